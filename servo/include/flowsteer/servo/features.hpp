@@ -1,0 +1,129 @@
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flowsteer/servo/flow_field.hpp"
+#include "flowsteer/servo/segmentation.hpp"
+
+namespace flowsteer::servo {
+
+// What the radial-flow fit found for an object.
+enum class MotionStatus : std::uint8_t {
+  approaching,  // τ > 0: the FOE and τ are valid
+  receding,     // τ < 0: the object moves away; the FOE is valid (a focus of contraction)
+  lateral,      // no expansion: the FOE is at infinity, τ is infinite
+  no_flow,      // not fitted: a dark region, or too few valid flow vectors
+};
+
+const char* to_string(MotionStatus status);
+
+struct FitQuality {
+  int samples = 0;               // flow vectors the robust fit used
+  int iterations = 0;            // Ceres iterations, all rounds together
+  double residual_rms = 0.0;     // over the inliers, normalised units per second
+  double inlier_fraction = 0.0;  // share of samples within the inlier threshold
+};
+
+// Moments of the derotated flow over a region, for velocity alignment (CGF Eq. 11).
+struct FlowMoments {
+  double mean_u = 0.0;   // (Σ u_j) / N
+  double mean_xu = 0.0;  // (Σ x_j u_j) / N
+  // Present when every valid pixel has a finite depth.
+  std::optional<double> mean_inv_depth;    // (Σ 1/Z_j) / N, 1/m
+  std::optional<double> mean_x_inv_depth;  // (Σ x_j/Z_j) / N, 1/m
+};
+
+// The visual features of one region (CGF §5).
+struct ObjectFeatures {
+  int label = Segmentation::kNoRegion;
+  std::int32_t source_id = -1;
+  RegionKind kind = RegionKind::visible;
+  int pixel_count = 0;
+  int invalid_flow_count = 0;  // NaN/Inf vectors, ignored
+
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // g: centroid, normalised
+  double width = 0.0;                                // horizontal extent, normalised
+  std::optional<double> depth_m;                     // mean depth when the field has depth
+
+  MotionStatus status = MotionStatus::no_flow;
+  Eigen::Vector2d foe = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double ttc_s = std::numeric_limits<double>::quiet_NaN();      // from the fit
+  double ttc_eq5_s = std::numeric_limits<double>::quiet_NaN();  // CGF Eq. 5, for comparison
+  FitQuality fit;
+  FlowMoments moments;
+
+  bool has_foe() const {
+    return status == MotionStatus::approaching || status == MotionStatus::receding;
+  }
+};
+
+// One flow vector u at normalised point x.
+struct FlowSample {
+  Eigen::Vector2d point;
+  Eigen::Vector2d flow;
+};
+
+struct RadialFitOptions {
+  int max_rounds = 4;             // robust rounds, each re-estimating the noise scale
+  int max_iterations = 25;        // Ceres iterations per round
+  double inlier_threshold = 3.0;  // in robust standard deviations
+  // |1/τ| below this (1/s) means no expansion: the motion is lateral.
+  double min_inverse_ttc = 1e-3;
+};
+
+struct RadialFit {
+  MotionStatus status = MotionStatus::no_flow;
+  Eigen::Vector2d foe = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double ttc_s = std::numeric_limits<double>::quiet_NaN();
+  FitQuality quality;
+};
+
+// Fits the radial model u_j = (x_j − f)/τ (CGF Eq. 2–3) to the samples with Ceres under a
+// Cauchy loss whose scale follows the residuals, so that noisy numerical flow and outliers do
+// not pull the FOE. Needs at least 3 samples; fewer give status no_flow.
+RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options = {});
+
+// CGF Eq. 5: τ = mean_j ‖x_j − f‖ / ‖u_j‖, over samples with a non-negligible flow, signed
+// like `sign_from`. NaN when no sample qualifies.
+double ttc_from_foe(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
+                    double sign_from);
+
+struct FeatureOptions {
+  int min_pixels = 12;         // smaller regions are reported with status no_flow
+  int max_fit_samples = 256;   // pixels of a region the robust fit uses, evenly spread
+  RadialFitOptions fit;
+};
+
+// Extracts per-region features from a derotated flow field. Keeps its scratch buffers between
+// calls so that a steady stream of frames does not allocate per pixel; one extractor per
+// thread.
+class FeatureExtractor {
+ public:
+  explicit FeatureExtractor(const FeatureOptions& options = {});
+  ~FeatureExtractor();
+  FeatureExtractor(FeatureExtractor&&) noexcept;
+  FeatureExtractor& operator=(FeatureExtractor&&) noexcept;
+
+  // Features of every region of `segmentation`, in label order. Throws std::invalid_argument
+  // when the segmentation does not match the field's size.
+  std::span<const ObjectFeatures> extract(const FlowField& derotated,
+                                          const Segmentation& segmentation);
+
+ private:
+  struct Accumulator;
+  FeatureOptions options_;
+  std::vector<Accumulator> accumulators_;
+  std::vector<FlowSample> samples_;
+  std::vector<int> sample_offsets_;
+  std::vector<int> sample_strides_;
+  std::vector<int> sample_counters_;
+  std::vector<ObjectFeatures> features_;
+};
+
+}  // namespace flowsteer::servo

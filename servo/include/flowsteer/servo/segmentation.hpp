@@ -1,0 +1,35 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace flowsteer::servo {
+
+// What a region is to the controller: something seen moving (visible), something too dark to
+// trust (dark, MIG 2019), or the ground.
+enum class RegionKind : std::uint8_t { visible, dark, ground };
+
+const char* to_string(RegionKind kind);
+
+// A partition of the image into regions: labels[i] is the region of pixel i (row-major), or
+// kNoRegion. Region r has kinds[r] and source_ids[r] (the object id it came from, or -1).
+struct Segmentation {
+  static constexpr std::int32_t kNoRegion = -1;
+
+  int width = 0;
+  int height = 0;
+  std::vector<std::int32_t> labels;
+  std::vector<RegionKind> kinds;
+  std::vector<std::int32_t> source_ids;
+
+  int region_count() const { return static_cast<int>(kinds.size()); }
+};
+
+// Semantic segmentation (MIG 2019): one visible region per object id >= 0 in `ids`; negative
+// ids (sky, ground) and pixels set in `excluded` (for example the ground mask) belong to no
+// region. `excluded` is empty or has one entry per pixel. Reuses out's storage.
+void segment_by_ids(std::span<const std::int32_t> ids, int width, int height,
+                    std::span<const std::uint8_t> excluded, Segmentation& out);
+
+}  // namespace flowsteer::servo

@@ -1,0 +1,370 @@
+#include "flowsteer/servo/control.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "flowsteer/servo/dynamics.hpp"
+
+namespace flowsteer::servo {
+
+namespace {
+
+// ln 10: σ = w / ln 10 makes exp(−|Δx|/σ) fall to 1/10 at |Δx| = w (CGF §6.2).
+constexpr double kLn10 = 2.302585092994046;
+// Goals further than this from the heading are treated as at this bearing; t_x = tan(bearing)
+// has no meaning behind the camera.
+constexpr double kMaxGoalBearing = 80.0 * std::numbers::pi / 180.0;
+
+// The gradient of L = w·exp(−|s|/σ) (w constant) through the rate of s: L̇ = −L sign(s)/σ · ṡ.
+// A separation of exactly zero is treated as positive, so a head-on obstacle turns the agent
+// left.
+TermGradient exp_falloff(double weight, double s, double sigma, const FeatureRate& rate) {
+  const double value = weight * std::exp(-std::abs(s) / sigma);
+  const double sign = s >= 0.0 ? 1.0 : -1.0;
+  const double d = -value * sign / sigma;
+  return {value, d * rate.per_accel, d * rate.per_turn};
+}
+
+// The gradient of L = ½ s² through the rate of s: L̇ = s ṡ.
+TermGradient half_square(double s, const FeatureRate& rate) {
+  return {0.5 * s * s, s * rate.per_accel, s * rate.per_turn};
+}
+
+void accumulate(TermGradient& sum, const TermGradient& g, double weight = 1.0) {
+  sum.cost += weight * g.cost;
+  sum.per_accel += weight * g.per_accel;
+  sum.per_turn += weight * g.per_turn;
+}
+
+double floored_speed(const AgentState& agent, const AvoidanceOptions& options) {
+  return std::max(std::abs(agent.speed_mps), options.min_speed_mps);
+}
+
+const ObjectFeatures* find_leader(const Percept& percept) {
+  if (!percept.leader_id) {
+    return nullptr;
+  }
+  for (const ObjectFeatures& object : percept.objects) {
+    if (object.source_id == *percept.leader_id && object.kind == RegionKind::visible &&
+        object.pixel_count > object.invalid_flow_count) {
+      return &object;
+    }
+  }
+  return nullptr;
+}
+
+class GoalTerm final : public CostTerm {
+ public:
+  std::string_view name() const override { return "goal"; }
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) const override {
+    if (!percept.goal_bearing_rad || !std::isfinite(*percept.goal_bearing_rad)) {
+      return {};
+    }
+    const double goal_x =
+        std::tan(std::clamp(*percept.goal_bearing_rad, -kMaxGoalBearing, kMaxGoalBearing));
+    const double tau_goal = percept.goal_distance_m && agent.speed_mps > 0.0
+                                ? *percept.goal_distance_m / agent.speed_mps
+                                : std::numeric_limits<double>::infinity();
+    return half_square(goal_x, goal_x_rate(goal_x, tau_goal));
+  }
+};
+
+class SpeedTerm final : public CostTerm {
+ public:
+  explicit SpeedTerm(double preferred_speed_mps) : preferred_(preferred_speed_mps) {}
+  std::string_view name() const override { return "speed"; }
+  TermGradient evaluate(const Percept&, const AgentState& agent) const override {
+    // v̇_c = a_c.
+    return half_square(agent.speed_mps - preferred_, FeatureRate{0.0, 1.0, 0.0});
+  }
+
+ private:
+  double preferred_;
+};
+
+class AvoidanceTerm final : public CostTerm {
+ public:
+  explicit AvoidanceTerm(const AvoidanceOptions& options) : options_(options) {}
+  std::string_view name() const override { return "avoidance"; }
+
+  // CGF Eq. 9 and 10; the gradient sign follows DESIGN.md ("Signs"), not the printed Eq. 17.
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) const override {
+    TermGradient sum;
+    for (const ObjectFeatures& object : percept.objects) {
+      if (object.kind != RegionKind::visible || object.status != MotionStatus::approaching ||
+          !(object.ttc_s <= options_.horizon_s) || !object.foe.allFinite() ||
+          !object.centre.allFinite()) {
+        continue;
+      }
+      const double tau = object.ttc_s;
+      const double importance =
+          std::max(0.0, options_.importance_slope * tau + options_.importance_intercept);
+      double tau_over_depth = 0.0;
+      double depth = 0.0;
+      if (options_.use_depth && object.depth_m && *object.depth_m > 0.0) {
+        depth = *object.depth_m;
+        tau_over_depth = tau / depth;
+      } else {
+        const double speed = floored_speed(agent, options_);
+        tau_over_depth = options_.depth_free_ratio / speed;
+        depth = tau / tau_over_depth;
+      }
+      const double sigma = (object.width + options_.agent_width_m / depth) / kLn10;
+      const double separation = object.centre.x() - object.foe.x();
+      accumulate(sum, exp_falloff(importance, separation, sigma,
+                                  separation_rate(object.centre.x(), object.foe.x(), tau,
+                                                  tau_over_depth, agent.speed_mps)));
+    }
+    return sum;
+  }
+
+ private:
+  AvoidanceOptions options_;
+};
+
+class DarkTerm final : public CostTerm {
+ public:
+  explicit DarkTerm(const AvoidanceOptions& options) : options_(options) {}
+  std::string_view name() const override { return "dark"; }
+
+  // MIG Eq. 3. A dark region has no flow to fit; it is taken as static, so its FOE is straight
+  // ahead and its centre moves as ġ = g/τ − (1 + g²) ω whatever its depth. MIG Eq. 7 prints
+  // (1 − g²) for that factor; the sign of the g² term does not survive the derivation.
+  TermGradient evaluate(const Percept& percept, const AgentState&) const override {
+    TermGradient sum;
+    for (const ObjectFeatures& object : percept.objects) {
+      if (object.kind != RegionKind::dark || object.pixel_count == 0 ||
+          !object.centre.allFinite()) {
+        continue;
+      }
+      double width = object.width;
+      if (object.depth_m && *object.depth_m > 0.0) {
+        width += options_.agent_width_m / *object.depth_m;
+      }
+      const double g = object.centre.x();
+      // The drift does not enter the gradient; an infinite τ leaves it out.
+      const FeatureRate rate = centre_x_rate(g, 0.0, std::numeric_limits<double>::infinity());
+      accumulate(sum, exp_falloff(1.0, g, width / kLn10, rate));
+    }
+    return sum;
+  }
+
+ private:
+  AvoidanceOptions options_;
+};
+
+class AlignTerm final : public CostTerm {
+ public:
+  explicit AlignTerm(const AvoidanceOptions& options) : options_(options) {}
+  std::string_view name() const override { return "align"; }
+
+  // CGF Eq. 11 with Eq. 6 averaged over the leader's pixels: L = U², U = (Σ u_j)/N.
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) const override {
+    const ObjectFeatures* leader = find_leader(percept);
+    if (leader == nullptr) {
+      return {};
+    }
+    const FlowMoments& m = leader->moments;
+    double mean_inv_depth = 0.0;
+    double mean_x_inv_depth = 0.0;
+    if (options_.use_depth && m.mean_inv_depth && m.mean_x_inv_depth) {
+      mean_inv_depth = *m.mean_inv_depth;
+      mean_x_inv_depth = *m.mean_x_inv_depth;
+    } else if (leader->has_foe() && std::isfinite(leader->ttc_s)) {
+      // τ v_c / Z = ratio, as for avoidance.
+      mean_inv_depth =
+          options_.depth_free_ratio / (std::abs(leader->ttc_s) * floored_speed(agent, options_));
+      mean_x_inv_depth = leader->centre.x() * mean_inv_depth;
+    }
+    const double u = m.mean_u;
+    const FeatureRate rate{0.0, mean_x_inv_depth,
+                           -(agent.speed_mps * mean_inv_depth + 2.0 * m.mean_xu)};
+    return {u * u, 2.0 * u * rate.per_accel, 2.0 * u * rate.per_turn};
+  }
+
+ private:
+  AvoidanceOptions options_;
+};
+
+class LeaderSpeedTerm final : public CostTerm {
+ public:
+  explicit LeaderSpeedTerm(const AvoidanceOptions& options) : options_(options) {}
+  std::string_view name() const override { return "leader_speed"; }
+
+  // CGF Eq. 13 with v_z = −Z/τ. The printed Eq. 19 takes v_z = +Z/τ, which would speed the
+  // agent up behind a slower leader. Needs the leader's depth: without it the relative speed
+  // is not observable from flow alone and the term is zero.
+  TermGradient evaluate(const Percept& percept, const AgentState&) const override {
+    const ObjectFeatures* leader = find_leader(percept);
+    if (leader == nullptr || !options_.use_depth || !leader->depth_m) {
+      return {};
+    }
+    double vz = 0.0;
+    double vx = 0.0;
+    if (leader->has_foe() && std::isfinite(leader->ttc_s)) {
+      vz = -*leader->depth_m / leader->ttc_s;
+      vx = leader->foe.x() * vz;
+    } else if (leader->status != MotionStatus::lateral) {
+      return {};
+    }
+    return half_square(vz, relative_vz_rate(vx));
+  }
+
+ private:
+  AvoidanceOptions options_;
+};
+
+void validate(const AvoidanceOptions& o) {
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) {
+      throw std::invalid_argument("avoidance options: " + what);
+    }
+  };
+  require(std::isfinite(o.agent_width_m) && o.agent_width_m >= 0.0,
+          "agent_width_m must be >= 0, got " + std::to_string(o.agent_width_m));
+  require(std::isfinite(o.horizon_s) && o.horizon_s > 0.0,
+          "horizon_s must be positive, got " + std::to_string(o.horizon_s));
+  require(std::isfinite(o.depth_free_ratio) && o.depth_free_ratio > 0.0,
+          "depth_free_ratio must be positive, got " + std::to_string(o.depth_free_ratio));
+  require(std::isfinite(o.min_speed_mps) && o.min_speed_mps > 0.0,
+          "min_speed_mps must be positive, got " + std::to_string(o.min_speed_mps));
+  require(std::isfinite(o.importance_slope) && std::isfinite(o.importance_intercept),
+          "importance slope and intercept must be finite");
+}
+
+void require_weight(double value, const char* name) {
+  if (!std::isfinite(value) || value < 0.0) {
+    throw std::invalid_argument(std::string("navigation weight ") + name +
+                                " must be >= 0, got " + std::to_string(value));
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<CostTerm> goal_term() { return std::make_unique<GoalTerm>(); }
+
+std::unique_ptr<CostTerm> speed_term(double preferred_speed_mps) {
+  if (!std::isfinite(preferred_speed_mps)) {
+    throw std::invalid_argument("preferred speed must be finite");
+  }
+  return std::make_unique<SpeedTerm>(preferred_speed_mps);
+}
+
+std::unique_ptr<CostTerm> avoidance_term(const AvoidanceOptions& options) {
+  validate(options);
+  return std::make_unique<AvoidanceTerm>(options);
+}
+
+std::unique_ptr<CostTerm> dark_term(const AvoidanceOptions& options) {
+  validate(options);
+  return std::make_unique<DarkTerm>(options);
+}
+
+std::unique_ptr<CostTerm> align_term(const AvoidanceOptions& options) {
+  validate(options);
+  return std::make_unique<AlignTerm>(options);
+}
+
+std::unique_ptr<CostTerm> leader_speed_term(const AvoidanceOptions& options) {
+  validate(options);
+  return std::make_unique<LeaderSpeedTerm>(options);
+}
+
+NavigationFunction& NavigationFunction::add(double weight, std::unique_ptr<CostTerm> term) {
+  if (!term) {
+    throw std::invalid_argument("NavigationFunction::add: null term");
+  }
+  require_weight(weight, std::string(term->name()).c_str());
+  terms_.push_back({weight, std::move(term)});
+  return *this;
+}
+
+TermGradient NavigationFunction::evaluate(const Percept& percept, const AgentState& agent,
+                                          std::vector<TermEvaluation>& out) const {
+  out.resize(terms_.size());
+  TermGradient total;
+  for (std::size_t k = 0; k < terms_.size(); ++k) {
+    const auto& [weight, term] = terms_[k];
+    out[k].name = term->name();
+    out[k].weight = weight;
+    out[k].gradient = term->evaluate(percept, agent);
+    accumulate(total, out[k].gradient, weight);
+  }
+  return total;
+}
+
+NavigationFunction goal_reaching(const GoalReachingWeights& w, const AvoidanceOptions& avoidance) {
+  require_weight(w.alpha, "alpha");
+  require_weight(w.beta, "beta");
+  require_weight(w.gamma, "gamma");
+  require_weight(w.delta, "delta");
+  if (w.delta > w.gamma) {
+    throw std::invalid_argument("navigation weights: delta (" + std::to_string(w.delta) +
+                                ") must not exceed gamma (" + std::to_string(w.gamma) +
+                                "): visible obstacles weigh at least as much as dark ones");
+  }
+  NavigationFunction f;
+  f.add(w.alpha, goal_term())
+      .add(w.beta, speed_term(w.preferred_speed_mps))
+      .add(w.gamma, avoidance_term(avoidance));
+  if (w.delta > 0.0) {
+    f.add(w.delta, dark_term(avoidance));
+  }
+  return f;
+}
+
+NavigationFunction following(const FollowingWeights& w, const AvoidanceOptions& avoidance) {
+  NavigationFunction f;
+  f.add(w.alpha, align_term(avoidance))
+      .add(w.beta, leader_speed_term(avoidance))
+      .add(w.gamma, avoidance_term(avoidance));
+  return f;
+}
+
+Controller::Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits)
+    : navigation_(std::move(navigation)), lambda_(lambda), limits_(limits) {
+  if (!std::isfinite(lambda) || lambda <= 0.0) {
+    throw std::invalid_argument("controller: lambda must be positive, got " +
+                                std::to_string(lambda));
+  }
+  if (!std::isfinite(limits.max_accel_mps2) || limits.max_accel_mps2 <= 0.0) {
+    throw std::invalid_argument("controller: max_accel_mps2 must be positive, got " +
+                                std::to_string(limits.max_accel_mps2));
+  }
+  if (!std::isfinite(limits.max_turn_rate) || limits.max_turn_rate <= 0.0) {
+    throw std::invalid_argument("controller: max_turn_rate must be positive, got " +
+                                std::to_string(limits.max_turn_rate));
+  }
+}
+
+void Controller::step(const Percept& percept, const AgentState& agent, ControlOutput& out) const {
+  if (!std::isfinite(agent.speed_mps)) {
+    throw std::invalid_argument("controller: agent speed is not finite");
+  }
+  const TermGradient total = navigation_.evaluate(percept, agent, out.terms);
+  out.cost = total.cost;
+  out.unclamped = {-lambda_ * total.per_accel, -lambda_ * total.per_turn};
+  if (!std::isfinite(out.unclamped.accel_mps2) || !std::isfinite(out.unclamped.turn_rate)) {
+    for (const TermEvaluation& t : out.terms) {
+      if (!std::isfinite(t.gradient.per_accel) || !std::isfinite(t.gradient.per_turn)) {
+        throw std::domain_error("controller: term '" + t.name + "' gave a non-finite gradient");
+      }
+    }
+    throw std::domain_error("controller: the command is not finite");
+  }
+  out.command = {std::clamp(out.unclamped.accel_mps2, -limits_.max_accel_mps2,
+                            limits_.max_accel_mps2),
+                 std::clamp(out.unclamped.turn_rate, -limits_.max_turn_rate,
+                            limits_.max_turn_rate)};
+}
+
+ControlOutput Controller::step(const Percept& percept, const AgentState& agent) const {
+  ControlOutput out;
+  step(percept, agent, out);
+  return out;
+}
+
+}  // namespace flowsteer::servo

@@ -1,0 +1,63 @@
+#include "flowsteer/servo/segmentation.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace flowsteer::servo {
+
+const char* to_string(RegionKind kind) {
+  switch (kind) {
+    case RegionKind::visible:
+      return "visible";
+    case RegionKind::dark:
+      return "dark";
+    case RegionKind::ground:
+      return "ground";
+  }
+  return "unknown";
+}
+
+void segment_by_ids(std::span<const std::int32_t> ids, int width, int height,
+                    std::span<const std::uint8_t> excluded, Segmentation& out) {
+  if (width <= 0 || height <= 0) {
+    throw std::invalid_argument("segment_by_ids: image size " + std::to_string(width) + "x" +
+                                std::to_string(height) + " is empty");
+  }
+  const auto pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (ids.size() != pixels) {
+    throw std::invalid_argument("segment_by_ids: id image has " + std::to_string(ids.size()) +
+                                " pixels, expected " + std::to_string(pixels));
+  }
+  if (!excluded.empty() && excluded.size() != pixels) {
+    throw std::invalid_argument("segment_by_ids: exclusion mask has " +
+                                std::to_string(excluded.size()) + " pixels, expected " +
+                                std::to_string(pixels));
+  }
+  out.width = width;
+  out.height = height;
+  out.labels.assign(pixels, Segmentation::kNoRegion);
+  out.kinds.clear();
+  out.source_ids.clear();
+
+  // Labels are given in order of first appearance; ids are small renderer ids, so a flat table
+  // indexed by id maps them.
+  const std::int32_t max_id = *std::max_element(ids.begin(), ids.end());
+  std::vector<std::int32_t> label_of_id(static_cast<std::size_t>(std::max(max_id + 1, 0)),
+                                        Segmentation::kNoRegion);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::int32_t id = ids[i];
+    if (id < 0 || (!excluded.empty() && excluded[i] != 0)) {
+      continue;
+    }
+    auto& label = label_of_id[static_cast<std::size_t>(id)];
+    if (label == Segmentation::kNoRegion) {
+      label = out.region_count();
+      out.kinds.push_back(RegionKind::visible);
+      out.source_ids.push_back(id);
+    }
+    out.labels[i] = label;
+  }
+}
+
+}  // namespace flowsteer::servo

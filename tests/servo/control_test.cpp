@@ -1,0 +1,198 @@
+#include "flowsteer/servo/control.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "two_body.hpp"
+
+namespace flowsteer::servo {
+namespace {
+
+constexpr double kLn10 = 2.302585092994046;
+
+ObjectFeatures object(double centre_x, double foe_x, double ttc_s, double depth_m,
+                      double width = 0.1) {
+  ObjectFeatures o;
+  o.source_id = 1;
+  o.pixel_count = 100;
+  o.centre = {centre_x, 0.0};
+  o.width = width;
+  o.status = ttc_s > 0.0 ? MotionStatus::approaching : MotionStatus::receding;
+  o.foe = {foe_x, 0.0};
+  o.ttc_s = ttc_s;
+  o.depth_m = depth_m;
+  return o;
+}
+
+Controller goal_controller(double limit = 10.0) {
+  return Controller(goal_reaching({}), 1.0, {limit, limit});
+}
+
+TEST(ControlSigns, GoalOnTheRightTurnsRight) {
+  const Percept p{{}, 0.3, 10.0, {}};
+  const ControlOutput out = goal_controller().step(p, {1.0});
+  EXPECT_GT(out.command.turn_rate, 0.0);
+  const double t = std::tan(0.3);
+  EXPECT_NEAR(out.command.turn_rate, t * (1.0 + t * t), 1e-12);  // ω = λ α t (1 + t²)
+  const ControlOutput left = goal_controller().step({{}, -0.3, 10.0, {}}, {1.0});
+  EXPECT_LT(left.command.turn_rate, 0.0);
+}
+
+TEST(ControlSigns, StaticObstacleJustRightOfHeadingTurnsLeft) {
+  // A static obstacle: FOE straight ahead, τ = Z / v_c.
+  const std::vector<ObjectFeatures> objects = {object(0.1, 0.0, 2.0, 2.0)};
+  const ControlOutput out = goal_controller().step({objects, 0.0, 10.0, {}}, {1.0});
+  EXPECT_LT(out.command.turn_rate, 0.0);
+  EXPECT_NEAR(out.command.accel_mps2, 0.0, 1e-12);  // f = 0: avoidance does not change speed
+  const std::vector<ObjectFeatures> on_left = {object(-0.1, 0.0, 2.0, 2.0)};
+  EXPECT_GT(goal_controller().step({on_left, 0.0, 10.0, {}}, {1.0}).command.turn_rate, 0.0);
+}
+
+TEST(ControlSigns, DarkRegionOnTheRightTurnsLeft) {
+  ObjectFeatures dark = object(0.15, 0.0, 2.0, 3.0);
+  dark.kind = RegionKind::dark;
+  dark.status = MotionStatus::no_flow;
+  const std::vector<ObjectFeatures> objects = {dark};
+  GoalReachingWeights weights;
+  weights.delta = 1.0;
+  const Controller controller(goal_reaching(weights), 1.0, {10.0, 10.0});
+  const ControlOutput out = controller.step({objects, 0.0, 10.0, {}}, {1.0});
+  EXPECT_LT(out.command.turn_rate, 0.0);
+  // Without dark-region awareness the agent ignores it.
+  EXPECT_EQ(goal_controller().step({objects, 0.0, 10.0, {}}, {1.0}).command.turn_rate, 0.0);
+}
+
+TEST(ControlSigns, SlowerLeaderAheadSlowsTheFollower) {
+  // Leader 4 m ahead at 0.5 m/s, follower at 1 m/s: v_z = −0.5, τ = 8 s.
+  ObjectFeatures leader = object(0.0, 0.0, 8.0, 4.0);
+  leader.source_id = 42;
+  const std::vector<ObjectFeatures> objects = {leader};
+  const Controller controller(following({}), 1.0, {10.0, 10.0});
+  const ControlOutput out = controller.step({objects, {}, {}, 42}, {1.0});
+  EXPECT_LT(out.command.accel_mps2, 0.0);
+  EXPECT_NEAR(out.command.accel_mps2, -0.5, 1e-12);  // a_c = λ β v_z
+  // A faster leader pulls away (τ < 0): speed up.
+  leader.ttc_s = -8.0;
+  leader.status = MotionStatus::receding;
+  const std::vector<ObjectFeatures> faster = {leader};
+  EXPECT_GT(controller.step({faster, {}, {}, 42}, {1.0}).command.accel_mps2, 0.0);
+}
+
+TEST(ControlSigns, LeaderDriftingRightIsFollowedToTheRight) {
+  ObjectFeatures leader = object(0.05, 0.0, 20.0, 4.0);
+  leader.source_id = 7;
+  leader.moments.mean_u = 0.05;  // moving right in the image
+  leader.moments.mean_inv_depth = 0.25;
+  leader.moments.mean_x_inv_depth = 0.05 * 0.25;
+  const std::vector<ObjectFeatures> objects = {leader};
+  FollowingWeights w;
+  w.beta = 0.0;
+  w.gamma = 0.0;
+  const ControlOutput out = Controller(following(w), 1.0, {10.0, 10.0}).step(
+      {objects, {}, {}, 7}, {1.0});
+  EXPECT_GT(out.command.turn_rate, 0.0);
+}
+
+TEST(ControlSigns, SpeedTermPullsTowardsThePreferredSpeed) {
+  GoalReachingWeights w;
+  w.preferred_speed_mps = 1.0;
+  const Controller c(goal_reaching(w), 1.0, {10.0, 10.0});
+  EXPECT_NEAR(c.step({}, {0.5}).command.accel_mps2, 0.1 * 0.5, 1e-12);
+  EXPECT_NEAR(c.step({}, {1.5}).command.accel_mps2, -0.1 * 0.5, 1e-12);
+}
+
+// The avoidance gradient equals the finite difference of L_av along the two-body simulation:
+// ∂L̇/∂ω = (dL/dt(a, ω) − dL/dt(a, 0)) / ω, with σ and I(τ) held constant as in CGF §6.2.
+TEST(ControlGradient, AvoidanceGradientMatchesSimulation) {
+  test::TwoBody s;
+  s.point = {6.0, -0.4};
+  s.point_velocity = {-0.3, 0.35};
+  s.agent_speed = 1.2;
+  const double width = 0.15;
+  AvoidanceOptions options;
+  options.agent_width_m = 0.0;
+  const double sigma = width / kLn10;
+  const double importance = -2.0 * s.ttc() + 10.0;
+  auto cost = [&](const test::TwoBody& b) {
+    return importance * std::exp(-std::abs(b.image_x() - b.foe_x()) / sigma);
+  };
+  ObjectFeatures o = object(s.image_x(), s.foe_x(), s.ttc(), s.depth(), width);
+  const std::vector<ObjectFeatures> objects = {o};
+  const TermGradient g = avoidance_term(options)->evaluate({objects, {}, {}, {}}, {s.agent_speed});
+  EXPECT_NEAR(g.cost, cost(s), 1e-12);
+  const double base = test::rate_of(s, 0.0, 0.0, cost);
+  const double per_turn = (test::rate_of(s, 0.0, 0.5, cost) - base) / 0.5;
+  const double per_accel = (test::rate_of(s, 0.8, 0.0, cost) - base) / 0.8;
+  EXPECT_NEAR(g.per_turn, per_turn, 1e-4 * (1.0 + std::abs(per_turn)));
+  EXPECT_NEAR(g.per_accel, per_accel, 1e-4 * (1.0 + std::abs(per_accel)));
+  EXPECT_NE(g.per_accel, 0.0);
+}
+
+TEST(ControlGradient, LeaderSpeedGradientMatchesSimulation) {
+  test::TwoBody s;
+  s.point = {5.0, 0.7};
+  s.point_velocity = {0.4, 0.3};
+  s.agent_speed = 1.0;
+  auto cost = [](const test::TwoBody& b) { return 0.5 * b.relative_vz() * b.relative_vz(); };
+  ObjectFeatures leader = object(s.image_x(), s.foe_x(), s.ttc(), s.depth());
+  const std::vector<ObjectFeatures> objects = {leader};
+  const TermGradient g = leader_speed_term()->evaluate({objects, {}, {}, 1}, {s.agent_speed});
+  const double base = test::rate_of(s, 0.0, 0.0, cost);
+  EXPECT_NEAR(g.per_turn, (test::rate_of(s, 0.0, 0.5, cost) - base) / 0.5, 1e-4);
+  EXPECT_NEAR(g.per_accel, (test::rate_of(s, 0.8, 0.0, cost) - base) / 0.8, 1e-4);
+}
+
+TEST(ControlInput, ObjectsThatCannotCollideAreIgnored) {
+  std::vector<ObjectFeatures> objects = {object(0.1, 0.0, 6.0, 6.0),    // beyond the 5 s horizon
+                                         object(0.1, 0.0, -2.0, 2.0)};  // receding
+  ObjectFeatures lateral = object(0.1, 0.0, 2.0, 2.0);
+  lateral.status = MotionStatus::lateral;
+  lateral.ttc_s = std::numeric_limits<double>::infinity();
+  objects.push_back(lateral);
+  ObjectFeatures unfitted = object(0.1, 0.0, 2.0, 2.0);
+  unfitted.status = MotionStatus::no_flow;
+  unfitted.foe.setConstant(std::numeric_limits<double>::quiet_NaN());
+  objects.push_back(unfitted);
+  const ControlOutput out = goal_controller().step({objects, 0.0, 10.0, {}}, {1.0});
+  EXPECT_EQ(out.command.turn_rate, 0.0);
+  EXPECT_EQ(out.terms.size(), 3U);
+  EXPECT_EQ(out.terms[2].name, "avoidance");
+  EXPECT_EQ(out.terms[2].gradient.cost, 0.0);
+}
+
+TEST(ControlInput, ZeroSpeedWithoutDepthStaysFinite) {
+  ObjectFeatures o = object(0.05, 0.02, 1.5, 0.0);
+  o.depth_m.reset();
+  const std::vector<ObjectFeatures> objects = {o};
+  const ControlOutput out = goal_controller().step({objects, 0.2, {}, {}}, {0.0});
+  EXPECT_TRUE(std::isfinite(out.command.accel_mps2));
+  EXPECT_TRUE(std::isfinite(out.command.turn_rate));
+  EXPECT_NE(out.command.turn_rate, 0.0);
+}
+
+TEST(ControlInput, LimitsClampAndTheUnclampedCommandIsKept) {
+  const Controller c(goal_reaching({}), 1.0, {0.5, 0.2});
+  const ControlOutput out = c.step({{}, 1.2, 5.0, {}}, {1.0});
+  EXPECT_EQ(out.command.turn_rate, 0.2);
+  EXPECT_GT(out.unclamped.turn_rate, 0.2);
+}
+
+TEST(ControlInput, BadSettingsAreRejected) {
+  EXPECT_THROW(Controller(goal_reaching({}), 0.0, {}), std::invalid_argument);
+  EXPECT_THROW(Controller(goal_reaching({}), 1.0, {-1.0, 1.0}), std::invalid_argument);
+  GoalReachingWeights w;
+  w.delta = 2.0;  // more than γ
+  EXPECT_THROW(goal_reaching(w), std::invalid_argument);
+  w.delta = 0.0;
+  w.alpha = -1.0;
+  EXPECT_THROW(goal_reaching(w), std::invalid_argument);
+  AvoidanceOptions bad;
+  bad.horizon_s = 0.0;
+  EXPECT_THROW(avoidance_term(bad), std::invalid_argument);
+  EXPECT_THROW(goal_controller().step({}, {std::nan("")}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace flowsteer::servo

@@ -1,0 +1,264 @@
+#include "flowsteer/servo/features.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "flowsteer/servo/analytic_scene.hpp"
+#include "flowsteer/servo/segmentation.hpp"
+
+namespace flowsteer::servo {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A thin panel facing the agent: one depth, so the radial model holds exactly.
+SceneObject panel(std::int32_t id, double x, double y, double width, Eigen::Vector2d velocity) {
+  SceneObject o;
+  o.id = id;
+  o.position_m = {x, y};
+  o.length_m = 0.002;
+  o.width_m = width;
+  o.height_m = 1.8;
+  o.velocity_mps = velocity;
+  return o;
+}
+
+AnalyticScene base_scene(double pitch_rad = 0.0) {
+  AnalyticScene scene;
+  scene.intrinsics = CameraIntrinsics::from_horizontal_fov(256, 192, 90.0 * kDeg);
+  scene.mount = {1.0, pitch_rad};
+  scene.agent_speed_mps = 1.0;
+  scene.agent_turn_rate = 0.3;
+  return scene;
+}
+
+struct Case {
+  const char* name;
+  double pitch_rad;
+  SceneObject object;
+};
+
+std::vector<Case> approaching_cases() {
+  return {
+      {"static, ahead right", 0.0, panel(3, 6.0, -0.8, 1.0, {0.0, 0.0})},
+      {"crossing from the left", 0.0, panel(4, 8.0, 1.5, 1.2, {0.0, -0.4})},
+      {"oncoming agent", 0.0, panel(5, 7.0, 0.5, 0.6, {-1.0, 0.0})},
+      {"static, camera pitched 10 deg", 10.0 * kDeg, panel(6, 5.0, 0.6, 1.0, {0.0, 0.0})},
+  };
+}
+
+struct Extracted {
+  ObjectFeatures features;
+  ObjectTruth truth;
+};
+
+// Renders, optionally corrupts, derotates and extracts the features of the case's object.
+template <typename Corrupt>
+Extracted extract(const Case& c, Corrupt corrupt) {
+  AnalyticScene scene = base_scene(c.pitch_rad);
+  scene.objects = {c.object};
+  SceneRender render = render_scene(scene);
+  derotate(render.flow, camera_angular_velocity(scene.agent_turn_rate, c.pitch_rad));
+  corrupt(render);
+  Segmentation segmentation;
+  segment_by_ids(render.ids, render.flow.width(), render.flow.height(), {}, segmentation);
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(render.flow, segmentation);
+  for (const ObjectFeatures& f : objects) {
+    if (f.source_id == c.object.id) {
+      ObjectTruth truth = object_truth(scene, c.object);
+      // The panel's face is at its centre's depth; τ there is the truth.
+      return {f, truth};
+    }
+  }
+  ADD_FAILURE() << c.name << ": object not found";
+  return {};
+}
+
+Extracted extract(const Case& c) {
+  return extract(c, [](SceneRender&) {});
+}
+
+TEST(RadialFit, ExactFlowGivesFoeAndTtc) {
+  for (const Case& c : approaching_cases()) {
+    const Extracted e = extract(c);
+    ASSERT_EQ(e.features.status, MotionStatus::approaching) << c.name;
+    EXPECT_LT((e.features.foe - e.truth.foe).norm(), 0.005) << c.name;
+    EXPECT_NEAR(e.features.ttc_s, e.truth.ttc_s, 0.01 * e.truth.ttc_s) << c.name;
+    EXPECT_NEAR(e.features.ttc_eq5_s, e.truth.ttc_s, 0.01 * e.truth.ttc_s) << c.name;
+    EXPECT_GT(e.features.fit.inlier_fraction, 0.99) << c.name;
+    EXPECT_GT(e.features.pixel_count, 100) << c.name;
+    ASSERT_TRUE(e.features.depth_m.has_value());
+    EXPECT_NEAR(*e.features.depth_m, e.truth.centre_depth_m, 0.01 * e.truth.centre_depth_m);
+  }
+}
+
+// Gaussian noise of 10% of each vector's magnitude, and 20% of the vectors replaced by random
+// ones of up to twice the region's mean magnitude.
+void corrupt_region(SceneRender& render, std::int32_t id, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto flow = render.flow.flow();
+  double mean_magnitude = 0.0;
+  int count = 0;
+  for (std::size_t i = 0; i < flow.size(); ++i) {
+    if (render.ids[i] == id) {
+      mean_magnitude += flow[i].norm();
+      ++count;
+    }
+  }
+  mean_magnitude /= count;
+  for (std::size_t i = 0; i < flow.size(); ++i) {
+    if (render.ids[i] != id) {
+      continue;
+    }
+    if (unit(rng) < 0.2) {
+      const double angle = 2.0 * std::numbers::pi * unit(rng);
+      const double magnitude = 2.0 * mean_magnitude * unit(rng);
+      flow[i] = Eigen::Vector2f(static_cast<float>(magnitude * std::cos(angle)),
+                                static_cast<float>(magnitude * std::sin(angle)));
+    } else {
+      const double sigma = 0.1 * flow[i].norm();
+      flow[i] += Eigen::Vector2f(static_cast<float>(sigma * gauss(rng)),
+                                 static_cast<float>(sigma * gauss(rng)));
+    }
+  }
+}
+
+TEST(RadialFit, NoisyFlowWithOutliersStaysWithinBounds) {
+  for (const Case& c : approaching_cases()) {
+    for (unsigned seed = 1; seed <= 5; ++seed) {
+      const Extracted e =
+          extract(c, [&](SceneRender& r) { corrupt_region(r, c.object.id, seed); });
+      ASSERT_EQ(e.features.status, MotionStatus::approaching) << c.name << " seed " << seed;
+      EXPECT_LT((e.features.foe - e.truth.foe).norm(), 0.02) << c.name << " seed " << seed;
+      EXPECT_NEAR(e.features.ttc_s, e.truth.ttc_s, 0.05 * e.truth.ttc_s)
+          << c.name << " seed " << seed;
+      EXPECT_GT(e.features.fit.inlier_fraction, 0.6) << c.name << " seed " << seed;
+      EXPECT_LT(e.features.fit.inlier_fraction, 0.95) << c.name << " seed " << seed;
+    }
+  }
+}
+
+TEST(RadialFit, RecedingObjectIsReportedWithNegativeTtc) {
+  // Faster than the agent, ahead: it pulls away.
+  const Case c{"receding", 0.0, panel(2, 6.0, 0.3, 1.0, {2.5, 0.0})};
+  const Extracted e = extract(c);
+  EXPECT_EQ(e.features.status, MotionStatus::receding);
+  EXPECT_LT(e.features.ttc_s, 0.0);
+  EXPECT_NEAR(e.features.ttc_s, e.truth.ttc_s, 0.01 * std::abs(e.truth.ttc_s));
+  EXPECT_LT((e.features.foe - e.truth.foe).norm(), 0.005);
+}
+
+TEST(RadialFit, ObjectKeepingItsDistanceIsLateral) {
+  // Same forward speed as the agent, drifting sideways: no expansion, FOE at infinity.
+  const Case c{"lateral", 0.0, panel(2, 6.0, 0.3, 1.0, {1.0, 0.5})};
+  const Extracted e = extract(c);
+  EXPECT_EQ(e.features.status, MotionStatus::lateral);
+  EXPECT_TRUE(std::isinf(e.features.ttc_s));
+  EXPECT_FALSE(e.features.has_foe());
+}
+
+TEST(RadialFit, TooFewSamplesGiveNoFlow) {
+  const std::vector<FlowSample> two = {{{0.1, 0.1}, {0.1, 0.1}}, {{0.2, 0.1}, {0.2, 0.1}}};
+  EXPECT_EQ(fit_radial_flow(two).status, MotionStatus::no_flow);
+  const std::vector<FlowSample> same_point(5, FlowSample{{0.1, 0.1}, {0.1, 0.1}});
+  EXPECT_EQ(fit_radial_flow(same_point).status, MotionStatus::no_flow);
+  EXPECT_EQ(fit_radial_flow({}).status, MotionStatus::no_flow);
+}
+
+TEST(FeatureExtractor, NonFiniteVectorsAreIgnoredAndCounted) {
+  const Case c = approaching_cases().front();
+  int poisoned = 0;
+  const Extracted e = extract(c, [&](SceneRender& r) {
+    auto flow = r.flow.flow();
+    for (std::size_t i = 0; i < flow.size(); ++i) {
+      if (r.ids[i] == c.object.id && i % 7 == 0) {
+        flow[i].x() = (poisoned % 2 == 0) ? std::numeric_limits<float>::quiet_NaN()
+                                          : std::numeric_limits<float>::infinity();
+        ++poisoned;
+      }
+    }
+  });
+  ASSERT_GT(poisoned, 10);
+  EXPECT_EQ(e.features.invalid_flow_count, poisoned);
+  EXPECT_EQ(e.features.status, MotionStatus::approaching);
+  EXPECT_LT((e.features.foe - e.truth.foe).norm(), 0.005);
+  EXPECT_TRUE(std::isfinite(e.features.moments.mean_u));
+}
+
+TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
+  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
+  FlowField field(k);
+  Segmentation s;
+  s.width = 8;
+  s.height = 6;
+  s.labels.assign(48, Segmentation::kNoRegion);
+  s.kinds = {RegionKind::visible, RegionKind::visible};
+  s.source_ids = {10, 11};
+  s.labels[5] = 1;  // region 0 has no pixel, region 1 has one
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(field, s);
+  ASSERT_EQ(objects.size(), 2U);
+  EXPECT_EQ(objects[0].pixel_count, 0);
+  EXPECT_EQ(objects[0].status, MotionStatus::no_flow);
+  EXPECT_EQ(objects[1].pixel_count, 1);
+  EXPECT_EQ(objects[1].status, MotionStatus::no_flow);
+  EXPECT_NEAR(objects[1].centre.x(), field.x(5), 1e-12);
+  EXPECT_GT(objects[1].width, 0.0);
+}
+
+TEST(FeatureExtractor, DarkRegionsGetGeometryButNoFit) {
+  const Case c = approaching_cases().front();
+  AnalyticScene scene = base_scene();
+  scene.objects = {c.object};
+  const SceneRender render = render_scene(scene);
+  Segmentation s;
+  segment_by_ids(render.ids, render.flow.width(), render.flow.height(), {}, s);
+  s.kinds[0] = RegionKind::dark;
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(render.flow, s);
+  ASSERT_EQ(objects.size(), 1U);
+  EXPECT_EQ(objects[0].kind, RegionKind::dark);
+  EXPECT_EQ(objects[0].status, MotionStatus::no_flow);
+  EXPECT_GT(objects[0].pixel_count, 100);
+  EXPECT_NEAR(objects[0].centre.x(), 0.8 / 6.0, 0.01);  // y = −0.8 m is to the right
+}
+
+TEST(FeatureExtractor, MismatchedSegmentationIsRejected) {
+  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
+  FlowField field(k);
+  Segmentation s;
+  s.width = 4;
+  s.height = 6;
+  s.labels.assign(24, Segmentation::kNoRegion);
+  FeatureExtractor extractor;
+  EXPECT_THROW(extractor.extract(field, s), std::invalid_argument);
+}
+
+TEST(FeatureExtractor, RejectsOptionsThatCannotFit) {
+  FeatureOptions options;
+  options.min_pixels = 1;
+  EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
+}
+
+TEST(Segmentation, IdsBecomeRegionsAndExclusionsAreDropped) {
+  const std::vector<std::int32_t> ids = {-1, 4, 4, 9, -2, 9};
+  const std::vector<std::uint8_t> excluded = {0, 0, 1, 0, 0, 0};
+  Segmentation s;
+  segment_by_ids(ids, 3, 2, excluded, s);
+  ASSERT_EQ(s.region_count(), 2);
+  EXPECT_EQ(s.source_ids[0], 4);
+  EXPECT_EQ(s.source_ids[1], 9);
+  EXPECT_EQ(s.labels, (std::vector<std::int32_t>{-1, 0, -1, 1, -1, 1}));
+  EXPECT_THROW(segment_by_ids(ids, 2, 2, {}, s), std::invalid_argument);
+  EXPECT_THROW(segment_by_ids(ids, 3, 2, std::span<const std::uint8_t>(excluded).first(2), s),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace flowsteer::servo
