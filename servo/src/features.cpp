@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <stdexcept>
 #include <string>
 
-#include <ceres/ceres.h>
+#include <ceres/tiny_solver.h>
 #include <Eigen/Dense>
 
 namespace flowsteer::servo {
@@ -28,72 +27,65 @@ const char* to_string(MotionStatus status) {
 namespace {
 
 // The radial model in a form linear in its parameters p = (1/τ, −f_x/τ, −f_y/τ):
-// u = p0 x + p1, v = p0 y + p2. The fit is well conditioned for any τ, including the lateral
-// case 1/τ → 0 where f runs off to infinity. Each residual carries a weight that the robust
-// rounds set; it stays constant within a Ceres solve, so the residual stays linear in p.
-class RadialResidual final : public ceres::SizedCostFunction<2, 3> {
- public:
-  explicit RadialResidual(const FlowSample& sample) : sample_(sample) {}
+// u = p0 x + p1, v = p0 y + p2. It is well conditioned for any τ, including the lateral case
+// 1/τ → 0 where f runs off to infinity. Each sample's residual carries a weight that the
+// robust rounds set, in the form Ceres' TinySolver takes.
+struct WeightedRadialResiduals {
+  using Scalar = double;
+  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = 3 };
 
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    const double* p = parameters[0];
-    const Eigen::Vector2d& x = sample_.point;
-    residuals[0] = weight_ * (sample_.flow.x() - (p[0] * x.x() + p[1]));
-    residuals[1] = weight_ * (sample_.flow.y() - (p[0] * x.y() + p[2]));
-    if (jacobians != nullptr && jacobians[0] != nullptr) {
-      double* j = jacobians[0];
-      j[0] = -weight_ * x.x();
-      j[1] = -weight_;
-      j[2] = 0.0;
-      j[3] = -weight_ * x.y();
-      j[4] = 0.0;
-      j[5] = -weight_;
+  std::span<const FlowSample> samples;
+  std::span<const double> weights;
+
+  int NumResiduals() const { return static_cast<int>(2 * samples.size()); }
+
+  bool operator()(const double* p, double* residuals, double* jacobian) const {
+    const auto rows = static_cast<std::size_t>(NumResiduals());
+    for (std::size_t j = 0; j < samples.size(); ++j) {
+      const FlowSample& s = samples[j];
+      const double w = weights[j];
+      residuals[2 * j] = w * (s.flow.x() - (p[0] * s.point.x() + p[1]));
+      residuals[2 * j + 1] = w * (s.flow.y() - (p[0] * s.point.y() + p[2]));
+      if (jacobian != nullptr) {  // column-major, rows × 3
+        jacobian[2 * j] = -w * s.point.x();
+        jacobian[2 * j + 1] = -w * s.point.y();
+        jacobian[rows + 2 * j] = -w;
+        jacobian[rows + 2 * j + 1] = 0.0;
+        jacobian[2 * rows + 2 * j] = 0.0;
+        jacobian[2 * rows + 2 * j + 1] = -w;
+      }
     }
     return true;
   }
-
-  Eigen::Vector2d predicted(const Eigen::Vector3d& p) const {
-    return p[0] * sample_.point + Eigen::Vector2d(p[1], p[2]);
-  }
-  double unweighted_norm(const Eigen::Vector3d& p) const {
-    return (sample_.flow - predicted(p)).norm();
-  }
-  double weighted_norm(const Eigen::Vector3d& p) const { return weight_ * unweighted_norm(p); }
-  void set_weight(double weight) { weight_ = weight; }
-
- private:
-  FlowSample sample_;
-  double weight_ = 1.0;
 };
 
-// Robust standard deviation of the weighted 2D residuals from the median of their norms: for
-// isotropic Gaussian noise the norm is Rayleigh distributed with median σ·sqrt(2 ln 2).
-double robust_sigma(const std::deque<RadialResidual>& residuals, const Eigen::Vector3d& p,
-                    std::vector<double>& scratch) {
-  scratch.resize(residuals.size());
-  for (std::size_t i = 0; i < residuals.size(); ++i) {
-    scratch[i] = residuals[i].weighted_norm(p);
-  }
+Eigen::Vector2d predicted(const FlowSample& s, const Eigen::Vector3d& p) {
+  return p[0] * s.point + Eigen::Vector2d(p[1], p[2]);
+}
+
+double residual_norm(const FlowSample& s, const Eigen::Vector3d& p) {
+  return (s.flow - predicted(s, p)).norm();
+}
+
+// Robust standard deviation of scaled residuals from the median of their norms: for isotropic
+// Gaussian noise the norm is Rayleigh distributed with median σ·sqrt(2 ln 2).
+double robust_sigma(std::span<const double> norms, std::vector<double>& scratch) {
+  scratch.assign(norms.begin(), norms.end());
   auto middle = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
   std::nth_element(scratch.begin(), middle, scratch.end());
   return *middle / 1.1774100225154747;
 }
 
-// Flow noise grows with the flow (numerical flow errs in proportion to the displacement), so
-// after the first round each residual is divided by the magnitude the model predicts there,
-// floored near the FOE where that magnitude vanishes.
-void weight_by_predicted_magnitude(std::deque<RadialResidual>& residuals,
-                                   const Eigen::Vector3d& p) {
-  double mean = 0.0;
-  for (const RadialResidual& r : residuals) {
-    mean += r.predicted(p).norm();
+enum class Loss { cauchy, tukey };
+
+// IRLS weight ψ(e)/e of a residual of norm e, as the square root that scales the residual.
+double robust_weight(Loss loss, double e, double sigma) {
+  if (loss == Loss::cauchy) {
+    const double c = 2.385 * sigma;  // 95% efficiency on Gaussian noise
+    return std::sqrt(1.0 / (1.0 + (e / c) * (e / c)));
   }
-  mean /= static_cast<double>(residuals.size());
-  const double floor = 0.25 * mean + 1e-12;
-  for (RadialResidual& r : residuals) {
-    r.set_weight(1.0 / (r.predicted(p).norm() + floor));
-  }
+  const double c = 4.685 * sigma;  // likewise
+  return e < c ? 1.0 - (e / c) * (e / c) : 0.0;
 }
 
 }  // namespace
@@ -130,62 +122,68 @@ RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOp
     return fit;  // all samples at one point: the model is not identifiable
   }
 
-  std::deque<RadialResidual> residuals;  // cost functions cannot move
-  for (const FlowSample& s : samples) {
-    residuals.emplace_back(s);
-  }
+  // Flow noise grows with the flow (numerical flow errs in proportion to the displacement), so
+  // after the first round a residual is measured relative to the flow the model predicts
+  // there, floored near the FOE where that vanishes.
+  std::vector<double> scale(samples.size(), 1.0);
+  std::vector<double> norms(samples.size());
+  std::vector<double> weights(samples.size());
   std::vector<double> scratch;
-  double sigma = robust_sigma(residuals, p, scratch);
+  auto scaled_norms = [&] {
+    for (std::size_t j = 0; j < samples.size(); ++j) {
+      norms[j] = scale[j] * residual_norm(samples[j], p);
+    }
+  };
+  scaled_norms();
+  double sigma = robust_sigma(norms, scratch);
   // Flow comes in float32: residuals below this are rounding, not noise.
   const double exact = 1e-6 * flow_scale + 1e-12;
-  bool weighted = false;
 
   if (sigma > exact) {
-    ceres::LossFunctionWrapper loss(nullptr, ceres::DO_NOT_TAKE_OWNERSHIP);
-    ceres::Problem::Options problem_options;
-    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem problem(problem_options);
-    for (RadialResidual& r : residuals) {
-      problem.AddResidualBlock(&r, &loss, p.data());
-    }
-    ceres::Solver::Options solver_options;
-    solver_options.linear_solver_type = ceres::DENSE_QR;
-    solver_options.max_num_iterations = options.max_iterations;
-    solver_options.logging_type = ceres::SILENT;
-    solver_options.num_threads = 1;
-    auto solve = [&](ceres::LossFunction* next_loss) {
-      loss.Reset(next_loss, ceres::TAKE_OWNERSHIP);
-      ceres::Solver::Summary summary;
-      ceres::Solve(solver_options, &problem, &summary);
-      fit.quality.iterations += static_cast<int>(summary.iterations.size());
-    };
-    // Cauchy rounds (2.385 σ: 95% efficiency on Gaussian noise) find the bulk of the inliers
-    // from any start; a last Tukey round (4.685 σ) then gives outliers no weight at all, which
-    // Cauchy's long tail still does.
-    for (int round = 0; round < options.max_rounds; ++round) {
-      solve(new ceres::CauchyLoss(2.385 * sigma));
-      const double previous = sigma;
-      if (!weighted) {
-        weight_by_predicted_magnitude(residuals, p);
-        weighted = true;
+    // Iteratively reweighted least squares: Cauchy rounds find the bulk of the inliers from any
+    // start; Tukey rounds then give outliers no weight at all, which Cauchy's long tail still
+    // does. Each round is solved by Ceres' TinySolver.
+    ceres::TinySolver<WeightedRadialResiduals> solver;
+    solver.options.max_num_iterations = options.max_iterations;
+    const WeightedRadialResiduals residuals{samples, weights};
+    const int rounds = options.max_rounds + 2;
+    for (int round = 0; round < rounds; ++round) {
+      const Loss loss = round < options.max_rounds ? Loss::cauchy : Loss::tukey;
+      for (std::size_t j = 0; j < samples.size(); ++j) {
+        weights[j] = scale[j] * robust_weight(loss, norms[j], sigma);
       }
-      sigma = robust_sigma(residuals, p, scratch);
-      if (round > 0 && std::abs(previous - sigma) <= 0.01 * previous) {
+      const Eigen::Vector3d previous = p;
+      fit.quality.iterations += solver.Solve(residuals, &p).iterations;
+      if (round == 0) {
+        double mean = 0.0;
+        for (const FlowSample& s : samples) {
+          mean += predicted(s, p).norm();
+        }
+        const double floor = 0.25 * mean / n + 1e-12;
+        for (std::size_t j = 0; j < samples.size(); ++j) {
+          scale[j] = 1.0 / (predicted(samples[j], p).norm() + floor);
+        }
+      }
+      scaled_norms();
+      sigma = robust_sigma(norms, scratch);
+      const bool settled = (p - previous).norm() <= 1e-6 * p.norm();
+      if (settled && round >= options.max_rounds) {
         break;
       }
+      if (settled && round > 0) {
+        round = options.max_rounds - 1;  // on to the Tukey rounds
+      }
     }
-    solve(new ceres::TukeyLoss(4.685 * sigma));
-    sigma = robust_sigma(residuals, p, scratch);
   }
 
-  const double threshold = options.inlier_threshold * (weighted ? sigma : std::max(sigma, exact));
+  const double threshold = options.inlier_threshold * std::max(sigma, exact * scale[0]);
   int inliers = 0;
   double sum_squares = 0.0;
-  for (const RadialResidual& r : residuals) {
-    if (r.weighted_norm(p) <= threshold) {
+  for (std::size_t j = 0; j < samples.size(); ++j) {
+    if (norms[j] <= threshold) {
       ++inliers;
-      sum_squares += r.unweighted_norm(p) * r.unweighted_norm(p);
+      const double r = residual_norm(samples[j], p);
+      sum_squares += r * r;
     }
   }
   fit.quality.samples = static_cast<int>(samples.size());
@@ -266,15 +264,37 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
   }
   const auto regions = static_cast<std::size_t>(segmentation.region_count());
   accumulators_.assign(regions, Accumulator{});
+  if (region_pixels_.size() < regions) {
+    region_pixels_.resize(regions);
+  }
+  for (std::size_t r = 0; r < regions; ++r) {
+    region_pixels_[r].clear();
+  }
   const auto flow = field.flow();
   const auto depth = field.depth();
   const auto& labels = segmentation.labels;
 
+  // Most pixels belong to no region: blocks of them are skipped with one AND over their labels
+  // (kNoRegion is all bits set), which the compiler vectorises.
+  static_assert(Segmentation::kNoRegion == -1);
+  constexpr int kBlock = 16;
   for (int row = 0; row < field.height(); ++row) {
     const double y = field.y(row);
+    const std::int32_t* row_labels = labels.data() + field.index(0, row);
     for (int col = 0; col < field.width(); ++col) {
+      if (col % kBlock == 0) {
+        const int end = std::min(col + kBlock, field.width());
+        std::int32_t all = Segmentation::kNoRegion;
+        for (int k = col; k < end; ++k) {
+          all &= row_labels[k];
+        }
+        if (all == Segmentation::kNoRegion) {
+          col = end - 1;
+          continue;
+        }
+      }
       const std::size_t i = field.index(col, row);
-      const std::int32_t label = labels[i];
+      const std::int32_t label = row_labels[col];
       if (label < 0) {
         continue;
       }
@@ -286,10 +306,11 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
       a.min_x = std::min(a.min_x, x);
       a.max_x = std::max(a.max_x, x);
       if (!depth.empty() && std::isfinite(depth[i]) && depth[i] > 0.0F) {
+        const double inverse_depth = 1.0 / depth[i];
         ++a.depth_count;
         a.sum_depth += depth[i];
-        a.sum_inv_depth += 1.0 / depth[i];
-        a.sum_x_inv_depth += x / depth[i];
+        a.sum_inv_depth += inverse_depth;
+        a.sum_x_inv_depth += x * inverse_depth;
       }
       if (!flow[i].allFinite()) {
         ++a.invalid;
@@ -297,41 +318,30 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
       }
       a.sum_u += flow[i].x();
       a.sum_xu += x * flow[i].x();
+      region_pixels_[static_cast<std::size_t>(label)].push_back(static_cast<std::uint32_t>(i));
     }
   }
 
   // Every region with enough valid vectors gets up to max_fit_samples of them, taken at an even
-  // stride in raster order.
+  // stride from its pixels in raster order.
   sample_offsets_.assign(regions + 1, 0);
-  sample_strides_.assign(regions, 0);
-  sample_counters_.assign(regions, 0);
   for (std::size_t r = 0; r < regions; ++r) {
-    const Accumulator& a = accumulators_[r];
+    const auto& pixels = region_pixels_[r];
+    const int valid = static_cast<int>(pixels.size());
     int take = 0;
-    if (segmentation.kinds[r] == RegionKind::visible && a.valid() >= options_.min_pixels) {
-      sample_strides_[r] = (a.valid() + options_.max_fit_samples - 1) / options_.max_fit_samples;
-      take = (a.valid() + sample_strides_[r] - 1) / sample_strides_[r];
+    int stride = 1;
+    if (segmentation.kinds[r] == RegionKind::visible && valid >= options_.min_pixels) {
+      stride = (valid + options_.max_fit_samples - 1) / options_.max_fit_samples;
+      take = (valid + stride - 1) / stride;
     }
     sample_offsets_[r + 1] = sample_offsets_[r] + take;
-  }
-  samples_.resize(static_cast<std::size_t>(sample_offsets_[regions]));
-  for (int row = 0; row < field.height(); ++row) {
-    const double y = field.y(row);
-    for (int col = 0; col < field.width(); ++col) {
-      const std::size_t i = field.index(col, row);
-      const std::int32_t label = labels[i];
-      if (label < 0) {
-        continue;
-      }
-      const auto r = static_cast<std::size_t>(label);
-      if (sample_strides_[r] == 0 || !flow[i].allFinite()) {
-        continue;
-      }
-      const int k = sample_counters_[r]++;
-      if (k % sample_strides_[r] == 0) {
-        const auto slot = static_cast<std::size_t>(sample_offsets_[r] + k / sample_strides_[r]);
-        samples_[slot] = {{field.x(col), y}, flow[i].cast<double>()};
-      }
+    samples_.resize(static_cast<std::size_t>(sample_offsets_[r + 1]));
+    for (int k = 0; k < take; ++k) {
+      const std::uint32_t i = pixels[static_cast<std::size_t>(k * stride)];
+      const auto col = static_cast<int>(i % static_cast<std::uint32_t>(field.width()));
+      const auto row = static_cast<int>(i / static_cast<std::uint32_t>(field.width()));
+      samples_[static_cast<std::size_t>(sample_offsets_[r] + k)] = {
+          {field.x(col), field.y(row)}, flow[i].cast<double>()};
     }
   }
 

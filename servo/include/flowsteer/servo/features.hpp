@@ -25,7 +25,7 @@ const char* to_string(MotionStatus status);
 
 struct FitQuality {
   int samples = 0;               // flow vectors the robust fit used
-  int iterations = 0;            // Ceres iterations, all rounds together
+  int iterations = 0;            // solver iterations, all rounds together
   double residual_rms = 0.0;     // over the inliers, normalised units per second
   double inlier_fraction = 0.0;  // share of samples within the inlier threshold
 };
@@ -70,8 +70,8 @@ struct FlowSample {
 };
 
 struct RadialFitOptions {
-  int max_rounds = 4;             // robust rounds, each re-estimating the noise scale
-  int max_iterations = 25;        // Ceres iterations per round
+  int max_rounds = 2;             // Cauchy rounds, each re-estimating the noise scale (+2 Tukey)
+  int max_iterations = 10;        // TinySolver iterations per round
   double inlier_threshold = 3.0;  // in robust standard deviations
   // |1/τ| below this (1/s) means no expansion: the motion is lateral.
   double min_inverse_ttc = 1e-3;
@@ -84,9 +84,10 @@ struct RadialFit {
   FitQuality quality;
 };
 
-// Fits the radial model u_j = (x_j − f)/τ (CGF Eq. 2–3) to the samples with Ceres under a
-// Cauchy loss whose scale follows the residuals, so that noisy numerical flow and outliers do
-// not pull the FOE. Needs at least 3 samples; fewer give status no_flow.
+// Fits the radial model u_j = (x_j − f)/τ (CGF Eq. 2–3) to the samples: a robust M-estimate
+// (Cauchy, then Tukey) by iteratively reweighted least squares with Ceres' TinySolver, the noise
+// scale re-estimated each round and relative to the flow's magnitude, so that noisy numerical
+// flow and outliers do not pull the FOE. Needs at least 3 samples; fewer give status no_flow.
 RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options = {});
 
 // CGF Eq. 5: τ = mean_j ‖x_j − f‖ / ‖u_j‖, over samples with a non-negligible flow, signed
@@ -119,10 +120,9 @@ class FeatureExtractor {
   struct Accumulator;
   FeatureOptions options_;
   std::vector<Accumulator> accumulators_;
+  std::vector<std::vector<std::uint32_t>> region_pixels_;  // valid pixels of each region
   std::vector<FlowSample> samples_;
   std::vector<int> sample_offsets_;
-  std::vector<int> sample_strides_;
-  std::vector<int> sample_counters_;
   std::vector<ObjectFeatures> features_;
 };
 
