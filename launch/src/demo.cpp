@@ -64,8 +64,8 @@ void run_demo(const DemoScene& demo, std::ostream& out) {
 
   const double deg = 180.0 / std::numbers::pi;
   out << "flowsteer demo: " << scene.intrinsics.width_px << "x" << scene.intrinsics.height_px
-      << " px, hfov " << fixed(2.0 * std::atan(0.5 * scene.intrinsics.width_px /
-                                               scene.intrinsics.fx_px) * deg, 1)
+      << " px, hfov "
+      << fixed(2.0 * std::atan(0.5 * scene.intrinsics.width_px / scene.intrinsics.fx_px) * deg, 1)
       << " deg, camera " << fixed(scene.mount.height_m, 2) << " m pitched "
       << fixed(scene.mount.pitch_rad * deg, 1) << " deg; agent at "
       << fixed(scene.agent_speed_mps, 2) << " m/s turning " << fixed(scene.agent_turn_rate, 2)
@@ -76,9 +76,10 @@ void run_demo(const DemoScene& demo, std::ostream& out) {
                                                           : "skipped: no motion")
       << ")\n\n";
 
-  out << "objects: measured from the flow | truth from the geometry (TTC at the footprint centre)\n";
+  out << "objects: measured from the flow | truth from the geometry (TTC at the footprint "
+         "centre)\n";
   const int widths[] = {4, 8, 12, 7, 8, 7, 8, 8, 8, 8, 8, 2, 8, 8};
-  const char* headers[] = {"id",    "kind",   "status",  "px",   "g_x", "w",     "foe_x",
+  const char* headers[] = {"id",    "kind",  "status",  "px",   "g_x", "w",     "foe_x",
                            "foe_y", "ttc_s", "ttc_eq5", "inl%", "|",   "foe_x", "ttc_s"};
   for (std::size_t i = 0; i < std::size(headers); ++i) {
     out << column(headers[i], widths[i]);
@@ -119,14 +120,18 @@ void run_demo(const DemoScene& demo, std::ostream& out) {
 
   out << "\ncost terms (L, dL'/da_c, dL'/dw):\n";
   for (const servo::TermEvaluation& t : command.terms) {
-    out << "  " << t.name << std::string(t.name.size() < 12 ? 12 - t.name.size() : 1, ' ') << "weight " << fixed(t.weight, 2) << "  L "
-        << column(fixed(t.gradient.cost, 4), 9) << " dL'/da_c "
-        << column(fixed(t.gradient.per_accel, 4), 9) << " dL'/dw "
+    out << "  " << t.name << std::string(t.name.size() < 12 ? 12 - t.name.size() : 1, ' ')
+        << "weight " << fixed(t.weight, 2) << "  L " << column(fixed(t.gradient.cost, 4), 9)
+        << " dL'/da_c " << column(fixed(t.gradient.per_accel, 4), 9) << " dL'/dw "
         << column(fixed(t.gradient.per_turn, 4), 9) << "\n";
   }
   const double w = command.command.turn_rate;
   out << "\ncommand: a_c = " << fixed(command.command.accel_mps2) << " m/s^2, w = " << fixed(w)
-      << " rad/s (" << (w > 0.0 ? "turns right" : w < 0.0 ? "turns left" : "straight") << ")";
+      << " rad/s ("
+      << (w > 0.0   ? "turns right"
+          : w < 0.0 ? "turns left"
+                    : "straight")
+      << ")";
   if (command.command.turn_rate != command.unclamped.turn_rate ||
       command.command.accel_mps2 != command.unclamped.accel_mps2) {
     out << ", clamped from a_c = " << fixed(command.unclamped.accel_mps2)

@@ -69,8 +69,7 @@ class Reader {
                   double fallback) const {
     const double value = number(map, field, key, fallback);
     if (!(value > 0.0)) {
-      fail(map[key] ? map[key] : map, join(field, key),
-           "must be positive, got " + format(value));
+      fail(map[key] ? map[key] : map, join(field, key), "must be positive, got " + format(value));
     }
     return value;
   }
@@ -90,8 +89,8 @@ class Reader {
       fail(node, field, "expected an integer, got '" + text(node) + "'");
     }
     if (value < min_value) {
-      fail(node, field, "must be at least " + std::to_string(min_value) + ", got " +
-                            std::to_string(value));
+      fail(node, field,
+           "must be at least " + std::to_string(min_value) + ", got " + std::to_string(value));
     }
     return value;
   }
@@ -187,8 +186,7 @@ void read_camera(const Reader& r, const YAML::Node& node, servo::AnalyticScene& 
 
 servo::SceneObject read_object(const Reader& r, const YAML::Node& node, const std::string& field,
                                std::int32_t default_id) {
-  r.only_keys(node, field, {"shape", "id", "position", "size", "radius_m", "height_m",
-                            "velocity"});
+  r.only_keys(node, field, {"shape", "id", "position", "size", "radius_m", "height_m", "velocity"});
   servo::SceneObject o;
   o.shape = r.word(node, field, "shape", {"box", "cylinder"}, "box") == "box"
                 ? servo::SceneObject::Shape::box
@@ -202,7 +200,8 @@ servo::SceneObject read_object(const Reader& r, const YAML::Node& node, const st
   o.height_m = r.positive(node, field, "height_m", 1.8);
   if (o.shape == servo::SceneObject::Shape::box) {
     if (node["radius_m"]) {
-      r.fail(node["radius_m"], field + ".radius_m", "a box has a size [length, width], not a radius");
+      r.fail(node["radius_m"], field + ".radius_m",
+             "a box has a size [length, width], not a radius");
     }
     const Eigen::Vector2d size = r.pair(node, field, "size", {1.0, 1.0});
     if (!(size.x() > 0.0 && size.y() > 0.0)) {
@@ -237,8 +236,8 @@ void read_controller(const Reader& r, const YAML::Node& node, ControllerSpec& c)
     w.beta = r.non_negative(node, "controller", "beta", w.beta);
     w.gamma = r.non_negative(node, "controller", "gamma", w.gamma);
     w.delta = r.non_negative(node, "controller", "delta", w.delta);
-    w.preferred_speed_mps = r.non_negative(node, "controller", "preferred_speed_mps",
-                                           w.preferred_speed_mps);
+    w.preferred_speed_mps =
+        r.non_negative(node, "controller", "preferred_speed_mps", w.preferred_speed_mps);
     if (w.delta > w.gamma) {
       r.fail(node["delta"], "controller.delta", "must not exceed gamma (MIG 2019: γ ≥ δ)");
     }
@@ -335,8 +334,8 @@ DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& sour
       const std::string field = "objects[" + std::to_string(i) + "]";
       s.objects.push_back(read_object(r, objects[i], field, static_cast<std::int32_t>(i + 1)));
       if (!ids.insert(s.objects.back().id).second) {
-        r.fail(objects[i], field + ".id", "id " + std::to_string(s.objects.back().id) +
-                                              " is used twice");
+        r.fail(objects[i], field + ".id",
+               "id " + std::to_string(s.objects.back().id) + " is used twice");
       }
     }
   }

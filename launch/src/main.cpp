@@ -97,8 +97,8 @@ int main(int argc, char** argv) {
         scene.scene.agent_speed_mps = speed;
       }
       if (resolution > 0) {
-        const double hfov = 2.0 * std::atan(0.5 * scene.scene.intrinsics.width_px /
-                                            scene.scene.intrinsics.fx_px);
+        const double hfov =
+            2.0 * std::atan(0.5 * scene.scene.intrinsics.width_px / scene.scene.intrinsics.fx_px);
         scene.scene.intrinsics =
             flowsteer::servo::CameraIntrinsics::from_horizontal_fov(resolution, resolution, hfov);
       }

@@ -111,8 +111,8 @@ void AnalyticScene::validate() const {
   const Eigen::Vector3d camera(0.0, 0.0, mount.height_m);
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const SceneObject& o = objects[i];
-    const std::string name = "scene: object " + std::to_string(i) + " (id " +
-                             std::to_string(o.id) + ")";
+    const std::string name =
+        "scene: object " + std::to_string(i) + " (id " + std::to_string(o.id) + ")";
     if (o.id < 0) {
       throw std::invalid_argument(name + ": id must be >= 0");
     }
@@ -137,8 +137,8 @@ SceneRender render_scene(const AnalyticScene& scene) {
   out.ids.assign(field.size(), kSkyId);
   const Eigen::Matrix3d r = camera_to_body(scene.mount.pitch_rad);
   const Eigen::Vector3d origin(0.0, 0.0, scene.mount.height_m);
-  const Eigen::Vector3d omega = camera_angular_velocity(scene.agent_turn_rate,
-                                                        scene.mount.pitch_rad);
+  const Eigen::Vector3d omega =
+      camera_angular_velocity(scene.agent_turn_rate, scene.mount.pitch_rad);
   const Eigen::Vector3d ground_velocity = relative_velocity_camera(scene, Eigen::Vector2d::Zero());
   std::vector<Eigen::Vector3d> object_velocities;
   object_velocities.reserve(scene.objects.size());
@@ -191,11 +191,9 @@ ObjectTruth object_truth(const AnalyticScene& scene, const SceneObject& object) 
   truth.relative_velocity_mps = relative_velocity_camera(scene, object.velocity_mps);
   const Eigen::Vector3d& v = truth.relative_velocity_mps;
   truth.foe = Eigen::Vector2d(v.x() / v.z(), v.y() / v.z());  // CGF Eq. 3
-  const Eigen::Vector3d centre(object.position_m.x(), object.position_m.y(),
-                               scene.mount.height_m);
-  const Eigen::Vector3d in_camera =
-      camera_to_body(scene.mount.pitch_rad).transpose() *
-      (centre - Eigen::Vector3d(0.0, 0.0, scene.mount.height_m));
+  const Eigen::Vector3d centre(object.position_m.x(), object.position_m.y(), scene.mount.height_m);
+  const Eigen::Vector3d in_camera = camera_to_body(scene.mount.pitch_rad).transpose() *
+                                    (centre - Eigen::Vector3d(0.0, 0.0, scene.mount.height_m));
   truth.centre_depth_m = in_camera.z();
   truth.ttc_s = -truth.centre_depth_m / v.z();
   return truth;

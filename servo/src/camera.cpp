@@ -34,10 +34,10 @@ CameraIntrinsics CameraIntrinsics::from_horizontal_fov(int width_px, int height_
 }
 
 void CameraIntrinsics::validate() const {
-  require(width_px > 0, "camera intrinsics: width_px must be positive, got " +
-                            std::to_string(width_px));
-  require(height_px > 0, "camera intrinsics: height_px must be positive, got " +
-                             std::to_string(height_px));
+  require(width_px > 0,
+          "camera intrinsics: width_px must be positive, got " + std::to_string(width_px));
+  require(height_px > 0,
+          "camera intrinsics: height_px must be positive, got " + std::to_string(height_px));
   require(std::isfinite(fx_px) && fx_px > 0.0,
           "camera intrinsics: fx_px must be positive, got " + std::to_string(fx_px));
   require(std::isfinite(fy_px) && fy_px > 0.0,
@@ -49,9 +49,9 @@ void CameraIntrinsics::validate() const {
 void CameraMount::validate() const {
   require(std::isfinite(height_m) && height_m > 0.0,
           "camera mount: height_m must be positive, got " + std::to_string(height_m));
-  require(std::isfinite(pitch_rad) && std::abs(pitch_rad) < 0.5 * std::numbers::pi,
-          "camera mount: pitch_rad must be within (-90, 90) degrees, got " +
-              std::to_string(pitch_rad));
+  require(
+      std::isfinite(pitch_rad) && std::abs(pitch_rad) < 0.5 * std::numbers::pi,
+      "camera mount: pitch_rad must be within (-90, 90) degrees, got " + std::to_string(pitch_rad));
 }
 
 }  // namespace flowsteer::servo

@@ -237,14 +237,16 @@ void validate(const AvoidanceOptions& o) {
 
 void require_weight(double value, const char* name) {
   if (!std::isfinite(value) || value < 0.0) {
-    throw std::invalid_argument(std::string("navigation weight ") + name +
-                                " must be >= 0, got " + std::to_string(value));
+    throw std::invalid_argument(std::string("navigation weight ") + name + " must be >= 0, got " +
+                                std::to_string(value));
   }
 }
 
 }  // namespace
 
-std::unique_ptr<CostTerm> goal_term() { return std::make_unique<GoalTerm>(); }
+std::unique_ptr<CostTerm> goal_term() {
+  return std::make_unique<GoalTerm>();
+}
 
 std::unique_ptr<CostTerm> speed_term(double preferred_speed_mps) {
   if (!std::isfinite(preferred_speed_mps)) {
@@ -355,10 +357,9 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
     }
     throw std::domain_error("controller: the command is not finite");
   }
-  out.command = {std::clamp(out.unclamped.accel_mps2, -limits_.max_accel_mps2,
-                            limits_.max_accel_mps2),
-                 std::clamp(out.unclamped.turn_rate, -limits_.max_turn_rate,
-                            limits_.max_turn_rate)};
+  out.command = {
+      std::clamp(out.unclamped.accel_mps2, -limits_.max_accel_mps2, limits_.max_accel_mps2),
+      std::clamp(out.unclamped.turn_rate, -limits_.max_turn_rate, limits_.max_turn_rate)};
 }
 
 ControlOutput Controller::step(const Percept& percept, const AgentState& agent) const {

@@ -11,8 +11,7 @@ FeatureRate centre_x_rate(double centre_x, double foe_x, double tau_s) {
 }
 
 FeatureRate foe_x_rate(double foe_x, double speed_mps, double relative_vz_mps) {
-  return {0.0, foe_x / relative_vz_mps,
-          -(1.0 + foe_x * foe_x + speed_mps / relative_vz_mps)};
+  return {0.0, foe_x / relative_vz_mps, -(1.0 + foe_x * foe_x + speed_mps / relative_vz_mps)};
 }
 
 FeatureRate separation_rate(double centre_x, double foe_x, double tau_s, double tau_over_depth,
@@ -25,6 +24,8 @@ FeatureRate flow_x_rate(double x, double flow_u, double tau_s, double depth_m, d
   return {2.0 * flow_u / tau_s, x / depth_m, -(speed_mps / depth_m + 2.0 * x * flow_u)};
 }
 
-FeatureRate relative_vz_rate(double relative_vx_mps) { return {0.0, -1.0, relative_vx_mps}; }
+FeatureRate relative_vz_rate(double relative_vx_mps) {
+  return {0.0, -1.0, relative_vx_mps};
+}
 
 }  // namespace flowsteer::servo

@@ -242,10 +242,9 @@ FeatureExtractor::FeatureExtractor(const FeatureOptions& options) : options_(opt
                                 std::to_string(options_.min_pixels));
   }
   if (options_.max_fit_samples < options_.min_pixels) {
-    throw std::invalid_argument("FeatureOptions::max_fit_samples (" +
-                                std::to_string(options_.max_fit_samples) +
-                                ") must be at least min_pixels (" +
-                                std::to_string(options_.min_pixels) + ")");
+    throw std::invalid_argument(
+        "FeatureOptions::max_fit_samples (" + std::to_string(options_.max_fit_samples) +
+        ") must be at least min_pixels (" + std::to_string(options_.min_pixels) + ")");
   }
 }
 
@@ -340,8 +339,8 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
       const std::uint32_t i = pixels[static_cast<std::size_t>(k * stride)];
       const auto col = static_cast<int>(i % static_cast<std::uint32_t>(field.width()));
       const auto row = static_cast<int>(i / static_cast<std::uint32_t>(field.width()));
-      samples_[static_cast<std::size_t>(sample_offsets_[r] + k)] = {
-          {field.x(col), field.y(row)}, flow[i].cast<double>()};
+      samples_[static_cast<std::size_t>(sample_offsets_[r] + k)] = {{field.x(col), field.y(row)},
+                                                                    flow[i].cast<double>()};
     }
   }
 

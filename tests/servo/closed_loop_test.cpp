@@ -50,7 +50,8 @@ RunResult run(std::vector<SceneObject> world, const Eigen::Vector2d& goal) {
   for (int step = 0; step < 400; ++step) {
     const Eigen::Rotation2Dd to_body(-yaw);
     AnalyticScene scene;
-    scene.intrinsics = CameraIntrinsics::from_horizontal_fov(96, 72, 100.0 * std::numbers::pi / 180);
+    scene.intrinsics =
+        CameraIntrinsics::from_horizontal_fov(96, 72, 100.0 * std::numbers::pi / 180);
     scene.mount = {1.0, 0.0};
     scene.agent_speed_mps = speed;
     scene.agent_turn_rate = turn_rate;

@@ -90,8 +90,8 @@ TEST(ControlSigns, LeaderDriftingRightIsFollowedToTheRight) {
   FollowingWeights w;
   w.beta = 0.0;
   w.gamma = 0.0;
-  const ControlOutput out = Controller(following(w), 1.0, {10.0, 10.0}).step(
-      {objects, {}, {}, 7}, {1.0});
+  const ControlOutput out =
+      Controller(following(w), 1.0, {10.0, 10.0}).step({objects, {}, {}, 7}, {1.0});
   EXPECT_GT(out.command.turn_rate, 0.0);
 }
 

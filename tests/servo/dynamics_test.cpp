@@ -81,12 +81,11 @@ TEST(FeatureDynamics, FoeRateMatchesSimulation) {
 TEST(FeatureDynamics, SeparationRateMatchesSimulation) {
   for (const TwoBody& s : random_configurations()) {
     for (const Controls& c : kControls) {
-      const double measured = rate_of(s, c.accel, c.turn, [](const TwoBody& b) {
-        return b.image_x() - b.foe_x();
-      });
-      expect_rate(separation_rate(s.image_x(), s.foe_x(), s.ttc(), s.ttc() / s.depth(),
-                                  s.agent_speed),
-                  measured, c, "delta_x");
+      const double measured =
+          rate_of(s, c.accel, c.turn, [](const TwoBody& b) { return b.image_x() - b.foe_x(); });
+      expect_rate(
+          separation_rate(s.image_x(), s.foe_x(), s.ttc(), s.ttc() / s.depth(), s.agent_speed),
+          measured, c, "delta_x");
     }
   }
 }
@@ -97,8 +96,8 @@ TEST(FeatureDynamics, FlowRateMatchesSimulation) {
       const double measured =
           rate_of(s, c.accel, c.turn, [](const TwoBody& b) { return b.flow_x(); });
       // τ of the point itself: −Z / v_z.
-      expect_rate(flow_x_rate(s.image_x(), s.flow_x(), s.ttc(), s.depth(), s.agent_speed),
-                  measured, c, "u");
+      expect_rate(flow_x_rate(s.image_x(), s.flow_x(), s.ttc(), s.depth(), s.agent_speed), measured,
+                  c, "u");
     }
   }
 }
@@ -119,8 +118,7 @@ TEST(FeatureDynamics, PrintedFoeEquationDisagreesWithSimulation) {
   int disagreements = 0;
   for (const TwoBody& s : random_configurations()) {
     const Controls c{0.5, 0.3};
-    const double measured =
-        rate_of(s, c.accel, c.turn, [](const TwoBody& b) { return b.foe_x(); });
+    const double measured = rate_of(s, c.accel, c.turn, [](const TwoBody& b) { return b.foe_x(); });
     const double f = s.foe_x();
     const double vz = s.relative_vz();
     const double printed = (s.agent_speed / vz - f * f - 1.0) * c.turn - f / vz * c.accel;

@@ -132,8 +132,7 @@ void corrupt_region(SceneRender& render, std::int32_t id, unsigned seed) {
 TEST(RadialFit, NoisyFlowWithOutliersStaysWithinBounds) {
   for (const Case& c : approaching_cases()) {
     for (unsigned seed = 1; seed <= 5; ++seed) {
-      const Extracted e =
-          extract(c, [&](SceneRender& r) { corrupt_region(r, c.object.id, seed); });
+      const Extracted e = extract(c, [&](SceneRender& r) { corrupt_region(r, c.object.id, seed); });
       ASSERT_EQ(e.features.status, MotionStatus::approaching) << c.name << " seed " << seed;
       EXPECT_LT((e.features.foe - e.truth.foe).norm(), 0.02) << c.name << " seed " << seed;
       EXPECT_NEAR(e.features.ttc_s, e.truth.ttc_s, 0.05 * e.truth.ttc_s)

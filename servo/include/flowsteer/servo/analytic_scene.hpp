@@ -16,11 +16,11 @@ namespace flowsteer::servo {
 struct SceneObject {
   enum class Shape { box, cylinder };
   Shape shape = Shape::box;
-  std::int32_t id = 0;  // >= 0; written to the id image
+  std::int32_t id = 0;                                   // >= 0; written to the id image
   Eigen::Vector2d position_m = Eigen::Vector2d::Zero();  // centre of the footprint
-  double length_m = 1.0;                                  // box: extent along x
-  double width_m = 1.0;                                   // box: extent along y
-  double radius_m = 0.5;                                  // cylinder
+  double length_m = 1.0;                                 // box: extent along x
+  double width_m = 1.0;                                  // box: extent along y
+  double radius_m = 0.5;                                 // cylinder
   double height_m = 1.8;
   Eigen::Vector2d velocity_mps = Eigen::Vector2d::Zero();  // over the ground, body axes
 };

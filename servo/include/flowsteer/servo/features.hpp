@@ -88,7 +88,8 @@ struct RadialFit {
 // (Cauchy, then Tukey) by iteratively reweighted least squares with Ceres' TinySolver, the noise
 // scale re-estimated each round and relative to the flow's magnitude, so that noisy numerical
 // flow and outliers do not pull the FOE. Needs at least 3 samples; fewer give status no_flow.
-RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options = {});
+RadialFit fit_radial_flow(std::span<const FlowSample> samples,
+                          const RadialFitOptions& options = {});
 
 // CGF Eq. 5: τ = mean_j ‖x_j − f‖ / ‖u_j‖, over samples with a non-negligible flow, signed
 // like `sign_from`. NaN when no sample qualifies.
@@ -96,8 +97,8 @@ double ttc_from_foe(std::span<const FlowSample> samples, const Eigen::Vector2d& 
                     double sign_from);
 
 struct FeatureOptions {
-  int min_pixels = 12;         // smaller regions are reported with status no_flow
-  int max_fit_samples = 256;   // pixels of a region the robust fit uses, evenly spread
+  int min_pixels = 12;        // smaller regions are reported with status no_flow
+  int max_fit_samples = 256;  // pixels of a region the robust fit uses, evenly spread
   RadialFitOptions fit;
 };
 
