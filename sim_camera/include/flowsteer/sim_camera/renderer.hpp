@@ -1,0 +1,61 @@
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "flowsteer/sim_camera/world.hpp"
+#include "flowsteer/servo/camera.hpp"
+
+namespace flowsteer::sim_camera {
+
+// Where a view is taken from: an agent's head camera, aligned with its direction of motion.
+struct View {
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  double yaw_rad = 0.0;
+  double speed_mps = 0.0;
+  double turn_rate = 0.0;  // ω about the camera's y axis, positive turns right
+  CameraSpec camera;
+  std::optional<std::size_t> self;  // the agent whose body is not drawn
+
+  static View of_agent(const World& world, std::size_t agent);
+  servo::CameraIntrinsics intrinsics() const;
+};
+
+// One render: all channels for the same instant, row-major from the top-left pixel.
+struct RenderedView {
+  cv::Mat image;       // CV_8UC3 BGR, lit, gamma-encoded
+  cv::Mat depth_m;     // CV_32F, depth along the optical axis, +inf for the sky
+  cv::Mat object_ids;  // CV_32S, agent_render_id()..., servo::kGroundId, servo::kSkyId
+  cv::Mat flow;        // CV_32FC2, CGF Eq. 1 (rotation included), normalised units per second
+};
+
+// A headless OpenGL 3.3 renderer through EGL: Mesa's surfaceless platform (llvmpipe on a
+// machine without a GPU) or, where there is one, the GPU through the device platform. It draws
+// lit, shadowed, procedurally textured worlds and, per pixel, the synthetic flow of CGF Eq. 1
+// from the depth, the object and the known relative velocities. One renderer per thread.
+class Renderer {
+ public:
+  // Throws std::runtime_error saying what failed when no EGL display or OpenGL 3.3 context can
+  // be had.
+  static std::unique_ptr<Renderer> create();
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Renders the world as it is now from `view`. Reuses out's buffers when the size is the same.
+  void render(const World& world, const View& view, RenderedView& out);
+
+  // What EGL and OpenGL report, e.g. "OpenGL 4.5 (Core Profile) Mesa 22.3.6, llvmpipe".
+  const std::string& description() const;
+
+ private:
+  struct Impl;
+  explicit Renderer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace flowsteer::sim_camera

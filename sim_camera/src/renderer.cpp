@@ -1,0 +1,683 @@
+#include "flowsteer/sim_camera/renderer.hpp"
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <EGL/egl.h>
+#include <EGL/eglext.h>
+#include <GL/gl.h>
+#include <GL/glext.h>
+
+#include <array>
+#include <cstdio>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "flowsteer/servo/analytic_scene.hpp"
+#include "flowsteer/servo/flow_field.hpp"
+#include "shaders.hpp"
+
+namespace flowsteer::sim_camera {
+
+namespace {
+
+constexpr int kShadowMapSize = 2048;
+constexpr int kMaxPointLights = 8;
+constexpr float kNear = 0.05F;
+constexpr float kFar = 500.0F;
+
+std::string egl_error(const char* what) {
+  char code[16];
+  std::snprintf(code, sizeof code, "0x%04x", eglGetError());
+  return std::string(what) + " failed (EGL error " + code + ")";
+}
+
+void check_gl(const char* what) {
+  const GLenum error = glGetError();
+  if (error != GL_NO_ERROR) {
+    char code[16];
+    std::snprintf(code, sizeof code, "0x%04x", error);
+    throw std::runtime_error(std::string("OpenGL: ") + what + " failed (error " + code + ")");
+  }
+}
+
+GLuint compile(GLenum type, const char* source, const char* name) {
+  const GLuint shader = glCreateShader(type);
+  glShaderSource(shader, 1, &source, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok == GL_FALSE) {
+    std::array<char, 4096> log{};
+    glGetShaderInfoLog(shader, log.size(), nullptr, log.data());
+    glDeleteShader(shader);
+    throw std::runtime_error(std::string("OpenGL: shader ") + name + " does not compile: " +
+                             log.data());
+  }
+  return shader;
+}
+
+GLuint link(const char* vertex, const char* fragment, const char* name) {
+  const GLuint vs = compile(GL_VERTEX_SHADER, vertex, name);
+  const GLuint fs = compile(GL_FRAGMENT_SHADER, fragment, name);
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (ok == GL_FALSE) {
+    std::array<char, 4096> log{};
+    glGetProgramInfoLog(program, log.size(), nullptr, log.data());
+    glDeleteProgram(program);
+    throw std::runtime_error(std::string("OpenGL: program ") + name + " does not link: " +
+                             log.data());
+  }
+  return program;
+}
+
+struct Vertex {
+  float position[3];
+  float normal[3];
+};
+
+// A vertex array with its buffers, drawn as indexed triangles.
+struct Mesh {
+  GLuint vao = 0;
+  GLuint vbo = 0;
+  GLuint ebo = 0;
+  GLsizei index_count = 0;
+
+  void upload(const std::vector<Vertex>& vertices, const std::vector<GLuint>& indices) {
+    glGenVertexArrays(1, &vao);
+    glGenBuffers(1, &vbo);
+    glGenBuffers(1, &ebo);
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(Vertex)),
+                 vertices.data(), GL_STATIC_DRAW);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLuint)),
+                 indices.data(), GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), nullptr);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, normal)));
+    glBindVertexArray(0);
+    index_count = static_cast<GLsizei>(indices.size());
+  }
+  void release() {
+    glDeleteBuffers(1, &ebo);
+    glDeleteBuffers(1, &vbo);
+    glDeleteVertexArrays(1, &vao);
+  }
+  void draw() const {
+    glBindVertexArray(vao);
+    glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
+  }
+};
+
+void add_quad(std::vector<Vertex>& v, std::vector<GLuint>& idx, const Eigen::Vector3f corners[4],
+              const Eigen::Vector3f& normal) {
+  const auto base = static_cast<GLuint>(v.size());
+  for (int k = 0; k < 4; ++k) {
+    v.push_back({{corners[k].x(), corners[k].y(), corners[k].z()},
+                 {normal.x(), normal.y(), normal.z()}});
+  }
+  for (GLuint k : {0U, 1U, 2U, 0U, 2U, 3U}) {
+    idx.push_back(base + k);
+  }
+}
+
+// A unit box: [-0.5, 0.5]² × [0, 1].
+Mesh box_mesh() {
+  std::vector<Vertex> v;
+  std::vector<GLuint> idx;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const float side : {-1.0F, 1.0F}) {
+      Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+      normal[axis] = side;
+      const int a = (axis + 1) % 3;
+      const int b = (axis + 2) % 3;
+      Eigen::Vector3f corners[4];
+      const float du[4] = {-1, 1, 1, -1};
+      const float dv[4] = {-1, -1, 1, 1};
+      for (int k = 0; k < 4; ++k) {
+        Eigen::Vector3f c;
+        c[axis] = 0.5F * side;
+        c[a] = 0.5F * du[k];
+        c[b] = 0.5F * dv[k];
+        c.z() += 0.5F;
+        corners[k] = c;
+      }
+      add_quad(v, idx, corners, normal);
+    }
+  }
+  Mesh m;
+  m.upload(v, idx);
+  return m;
+}
+
+// A unit cylinder: radius 1, from z = 0 to 1, with its top cap.
+Mesh cylinder_mesh() {
+  constexpr int kSegments = 48;
+  std::vector<Vertex> v;
+  std::vector<GLuint> idx;
+  for (int k = 0; k < kSegments; ++k) {
+    const double a0 = 2.0 * std::numbers::pi * k / kSegments;
+    const double a1 = 2.0 * std::numbers::pi * (k + 1) / kSegments;
+    const Eigen::Vector3f p0(static_cast<float>(std::cos(a0)), static_cast<float>(std::sin(a0)),
+                             0.0F);
+    const Eigen::Vector3f p1(static_cast<float>(std::cos(a1)), static_cast<float>(std::sin(a1)),
+                             0.0F);
+    const auto base = static_cast<GLuint>(v.size());
+    const Eigen::Vector3f up(0, 0, 1);
+    for (const auto& [p, n] : {std::pair{p0, p0}, std::pair{p1, p1}, std::pair{Eigen::Vector3f(p1 + up), p1},
+                               std::pair{Eigen::Vector3f(p0 + up), p0}}) {
+      v.push_back({{p.x(), p.y(), p.z()}, {n.x(), n.y(), n.z()}});
+    }
+    for (GLuint i : {0U, 1U, 2U, 0U, 2U, 3U}) {
+      idx.push_back(base + i);
+    }
+    const auto cap = static_cast<GLuint>(v.size());
+    v.push_back({{0, 0, 1}, {0, 0, 1}});
+    v.push_back({{p0.x(), p0.y(), 1}, {0, 0, 1}});
+    v.push_back({{p1.x(), p1.y(), 1}, {0, 0, 1}});
+    for (GLuint i : {0U, 1U, 2U}) {
+      idx.push_back(cap + i);
+    }
+  }
+  Mesh m;
+  m.upload(v, idx);
+  return m;
+}
+
+// The ground: [-0.5, 0.5]² at z = 0.
+Mesh ground_mesh() {
+  std::vector<Vertex> v;
+  std::vector<GLuint> idx;
+  const Eigen::Vector3f corners[4] = {{-0.5F, -0.5F, 0}, {0.5F, -0.5F, 0}, {0.5F, 0.5F, 0},
+                                      {-0.5F, 0.5F, 0}};
+  add_quad(v, idx, corners, Eigen::Vector3f(0, 0, 1));
+  Mesh m;
+  m.upload(v, idx);
+  return m;
+}
+
+Eigen::Matrix4f model_matrix(const Eigen::Vector2d& centre, double yaw, const Eigen::Vector3d& scale) {
+  Eigen::Affine3d t = Eigen::Translation3d(centre.x(), centre.y(), 0.0) *
+                      Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::Scaling(scale);
+  return t.matrix().cast<float>();
+}
+
+// What one draw needs: the shape, its pose and size, how it looks, who it is and how it moves.
+struct DrawItem {
+  const Mesh* mesh;
+  Eigen::Matrix4f model;
+  const Material* material;
+  std::int32_t id;
+  Eigen::Vector3d velocity_mps;  // world frame
+  bool casts_shadow;
+};
+
+}  // namespace
+
+struct Renderer::Impl {
+  EGLDisplay display = EGL_NO_DISPLAY;
+  EGLContext context = EGL_NO_CONTEXT;
+  std::string description;
+  GLuint scene_program = 0;
+  GLuint shadow_program = 0;
+  Mesh box;
+  Mesh cylinder;
+  Mesh ground;
+  GLuint fbo = 0;
+  std::array<GLuint, 5> renderbuffers{};  // color, id, flow, depth, depth-stencil
+  int fbo_width = 0;
+  int fbo_height = 0;
+  GLuint shadow_fbo = 0;
+  GLuint shadow_texture = 0;
+  const World* shadow_world = nullptr;
+  double shadow_time_s = -1.0;
+  Eigen::Matrix4f light_view_projection = Eigen::Matrix4f::Identity();
+  std::vector<DrawItem> items;
+
+  ~Impl() {
+    if (context != EGL_NO_CONTEXT) {
+      eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context);
+      box.release();
+      cylinder.release();
+      ground.release();
+      glDeleteRenderbuffers(static_cast<GLsizei>(renderbuffers.size()), renderbuffers.data());
+      glDeleteFramebuffers(1, &fbo);
+      glDeleteTextures(1, &shadow_texture);
+      glDeleteFramebuffers(1, &shadow_fbo);
+      glDeleteProgram(scene_program);
+      glDeleteProgram(shadow_program);
+      eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+      eglDestroyContext(display, context);
+    }
+    if (display != EGL_NO_DISPLAY) {
+      eglTerminate(display);
+    }
+  }
+
+  void open_display() {
+    const auto get_platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+        eglGetProcAddress("eglGetPlatformDisplayEXT"));
+    if (get_platform_display == nullptr) {
+      throw std::runtime_error(
+          "no EGL display available: EGL has no eglGetPlatformDisplayEXT (is libegl1 with a "
+          "vendor library such as libegl-mesa0 installed?)");
+    }
+    // A GPU through the device platform first, then Mesa's surfaceless platform (llvmpipe).
+    const auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(
+        eglGetProcAddress("eglQueryDevicesEXT"));
+    if (query_devices != nullptr) {
+      std::array<EGLDeviceEXT, 8> devices{};
+      EGLint count = 0;
+      if (query_devices(static_cast<EGLint>(devices.size()), devices.data(), &count) &&
+          count > 0) {
+        for (EGLint k = 0; k < count && display == EGL_NO_DISPLAY; ++k) {
+          EGLDisplay d = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[k], nullptr);
+          if (d != EGL_NO_DISPLAY && eglInitialize(d, nullptr, nullptr)) {
+            const char* vendor = eglQueryString(d, EGL_VENDOR);
+            // Mesa's software device is the surfaceless one below; prefer a real GPU here.
+            if (vendor != nullptr && std::string(vendor).find("Mesa") == std::string::npos) {
+              display = d;
+            } else {
+              eglTerminate(d);
+            }
+          }
+        }
+      }
+    }
+    if (display == EGL_NO_DISPLAY) {
+      EGLDisplay d = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY,
+                                          nullptr);
+      if (d == EGL_NO_DISPLAY || !eglInitialize(d, nullptr, nullptr)) {
+        throw std::runtime_error("no EGL display available: " +
+                                 egl_error("the surfaceless platform (Mesa)") +
+                                 "; install libegl-mesa0 and libgl1-mesa-dri, or run where a "
+                                 "GPU's EGL driver is present");
+      }
+      display = d;
+    }
+  }
+
+  void create_context() {
+    if (!eglBindAPI(EGL_OPENGL_API)) {
+      throw std::runtime_error(egl_error("eglBindAPI(EGL_OPENGL_API)"));
+    }
+    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                 3,
+                                 EGL_CONTEXT_MINOR_VERSION,
+                                 3,
+                                 EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                 EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                 EGL_NONE};
+    context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
+    if (context == EGL_NO_CONTEXT) {
+      throw std::runtime_error(egl_error("creating an OpenGL 3.3 core context"));
+    }
+    if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
+      throw std::runtime_error(egl_error("eglMakeCurrent without a surface"));
+    }
+    description = std::string("OpenGL ") +
+                  reinterpret_cast<const char*>(glGetString(GL_VERSION)) + ", " +
+                  reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  }
+
+  void create_resources() {
+    scene_program = link(shaders::kSceneVertex, shaders::kSceneFragment, "scene");
+    shadow_program = link(shaders::kShadowVertex, shaders::kShadowFragment, "shadow");
+    box = box_mesh();
+    cylinder = cylinder_mesh();
+    ground = ground_mesh();
+    glGenTextures(1, &shadow_texture);
+    glBindTexture(GL_TEXTURE_2D, shadow_texture);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, kShadowMapSize, kShadowMapSize, 0,
+                 GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    glGenFramebuffers(1, &shadow_fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadow_texture, 0);
+    glDrawBuffer(GL_NONE);
+    glReadBuffer(GL_NONE);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+      throw std::runtime_error("OpenGL: the shadow-map framebuffer is incomplete");
+    }
+    glGenFramebuffers(1, &fbo);
+    check_gl("creating the renderer's resources");
+  }
+
+  void resize(int width, int height) {
+    if (width == fbo_width && height == fbo_height) {
+      return;
+    }
+    if (renderbuffers[0] != 0) {
+      glDeleteRenderbuffers(static_cast<GLsizei>(renderbuffers.size()), renderbuffers.data());
+    }
+    glGenRenderbuffers(static_cast<GLsizei>(renderbuffers.size()), renderbuffers.data());
+    const GLenum formats[] = {GL_RGBA8, GL_R32I, GL_RG32F, GL_R32F, GL_DEPTH_COMPONENT24};
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    for (std::size_t k = 0; k < renderbuffers.size(); ++k) {
+      glBindRenderbuffer(GL_RENDERBUFFER, renderbuffers[k]);
+      glRenderbufferStorage(GL_RENDERBUFFER, formats[k], width, height);
+      const GLenum attachment =
+          k < 4 ? GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(k) : GL_DEPTH_ATTACHMENT;
+      glFramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, renderbuffers[k]);
+    }
+    const GLenum draw_buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1,
+                                   GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    glDrawBuffers(4, draw_buffers);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+      throw std::runtime_error("OpenGL: the " + std::to_string(width) + "x" +
+                               std::to_string(height) + " framebuffer is incomplete");
+    }
+    check_gl("allocating the framebuffer");
+    fbo_width = width;
+    fbo_height = height;
+  }
+
+  void collect_items(const World& world, std::optional<std::size_t> self) {
+    items.clear();
+    const WorldSpec& spec = world.spec();
+    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+      const AgentSpec& a = spec.agents[i];
+      const AgentState& s = world.agents()[i];
+      const Eigen::Vector2d v = s.velocity_mps();
+      items.push_back({&cylinder, model_matrix(s.position_m, 0.0, {a.radius_m, a.radius_m, a.height_m}),
+                       &a.material, agent_render_id(i), {v.x(), v.y(), 0.0}, true});
+      if (self && *self == i) {
+        items.back().mesh = nullptr;  // casts a shadow, but its own camera does not see it
+      }
+    }
+    auto add_solid = [&](const Solid& s, std::int32_t id, const Eigen::Vector2d& velocity) {
+      const bool box_shape = s.shape == Solid::Shape::box;
+      const Eigen::Vector3d scale = box_shape ? Eigen::Vector3d(s.size_m.x(), s.size_m.y(), s.height_m)
+                                              : Eigen::Vector3d(s.radius_m, s.radius_m, s.height_m);
+      items.push_back({box_shape ? &box : &cylinder, model_matrix(s.centre_m, s.yaw_rad, scale),
+                       &s.material, id, {velocity.x(), velocity.y(), 0.0}, true});
+    };
+    for (std::size_t k = 0; k < spec.obstacles.size(); ++k) {
+      add_solid(spec.obstacles[k], obstacle_render_id(k), Eigen::Vector2d::Zero());
+    }
+    for (std::size_t k = 0; k < spec.moving.size(); ++k) {
+      add_solid(world.moving_now(k), moving_render_id(k), world.moving()[k].velocity_mps);
+    }
+  }
+
+  // The sun's shadow map, once per world state: every view of that instant shares it.
+  void render_shadow_map(const World& world) {
+    const auto& sun = world.spec().lighting.sun;
+    if (!sun || !sun->shadows || (shadow_world == &world && shadow_time_s == world.time_s())) {
+      return;
+    }
+    shadow_world = &world;
+    shadow_time_s = world.time_s();
+    // Fit an orthographic light frustum around everything that stands on the ground.
+    Eigen::AlignedBox2d bounds;
+    for (const AgentState& a : world.agents()) {
+      bounds.extend(a.position_m);
+    }
+    for (const Solid& s : world.spec().obstacles) {
+      bounds.extend(s.centre_m);
+    }
+    for (const MovingState& m : world.moving()) {
+      bounds.extend(m.position_m);
+    }
+    const Eigen::Vector2d centre2 = bounds.center();
+    const double radius = 0.5 * bounds.diagonal().norm() + 6.0;
+    const Eigen::Vector3d centre(centre2.x(), centre2.y(), 0.0);
+    const Eigen::Vector3d to_sun(std::cos(sun->elevation_rad) * std::cos(sun->azimuth_rad),
+                                 std::cos(sun->elevation_rad) * std::sin(sun->azimuth_rad),
+                                 std::sin(sun->elevation_rad));
+    const Eigen::Vector3d eye = centre + 2.0 * radius * to_sun;
+    const Eigen::Vector3d forward = (centre - eye).normalized();
+    Eigen::Vector3d up = std::abs(forward.z()) > 0.99 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d right = forward.cross(up).normalized();
+    up = right.cross(forward);
+    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
+    view.block<1, 3>(0, 0) = right.transpose();
+    view.block<1, 3>(1, 0) = up.transpose();
+    view.block<1, 3>(2, 0) = -forward.transpose();
+    view.block<3, 1>(0, 3) = -view.block<3, 3>(0, 0) * eye;
+    const double near = 0.1;
+    const double far = 4.0 * radius;
+    Eigen::Matrix4d ortho = Eigen::Matrix4d::Identity();
+    ortho(0, 0) = 1.0 / radius;
+    ortho(1, 1) = 1.0 / radius;
+    ortho(2, 2) = -2.0 / (far - near);
+    ortho(2, 3) = -(far + near) / (far - near);
+    light_view_projection = (ortho * view).cast<float>();
+
+    glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+    glViewport(0, 0, kShadowMapSize, kShadowMapSize);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glUseProgram(shadow_program);
+    glUniformMatrix4fv(glGetUniformLocation(shadow_program, "u_light_view_projection"), 1,
+                       GL_FALSE, light_view_projection.data());
+    const GLint model_location = glGetUniformLocation(shadow_program, "u_model");
+    collect_items(world, std::nullopt);
+    for (const DrawItem& item : items) {
+      glUniformMatrix4fv(model_location, 1, GL_FALSE, item.model.data());
+      item.mesh->draw();
+    }
+    check_gl("rendering the shadow map");
+  }
+
+  void set_material(const Material& m) {
+    glUniform3f(glGetUniformLocation(scene_program, "u_albedo"), m.albedo.x(), m.albedo.y(),
+                m.albedo.z());
+    glUniform1i(glGetUniformLocation(scene_program, "u_pattern"), static_cast<int>(m.pattern));
+    glUniform1f(glGetUniformLocation(scene_program, "u_pattern_scale"), m.pattern_scale_m);
+    glUniform1f(glGetUniformLocation(scene_program, "u_pattern_contrast"), m.pattern_contrast);
+  }
+
+  void render(const World& world, const View& view, RenderedView& out) {
+    eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context);
+    const servo::CameraIntrinsics k = view.intrinsics();
+    const WorldSpec& spec = world.spec();
+    render_shadow_map(world);
+    resize(k.width_px, k.height_px);
+
+    // World to the optical frame (x right, y down, z forward), camera pitched down.
+    const double c = std::cos(view.yaw_rad);
+    const double s = std::sin(view.yaw_rad);
+    const double cp = std::cos(view.camera.pitch_rad);
+    const double sp = std::sin(view.camera.pitch_rad);
+    const Eigen::Vector3d forward(c * cp, s * cp, -sp);
+    const Eigen::Vector3d right(s, -c, 0.0);
+    const Eigen::Vector3d down = forward.cross(right);
+    Eigen::Matrix3d rotation;
+    rotation << right.transpose(), down.transpose(), forward.transpose();
+    const Eigen::Vector3d eye(view.position_m.x(), view.position_m.y(), view.camera.height_m);
+    Eigen::Matrix4f world_to_camera = Eigen::Matrix4f::Identity();
+    world_to_camera.block<3, 3>(0, 0) = rotation.cast<float>();
+    world_to_camera.block<3, 1>(0, 3) = (-rotation * eye).cast<float>();
+    // Pixel centres at integer coordinates; row 0 lands on the first row glReadPixels returns.
+    Eigen::Matrix4f projection = Eigen::Matrix4f::Zero();
+    projection(0, 0) = static_cast<float>(2.0 * k.fx_px / k.width_px);
+    projection(0, 2) = static_cast<float>(2.0 * (k.cx_px + 0.5) / k.width_px - 1.0);
+    projection(1, 1) = static_cast<float>(2.0 * k.fy_px / k.height_px);
+    projection(1, 2) = static_cast<float>(2.0 * (k.cy_px + 0.5) / k.height_px - 1.0);
+    projection(2, 2) = (kFar + kNear) / (kFar - kNear);
+    projection(2, 3) = -2.0F * kFar * kNear / (kFar - kNear);
+    projection(3, 2) = 1.0F;
+    const Eigen::Vector3d agent_velocity(view.speed_mps * c, view.speed_mps * s, 0.0);
+    const Eigen::Vector3d omega = servo::camera_angular_velocity(view.turn_rate, view.camera.pitch_rad);
+
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glViewport(0, 0, k.width_px, k.height_px);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);
+    const Lighting& lighting = spec.lighting;
+    const float sky_light = lighting.ambient + (lighting.sun ? 0.6F * lighting.sun->intensity : 0.0F);
+    const std::array<float, 4> sky = {std::min(1.0F, 0.55F * sky_light), std::min(1.0F, 0.7F * sky_light),
+                                      std::min(1.0F, 0.9F * sky_light), 1.0F};
+    const std::array<GLint, 4> no_id = {servo::kSkyId, 0, 0, 0};
+    const std::array<float, 4> zero = {0, 0, 0, 0};
+    const std::array<float, 4> infinite = {std::numeric_limits<float>::infinity(), 0, 0, 0};
+    const float far_depth = 1.0F;
+    glClearBufferfv(GL_COLOR, 0, sky.data());
+    glClearBufferiv(GL_COLOR, 1, no_id.data());
+    glClearBufferfv(GL_COLOR, 2, zero.data());
+    glClearBufferfv(GL_COLOR, 3, infinite.data());
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+
+    glUseProgram(scene_program);
+    auto location = [&](const char* name) { return glGetUniformLocation(scene_program, name); };
+    glUniformMatrix4fv(location("u_world_to_camera"), 1, GL_FALSE, world_to_camera.data());
+    glUniformMatrix4fv(location("u_projection"), 1, GL_FALSE, projection.data());
+    glUniformMatrix4fv(location("u_light_view_projection"), 1, GL_FALSE, light_view_projection.data());
+    glUniform3f(location("u_camera_omega"), static_cast<float>(omega.x()), static_cast<float>(omega.y()),
+                static_cast<float>(omega.z()));
+    glUniform1f(location("u_ambient"), lighting.ambient);
+    if (lighting.sun) {
+      const SunLight& sun = *lighting.sun;
+      glUniform3f(location("u_sun_direction"),
+                  static_cast<float>(std::cos(sun.elevation_rad) * std::cos(sun.azimuth_rad)),
+                  static_cast<float>(std::cos(sun.elevation_rad) * std::sin(sun.azimuth_rad)),
+                  static_cast<float>(std::sin(sun.elevation_rad)));
+      glUniform1f(location("u_sun_intensity"), sun.intensity);
+      glUniform1i(location("u_sun_shadows"), sun.shadows ? 1 : 0);
+    } else {
+      glUniform1f(location("u_sun_intensity"), 0.0F);
+      glUniform1i(location("u_sun_shadows"), 0);
+    }
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, shadow_texture);
+    glUniform1i(location("u_shadow_map"), 0);
+    // Fixed lights, then the lights agents carry.
+    std::vector<PointLight> points = lighting.points;
+    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+      if (const auto& carried = spec.agents[i].carried_light) {
+        const AgentState& a = world.agents()[i];
+        const Eigen::Vector2d offset = Eigen::Rotation2Dd(a.yaw_rad) * carried->position_m.head<2>();
+        PointLight p = *carried;
+        p.position_m = Eigen::Vector3d(a.position_m.x() + offset.x(), a.position_m.y() + offset.y(),
+                                       carried->position_m.z());
+        points.push_back(p);
+      }
+    }
+    const int point_count = std::min<int>(static_cast<int>(points.size()), kMaxPointLights);
+    glUniform1i(location("u_point_count"), point_count);
+    for (int p = 0; p < point_count; ++p) {
+      const PointLight& light = points[static_cast<std::size_t>(p)];
+      char name[32];
+      std::snprintf(name, sizeof name, "u_point_position[%d]", p);
+      glUniform3f(location(name), static_cast<float>(light.position_m.x()),
+                  static_cast<float>(light.position_m.y()), static_cast<float>(light.position_m.z()));
+      std::snprintf(name, sizeof name, "u_point_intensity[%d]", p);
+      glUniform1f(location(name), light.intensity);
+      std::snprintf(name, sizeof name, "u_point_range[%d]", p);
+      glUniform1f(location(name), static_cast<float>(light.range_m));
+    }
+
+    const GLint model_location = location("u_model");
+    const GLint normal_location = location("u_normal_matrix");
+    const GLint id_location = location("u_id");
+    const GLint velocity_location = location("u_relative_velocity");
+    auto draw = [&](const Mesh& mesh, const Eigen::Matrix4f& model, const Material& material,
+                    std::int32_t id, const Eigen::Vector3d& velocity) {
+      const Eigen::Matrix3f normal = model.block<3, 3>(0, 0).inverse().transpose();
+      const Eigen::Vector3f relative = (rotation * (velocity - agent_velocity)).cast<float>();
+      glUniformMatrix4fv(model_location, 1, GL_FALSE, model.data());
+      glUniformMatrix3fv(normal_location, 1, GL_FALSE, normal.data());
+      glUniform1i(id_location, id);
+      glUniform3f(velocity_location, relative.x(), relative.y(), relative.z());
+      set_material(material);
+      mesh.draw();
+    };
+    const Eigen::Vector2d ground_centre = view.position_m;
+    draw(ground, model_matrix(ground_centre, 0.0, {spec.ground_size_m, spec.ground_size_m, 1.0}),
+         spec.ground, servo::kGroundId, Eigen::Vector3d::Zero());
+    collect_items(world, view.self);
+    for (const DrawItem& item : items) {
+      if (item.mesh != nullptr) {
+        draw(*item.mesh, item.model, *item.material, item.id, item.velocity_mps);
+      }
+    }
+    check_gl("rendering the view");
+    read_back(k, omega, out);
+  }
+
+  void read_back(const servo::CameraIntrinsics& k, const Eigen::Vector3d& omega, RenderedView& out) {
+    out.image.create(k.height_px, k.width_px, CV_8UC3);
+    out.object_ids.create(k.height_px, k.width_px, CV_32SC1);
+    out.flow.create(k.height_px, k.width_px, CV_32FC2);
+    out.depth_m.create(k.height_px, k.width_px, CV_32FC1);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, k.width_px, k.height_px, GL_BGR, GL_UNSIGNED_BYTE, out.image.data);
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, k.width_px, k.height_px, GL_RED_INTEGER, GL_INT, out.object_ids.data);
+    glReadBuffer(GL_COLOR_ATTACHMENT2);
+    glReadPixels(0, 0, k.width_px, k.height_px, GL_RG, GL_FLOAT, out.flow.data);
+    glReadBuffer(GL_COLOR_ATTACHMENT3);
+    glReadPixels(0, 0, k.width_px, k.height_px, GL_RED, GL_FLOAT, out.depth_m.data);
+    check_gl("reading the view back");
+    // The sky is at infinite depth: only the camera's rotation moves it.
+    for (int row = 0; row < k.height_px; ++row) {
+      const auto* ids = out.object_ids.ptr<std::int32_t>(row);
+      auto* flow = out.flow.ptr<cv::Vec2f>(row);
+      const double y = (row - k.cy_px) / k.fy_px;
+      for (int col = 0; col < k.width_px; ++col) {
+        if (ids[col] == servo::kSkyId) {
+          const Eigen::Vector2d r = servo::rotational_flow((col - k.cx_px) / k.fx_px, y, omega);
+          flow[col] = cv::Vec2f(static_cast<float>(r.x()), static_cast<float>(r.y()));
+        }
+      }
+    }
+  }
+};
+
+View View::of_agent(const World& world, std::size_t agent) {
+  const AgentState& s = world.agents().at(agent);
+  View v;
+  v.position_m = s.position_m;
+  v.yaw_rad = s.yaw_rad;
+  v.speed_mps = s.speed_mps;
+  v.turn_rate = s.turn_rate;
+  v.camera = world.spec().agents[agent].camera;
+  v.self = agent;
+  return v;
+}
+
+servo::CameraIntrinsics View::intrinsics() const {
+  return servo::CameraIntrinsics::from_horizontal_fov(camera.width_px, camera.height_px,
+                                                      camera.hfov_rad);
+}
+
+std::unique_ptr<Renderer> Renderer::create() {
+  auto impl = std::make_unique<Impl>();
+  impl->open_display();
+  impl->create_context();
+  impl->create_resources();
+  return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Renderer::~Renderer() = default;
+
+void Renderer::render(const World& world, const View& view, RenderedView& out) {
+  impl_->render(world, view, out);
+}
+
+const std::string& Renderer::description() const { return impl_->description; }
+
+}  // namespace flowsteer::sim_camera

@@ -1,0 +1,143 @@
+#pragma once
+
+// GLSL 3.30 core sources of the renderer's two programs.
+namespace flowsteer::sim_camera::shaders {
+
+inline constexpr const char* kSceneVertex = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+uniform mat4 u_model;
+uniform mat3 u_normal_matrix;
+uniform mat4 u_world_to_camera;  // to the optical frame: x right, y down, z forward
+uniform mat4 u_projection;
+uniform mat4 u_light_view_projection;
+out vec3 v_world;
+out vec3 v_normal;
+out vec3 v_camera;
+out vec4 v_light_clip;
+void main() {
+  vec4 world = u_model * vec4(a_position, 1.0);
+  v_world = world.xyz;
+  v_normal = u_normal_matrix * a_normal;
+  v_camera = (u_world_to_camera * world).xyz;
+  v_light_clip = u_light_view_projection * world;
+  gl_Position = u_projection * vec4(v_camera, 1.0);
+}
+)";
+
+inline constexpr const char* kSceneFragment = R"(#version 330 core
+in vec3 v_world;
+in vec3 v_normal;
+in vec3 v_camera;
+in vec4 v_light_clip;
+uniform vec3 u_albedo;
+uniform int u_pattern;  // 0 plain, 1 checker, 2 noise, 3 stripes
+uniform float u_pattern_scale;
+uniform float u_pattern_contrast;
+uniform int u_id;
+uniform vec3 u_relative_velocity;  // object minus camera, optical frame, m/s
+uniform vec3 u_camera_omega;       // angular velocity of the camera, optical frame, rad/s
+uniform float u_ambient;
+uniform vec3 u_sun_direction;  // towards the sun, world frame
+uniform float u_sun_intensity;
+uniform int u_sun_shadows;
+uniform sampler2DShadow u_shadow_map;
+uniform int u_point_count;
+uniform vec3 u_point_position[8];
+uniform float u_point_intensity[8];
+uniform float u_point_range[8];
+layout(location = 0) out vec4 o_color;
+layout(location = 1) out int o_id;
+layout(location = 2) out vec2 o_flow;
+layout(location = 3) out float o_depth;
+
+float hash(vec3 p) {
+  p = fract(p * 0.1031);
+  p += dot(p, p.zyx + 31.32);
+  return fract((p.x + p.y) * p.z);
+}
+
+float value_noise(vec3 p) {
+  vec3 i = floor(p);
+  vec3 f = fract(p);
+  f = f * f * (3.0 - 2.0 * f);
+  float x00 = mix(hash(i), hash(i + vec3(1, 0, 0)), f.x);
+  float x10 = mix(hash(i + vec3(0, 1, 0)), hash(i + vec3(1, 1, 0)), f.x);
+  float x01 = mix(hash(i + vec3(0, 0, 1)), hash(i + vec3(1, 0, 1)), f.x);
+  float x11 = mix(hash(i + vec3(0, 1, 1)), hash(i + vec3(1, 1, 1)), f.x);
+  return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+}
+
+float pattern_value(vec3 w) {
+  vec3 p = w / u_pattern_scale;
+  if (u_pattern == 1) {
+    return mod(floor(p.x) + floor(p.y) + floor(p.z), 2.0);
+  }
+  if (u_pattern == 2) {
+    return 0.55 * value_noise(p) + 0.3 * value_noise(2.7 * p + 17.0) +
+           0.15 * value_noise(7.3 * p + 5.0);
+  }
+  if (u_pattern == 3) {
+    return 0.7 * step(0.5, fract(p.z)) + 0.3 * value_noise(3.0 * p);
+  }
+  return 1.0;
+}
+
+float sun_visibility() {
+  if (u_sun_shadows == 0) {
+    return 1.0;
+  }
+  vec3 ndc = v_light_clip.xyz / v_light_clip.w;
+  vec3 uvz = 0.5 * ndc + 0.5;
+  if (any(lessThan(uvz.xy, vec2(0.0))) || any(greaterThan(uvz.xy, vec2(1.0)))) {
+    return 1.0;
+  }
+  vec2 texel = 1.0 / vec2(textureSize(u_shadow_map, 0));
+  float lit = 0.0;
+  for (int dx = -1; dx <= 1; ++dx) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      lit += texture(u_shadow_map, vec3(uvz.xy + vec2(dx, dy) * texel, uvz.z - 0.0015));
+    }
+  }
+  return lit / 9.0;
+}
+
+void main() {
+  vec3 n = normalize(v_normal);
+  float light = u_ambient;
+  light += u_sun_intensity * max(dot(n, u_sun_direction), 0.0) * sun_visibility();
+  for (int k = 0; k < u_point_count; ++k) {
+    vec3 to_light = u_point_position[k] - v_world;
+    float d = length(to_light);
+    float falloff = clamp(1.0 - d / u_point_range[k], 0.0, 1.0);
+    light += u_point_intensity[k] * falloff * falloff * max(dot(n, to_light / d), 0.0);
+  }
+  float texture_factor = 1.0 - u_pattern_contrast + u_pattern_contrast * pattern_value(v_world);
+  vec3 linear = u_albedo * texture_factor * light;
+  o_color = vec4(pow(clamp(linear, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+  o_id = u_id;
+  // CGF Eq. 1 at the point seen through this pixel: translation over depth, plus rotation.
+  float z = v_camera.z;
+  vec2 p = v_camera.xy / z;
+  vec3 v = u_relative_velocity;
+  vec3 w = u_camera_omega;
+  vec2 translation = vec2(v.x - p.x * v.z, v.y - p.y * v.z) / z;
+  vec2 rotation = vec2(p.x * p.y * w.x - (1.0 + p.x * p.x) * w.y + p.y * w.z,
+                       (1.0 + p.y * p.y) * w.x - p.x * p.y * w.y - p.x * w.z);
+  o_flow = translation + rotation;
+  o_depth = z;
+}
+)";
+
+inline constexpr const char* kShadowVertex = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+uniform mat4 u_model;
+uniform mat4 u_light_view_projection;
+void main() { gl_Position = u_light_view_projection * u_model * vec4(a_position, 1.0); }
+)";
+
+inline constexpr const char* kShadowFragment = R"(#version 330 core
+void main() {}
+)";
+
+}  // namespace flowsteer::sim_camera::shaders

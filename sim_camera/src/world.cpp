@@ -1,0 +1,242 @@
+#include "flowsteer/sim_camera/world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace flowsteer::sim_camera {
+
+namespace {
+
+constexpr std::int32_t kObstacleIdBase = 10000;
+constexpr std::int32_t kMovingIdBase = 20000;
+
+std::string describe(const AgentSpec& a, std::size_t i) {
+  return "agent " + std::to_string(i) + (a.name.empty() ? "" : " (" + a.name + ")");
+}
+
+}  // namespace
+
+std::int32_t agent_render_id(std::size_t agent) { return static_cast<std::int32_t>(agent); }
+std::int32_t obstacle_render_id(std::size_t obstacle) {
+  return kObstacleIdBase + static_cast<std::int32_t>(obstacle);
+}
+std::int32_t moving_render_id(std::size_t moving) {
+  return kMovingIdBase + static_cast<std::int32_t>(moving);
+}
+
+Eigen::Vector2d AgentState::velocity_mps() const {
+  return speed_mps * Eigen::Vector2d(std::cos(yaw_rad), std::sin(yaw_rad));
+}
+
+double footprint_distance(const Solid& solid, const Eigen::Vector2d& point) {
+  const Eigen::Vector2d d = point - solid.centre_m;
+  if (solid.shape == Solid::Shape::cylinder) {
+    return d.norm() - solid.radius_m;
+  }
+  // Into the box's own frame.
+  const double c = std::cos(solid.yaw_rad);
+  const double s = std::sin(solid.yaw_rad);
+  const Eigen::Vector2d local(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
+  const Eigen::Vector2d q = local.cwiseAbs() - 0.5 * solid.size_m;
+  const double outside = q.cwiseMax(0.0).norm();
+  const double inside = std::min(std::max(q.x(), q.y()), 0.0);
+  return outside + inside;
+}
+
+World::World(WorldSpec spec) : spec_(std::move(spec)) {
+  if (!(spec_.step_s > 0.0) || !(spec_.duration_s > 0.0)) {
+    throw std::invalid_argument("world: step_s and duration_s must be positive");
+  }
+  if (spec_.agents.empty()) {
+    throw std::invalid_argument("world '" + spec_.name + "' has no agent");
+  }
+  for (std::size_t i = 0; i < spec_.agents.size(); ++i) {
+    const AgentSpec& a = spec_.agents[i];
+    if (!(a.radius_m > 0.0) || !(a.height_m > 0.0)) {
+      throw std::invalid_argument(describe(a, i) + ": radius_m and height_m must be positive");
+    }
+    if (a.leader && (*a.leader < 0 || static_cast<std::size_t>(*a.leader) >= spec_.agents.size() ||
+                     static_cast<std::size_t>(*a.leader) == i)) {
+      throw std::invalid_argument(describe(a, i) + ": leader " + std::to_string(*a.leader) +
+                                  " is not another agent of the scenario");
+    }
+    if (!a.leader && a.goals.empty()) {
+      throw std::invalid_argument(describe(a, i) + ": has neither a goal nor a leader");
+    }
+    for (std::size_t k = 0; k < spec_.obstacles.size(); ++k) {
+      if (footprint_distance(spec_.obstacles[k], a.start_m) < a.radius_m) {
+        throw std::invalid_argument(describe(a, i) + " starts inside obstacle " +
+                                    std::to_string(k));
+      }
+    }
+    for (std::size_t k = 0; k < spec_.moving.size(); ++k) {
+      if (footprint_distance(spec_.moving[k].body, a.start_m) < a.radius_m) {
+        throw std::invalid_argument(describe(a, i) + " starts inside moving obstacle " +
+                                    std::to_string(k));
+      }
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      const AgentSpec& b = spec_.agents[j];
+      if ((a.start_m - b.start_m).norm() < a.radius_m + b.radius_m) {
+        throw std::invalid_argument(describe(a, i) + " starts overlapping " + describe(b, j));
+      }
+    }
+    AgentState state;
+    state.position_m = a.start_m;
+    state.yaw_rad = a.heading_rad;
+    state.speed_mps = a.start_speed_mps;
+    agents_.push_back(state);
+  }
+  for (std::size_t k = 0; k < spec_.moving.size(); ++k) {
+    MovingObstacle& m = spec_.moving[k];
+    if (m.waypoints.size() < 2 || !(m.speed_mps >= 0.0)) {
+      throw std::invalid_argument("moving obstacle " + std::to_string(k) +
+                                  ": needs two waypoints or more and a speed >= 0");
+    }
+    m.body.centre_m = m.waypoints.front();
+    MovingState state;
+    state.position_m = m.waypoints.front();
+    const Eigen::Vector2d heading = (m.waypoints[1] - m.waypoints[0]).normalized();
+    state.velocity_mps = m.speed_mps * heading;
+    state.yaw_rad = std::atan2(heading.y(), heading.x());
+    moving_.push_back(state);
+  }
+  const std::size_t bodies = agents_.size() + spec_.obstacles.size() + spec_.moving.size();
+  in_contact_.assign(agents_.size(), std::vector<bool>(bodies, false));
+}
+
+Solid World::moving_now(std::size_t moving) const {
+  Solid body = spec_.moving[moving].body;
+  body.centre_m = moving_[moving].position_m;
+  body.yaw_rad = moving_[moving].yaw_rad;
+  return body;
+}
+
+void World::step(const std::vector<std::pair<double, double>>& accel_and_turn) {
+  if (accel_and_turn.size() != agents_.size()) {
+    throw std::invalid_argument("world step: " + std::to_string(accel_and_turn.size()) +
+                                " commands for " + std::to_string(agents_.size()) + " agents");
+  }
+  const double dt = spec_.step_s;
+  for (std::size_t i = 0; i < agents_.size(); ++i) {
+    AgentState& s = agents_[i];
+    const AgentSpec& a = spec_.agents[i];
+    if (s.reached_goal && !a.leader) {
+      s.speed_mps = 0.0;
+      s.turn_rate = 0.0;
+      continue;
+    }
+    const auto [accel, turn] = accel_and_turn[i];
+    s.turn_rate = turn;
+    s.speed_mps = std::clamp(s.speed_mps + dt * accel, 0.0, a.max_speed_mps);
+    s.yaw_rad = std::remainder(s.yaw_rad - dt * turn, 2.0 * 3.141592653589793);
+    s.position_m += dt * s.velocity_mps();
+  }
+  for (std::size_t k = 0; k < moving_.size(); ++k) {
+    const MovingObstacle& m = spec_.moving[k];
+    MovingState& s = moving_[k];
+    double travel = m.speed_mps * dt;
+    while (travel > 0.0 && s.next_waypoint < m.waypoints.size()) {
+      const Eigen::Vector2d to_next = m.waypoints[s.next_waypoint] - s.position_m;
+      const double distance = to_next.norm();
+      if (distance > travel) {
+        s.position_m += travel * to_next / distance;
+        s.velocity_mps = m.speed_mps * to_next / distance;
+        s.yaw_rad = std::atan2(to_next.y(), to_next.x());
+        travel = 0.0;
+      } else {
+        s.position_m = m.waypoints[s.next_waypoint];
+        travel -= distance;
+        ++s.next_waypoint;
+        if (s.next_waypoint == m.waypoints.size() && m.loop) {
+          s.next_waypoint = 0;
+        }
+      }
+    }
+    if (s.next_waypoint >= m.waypoints.size()) {
+      s.velocity_mps.setZero();
+    }
+  }
+  time_s_ += dt;
+  for (std::size_t i = 0; i < agents_.size(); ++i) {
+    advance_goals(i);
+  }
+  detect_collisions();
+}
+
+void World::advance_goals(std::size_t i) {
+  AgentState& s = agents_[i];
+  const AgentSpec& a = spec_.agents[i];
+  while (s.next_goal < a.goals.size() &&
+         (a.goals[s.next_goal] - s.position_m).norm() <= a.goal_radius_m) {
+    ++s.next_goal;
+  }
+  if (!a.goals.empty() && s.next_goal == a.goals.size() && !s.reached_goal) {
+    s.reached_goal = true;
+    s.time_to_goal_s = time_s_;
+  }
+}
+
+double World::clearance(std::size_t i) const {
+  const AgentState& s = agents_[i];
+  const double r = spec_.agents[i].radius_m;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t j = 0; j < agents_.size(); ++j) {
+    if (j != i) {
+      best = std::min(best, (agents_[j].position_m - s.position_m).norm() - r -
+                                spec_.agents[j].radius_m);
+    }
+  }
+  for (const Solid& o : spec_.obstacles) {
+    best = std::min(best, footprint_distance(o, s.position_m) - r);
+  }
+  for (std::size_t k = 0; k < moving_.size(); ++k) {
+    best = std::min(best, footprint_distance(moving_now(k), s.position_m) - r);
+  }
+  return best;
+}
+
+void World::detect_collisions() {
+  new_collisions_.clear();
+  for (std::size_t i = 0; i < agents_.size(); ++i) {
+    const Eigen::Vector2d p = agents_[i].position_m;
+    const double r = spec_.agents[i].radius_m;
+    std::size_t body = 0;
+    auto check = [&](bool touching, const std::string& with) {
+      const bool was = in_contact_[i][body];
+      in_contact_[i][body] = touching;
+      if (touching && !was) {
+        new_collisions_.push_back({time_s_, i, with, p});
+      }
+      ++body;
+    };
+    for (std::size_t j = 0; j < agents_.size(); ++j) {
+      // Each pair once, on the lower index; the higher one's slot stays unused.
+      const bool touching = j > i && (agents_[j].position_m - p).norm() <
+                                         r + spec_.agents[j].radius_m;
+      check(touching, "agent " + std::to_string(j));
+    }
+    for (std::size_t k = 0; k < spec_.obstacles.size(); ++k) {
+      check(footprint_distance(spec_.obstacles[k], p) < r, "obstacle " + std::to_string(k));
+    }
+    for (std::size_t k = 0; k < moving_.size(); ++k) {
+      check(footprint_distance(moving_now(k), p) < r, "moving " + std::to_string(k));
+    }
+  }
+}
+
+bool World::finished() const {
+  if (time_s_ >= spec_.duration_s - 1e-9) {
+    return true;
+  }
+  for (std::size_t i = 0; i < agents_.size(); ++i) {
+    if (!spec_.agents[i].leader && !agents_[i].reached_goal) {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace flowsteer::sim_camera

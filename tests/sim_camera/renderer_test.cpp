@@ -1,0 +1,200 @@
+#include "flowsteer/sim_camera/renderer.hpp"
+
+#include <cmath>
+#include <map>
+#include <numbers>
+
+#include <Eigen/Geometry>
+
+#include <gtest/gtest.h>
+
+#include "flowsteer/servo/analytic_scene.hpp"
+#include "flowsteer/sim_camera/sim_camera.hpp"
+
+namespace flowsteer::sim_camera {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Renderer& renderer() {
+  static std::unique_ptr<Renderer> r = Renderer::create();
+  return *r;
+}
+
+AgentSpec observer(Eigen::Vector2d start, double heading_rad, double speed) {
+  AgentSpec a;
+  a.start_m = start;
+  a.heading_rad = heading_rad;
+  a.start_speed_mps = speed;
+  a.goals = {start + 20.0 * Eigen::Vector2d(std::cos(heading_rad), std::sin(heading_rad))};
+  a.camera.width_px = 160;
+  a.camera.height_px = 120;
+  a.camera.hfov_rad = 90.0 * kDeg;
+  a.camera.height_m = 1.5;
+  return a;
+}
+
+Solid box(Eigen::Vector2d centre, Eigen::Vector2d size, double height) {
+  Solid s;
+  s.centre_m = centre;
+  s.size_m = size;
+  s.height_m = height;
+  return s;
+}
+
+TEST(Renderer, DescribesItsContext) {
+  EXPECT_NE(renderer().description().find("OpenGL"), std::string::npos);
+}
+
+TEST(Renderer, DepthOfABoxFaceAndIdsFollowTheGeometry) {
+  WorldSpec spec;
+  spec.agents = {observer({0.0, 0.0}, 0.0, 1.0)};
+  spec.obstacles = {box({5.0, 0.0}, {1.0, 2.0}, 3.0)};  // front face at x = 4.5
+  World world(spec);
+  RenderedView out;
+  renderer().render(world, View::of_agent(world, 0), out);
+  ASSERT_EQ(out.depth_m.cols, 160);
+  ASSERT_EQ(out.depth_m.rows, 120);
+  const int centre_col = 80;
+  const int centre_row = 60;
+  EXPECT_EQ(out.object_ids.at<std::int32_t>(centre_row, centre_col), obstacle_render_id(0));
+  EXPECT_NEAR(out.depth_m.at<float>(centre_row, centre_col), 4.5, 0.045);
+  // Top rows: sky; bottom rows: ground; the box spans |x| < 1 / 4.5 in normalised units.
+  EXPECT_EQ(out.object_ids.at<std::int32_t>(0, 5), servo::kSkyId);
+  EXPECT_EQ(out.object_ids.at<std::int32_t>(119, 5), servo::kGroundId);
+  EXPECT_TRUE(std::isinf(out.depth_m.at<float>(0, 5)));
+  const servo::CameraIntrinsics k = View::of_agent(world, 0).intrinsics();
+  for (int col = 0; col < 160; ++col) {
+    const double x = (col - k.cx_px) / k.fx_px;
+    if (std::abs(std::abs(x) - 1.0 / 4.5) < 0.02) {
+      continue;  // the edge itself
+    }
+    const bool on_box = std::abs(x) < 1.0 / 4.5;
+    EXPECT_EQ(out.object_ids.at<std::int32_t>(centre_row, col) == obstacle_render_id(0), on_box)
+        << "col " << col;
+  }
+  // The ground's depth at the bottom row: Z = h / y.
+  const double y_bottom = (119 - k.cy_px) / k.fy_px;
+  EXPECT_NEAR(out.depth_m.at<float>(119, 5), 1.5 / y_bottom, 0.01 * 1.5 / y_bottom);
+}
+
+Solid cylinder(Eigen::Vector2d centre, double radius, double height) {
+  Solid s;
+  s.shape = Solid::Shape::cylinder;
+  s.centre_m = centre;
+  s.radius_m = radius;
+  s.height_m = height;
+  return s;
+}
+
+// The renderer's flow against the analytic ray-caster of the servo core on the same scene:
+// a post, a moving cylinder, the ground and the sky, seen by a turning, pitched camera.
+TEST(Renderer, SyntheticFlowEqualsTheAnalyticFlow) {
+  WorldSpec spec;
+  AgentSpec me = observer({1.0, 2.0}, 30.0 * kDeg, 1.2);
+  me.camera.pitch_rad = 5.0 * kDeg;
+  spec.agents = {me};
+  spec.obstacles = {cylinder({6.0, 4.5}, 0.5, 2.0)};
+  MovingObstacle walker;
+  walker.body = cylinder({0.0, 0.0}, 0.4, 1.7);
+  walker.waypoints = {{7.0, 8.0}, {7.0, -4.0}};
+  walker.speed_mps = 1.5;
+  spec.moving = {walker};
+  World world(spec);
+  world.step({{0.0, 0.3}});  // turning right at 0.3 rad/s
+  const View view = View::of_agent(world, 0);
+  RenderedView out;
+  renderer().render(world, view, out);
+
+  servo::AnalyticScene scene;
+  scene.intrinsics = view.intrinsics();
+  scene.mount = {view.camera.height_m, view.camera.pitch_rad};
+  scene.agent_speed_mps = view.speed_mps;
+  scene.agent_turn_rate = view.turn_rate;
+  const Eigen::Rotation2D<double> to_body(-view.yaw_rad);
+  auto add = [&](const Solid& s, std::int32_t id, const Eigen::Vector2d& velocity) {
+    servo::SceneObject o;
+    o.shape = servo::SceneObject::Shape::cylinder;
+    o.id = id;
+    o.position_m = to_body * (s.centre_m - view.position_m);
+    o.radius_m = s.radius_m;
+    o.height_m = s.height_m;
+    o.velocity_mps = to_body * velocity;
+    scene.objects.push_back(o);
+  };
+  add(spec.obstacles[0], obstacle_render_id(0), Eigen::Vector2d::Zero());
+  add(world.moving_now(0), moving_render_id(0), world.moving()[0].velocity_mps);
+  const servo::SceneRender truth = servo::render_scene(scene);
+
+  std::map<std::int32_t, int> compared;
+  double worst = 0.0;
+  for (int row = 0; row < out.flow.rows; ++row) {
+    for (int col = 0; col < out.flow.cols; ++col) {
+      const std::int32_t id = out.object_ids.at<std::int32_t>(row, col);
+      const std::size_t i = truth.flow.index(col, row);
+      if (id != truth.ids[i]) {
+        continue;  // a pixel on an edge, where the two rasterise differently
+      }
+      const cv::Vec2f f = out.flow.at<cv::Vec2f>(row, col);
+      const Eigen::Vector2f& g = truth.flow.flow()[i];
+      worst = std::max(worst, static_cast<double>((Eigen::Vector2f(f[0], f[1]) - g).norm()));
+      ++compared[id];
+    }
+  }
+  EXPECT_GT(compared[obstacle_render_id(0)], 100);
+  EXPECT_GT(compared[moving_render_id(0)], 100);
+  EXPECT_GT(compared[servo::kGroundId], 1000);
+  EXPECT_GT(compared[servo::kSkyId], 1000);
+  EXPECT_LT(worst, 1e-3);
+}
+
+TEST(Renderer, ShadowedGroundIsDarkerByTheAmbientRatio) {
+  WorldSpec spec;
+  spec.ground.pattern = Material::Pattern::plain;
+  spec.lighting.ambient = 0.25F;
+  spec.lighting.sun = SunLight{0.0, 45.0 * kDeg, 0.6F, true};  // from +x, 45° up
+  AgentSpec me = observer({0.0, 0.0}, 0.0, 1.0);
+  me.camera.pitch_rad = 30.0 * kDeg;
+  spec.agents = {me};
+  // A wall across the view, lit from behind: its shadow falls towards the agent.
+  spec.obstacles = {box({9.0, 0.0}, {0.2, 30.0}, 4.0)};
+  World world(spec);
+  RenderedView out;
+  renderer().render(world, View::of_agent(world, 0), out);
+  // The shadow reaches 4 m in front of the wall (45°): ground from x = 5 to 8.9 is in shadow.
+  const servo::CameraIntrinsics k = View::of_agent(world, 0).intrinsics();
+  auto ground_row = [&](double distance) {
+    // Row whose ray meets the ground at `distance` ahead, for a camera pitched down by 30°.
+    const double angle = std::atan2(1.5, distance) - 30.0 * kDeg;
+    return static_cast<int>(std::lround(k.cy_px + k.fy_px * std::tan(angle)));
+  };
+  const int lit_row = ground_row(3.0);
+  const int shadow_row = ground_row(7.0);
+  ASSERT_EQ(out.object_ids.at<std::int32_t>(lit_row, 80), servo::kGroundId);
+  ASSERT_EQ(out.object_ids.at<std::int32_t>(shadow_row, 80), servo::kGroundId);
+  auto luminance = [&](int row) {
+    const cv::Vec3b bgr = out.image.at<cv::Vec3b>(row, 80);
+    return std::pow((bgr[0] + bgr[1] + bgr[2]) / (3.0 * 255.0), 2.2);  // back to linear
+  };
+  // Lit: ambient + sun·sin(45°); shadowed: ambient alone.
+  const double expected = 0.25 / (0.25 + 0.6 * std::sin(45.0 * kDeg));
+  EXPECT_NEAR(luminance(shadow_row) / luminance(lit_row), expected, 0.03);
+}
+
+TEST(SimCamera, DeliversFramesWithSimulatorChannels) {
+  WorldSpec spec;
+  spec.agents = {observer({0.0, 0.0}, 0.0, 1.0)};
+  World world(spec);
+  SimCamera camera(world, renderer(), 0);
+  camera_io::Frame frame;
+  ASSERT_EQ(camera.read(frame, 0.1), camera_io::ReadStatus::ok);
+  ASSERT_EQ(camera.read(frame, 0.1), camera_io::ReadStatus::ok);
+  EXPECT_EQ(frame.sequence, 1U);
+  EXPECT_EQ(frame.image.type(), CV_8UC3);
+  ASSERT_TRUE(frame.sim.has_value());
+  EXPECT_EQ(frame.sim->flow.type(), CV_32FC2);
+  EXPECT_EQ(camera.intrinsics().width_px, 160);
+}
+
+}  // namespace
+}  // namespace flowsteer::sim_camera
