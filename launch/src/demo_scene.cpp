@@ -2,14 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <set>
-#include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
 #include "flowsteer/launch/config_error.hpp"
+#include "yaml_reader.hpp"
 
 namespace flowsteer::launch {
 
@@ -17,149 +16,7 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// Reads typed fields out of YAML nodes and reports problems at the node's position, under a
-// dotted field path such as "objects[2].radius_m".
-class Reader {
- public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
-
-  [[noreturn]] void fail(const YAML::Node& node, const std::string& field,
-                         const std::string& message) const {
-    const YAML::Mark mark = node.Mark();
-    throw ConfigError(source_, mark.line + 1, mark.column + 1, field, message);
-  }
-
-  // Fails on any key of `map` that is not in `allowed`, so that typos do not pass silently.
-  void only_keys(const YAML::Node& map, const std::string& field,
-                 std::initializer_list<const char*> allowed) const {
-    if (!map.IsMap()) {
-      fail(map, field, "expected a mapping");
-    }
-    const std::set<std::string> names(allowed.begin(), allowed.end());
-    for (const auto& entry : map) {
-      const auto key = entry.first.as<std::string>();
-      if (!names.contains(key)) {
-        std::string list;
-        for (const char* name : allowed) {
-          list += list.empty() ? name : std::string(", ") + name;
-        }
-        fail(entry.first, join(field, key), "unknown key (expected one of: " + list + ")");
-      }
-    }
-  }
-
-  double number(const YAML::Node& map, const std::string& field, const char* key,
-                double fallback) const {
-    const YAML::Node node = map[key];
-    if (!node) {
-      return fallback;
-    }
-    return number(node, join(field, key));
-  }
-
-  double number(const YAML::Node& node, const std::string& field) const {
-    double value = 0.0;
-    if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value)) {
-      fail(node, field, "expected a finite number, got '" + text(node) + "'");
-    }
-    return value;
-  }
-
-  double positive(const YAML::Node& map, const std::string& field, const char* key,
-                  double fallback) const {
-    const double value = number(map, field, key, fallback);
-    if (!(value > 0.0)) {
-      fail(map[key] ? map[key] : map, join(field, key), "must be positive, got " + format(value));
-    }
-    return value;
-  }
-
-  double non_negative(const YAML::Node& map, const std::string& field, const char* key,
-                      double fallback) const {
-    const double value = number(map, field, key, fallback);
-    if (value < 0.0) {
-      fail(map[key], join(field, key), "must be >= 0, got " + format(value));
-    }
-    return value;
-  }
-
-  int integer(const YAML::Node& node, const std::string& field, int min_value) const {
-    int value = 0;
-    if (!node.IsScalar() || !YAML::convert<int>::decode(node, value)) {
-      fail(node, field, "expected an integer, got '" + text(node) + "'");
-    }
-    if (value < min_value) {
-      fail(node, field,
-           "must be at least " + std::to_string(min_value) + ", got " + std::to_string(value));
-    }
-    return value;
-  }
-
-  Eigen::Vector2d pair(const YAML::Node& map, const std::string& field, const char* key,
-                       const Eigen::Vector2d& fallback) const {
-    const YAML::Node node = map[key];
-    if (!node) {
-      return fallback;
-    }
-    if (!node.IsSequence() || node.size() != 2) {
-      fail(node, join(field, key), "expected a pair [x, y]");
-    }
-    return {number(node[0], join(field, key) + "[0]"), number(node[1], join(field, key) + "[1]")};
-  }
-
-  std::string word(const YAML::Node& map, const std::string& field, const char* key,
-                   std::initializer_list<const char*> allowed, const char* fallback) const {
-    const YAML::Node node = map[key];
-    if (!node) {
-      return fallback;
-    }
-    const std::string value = node.IsScalar() ? node.as<std::string>() : "";
-    for (const char* a : allowed) {
-      if (value == a) {
-        return value;
-      }
-    }
-    std::string list;
-    for (const char* a : allowed) {
-      list += list.empty() ? a : std::string(", ") + a;
-    }
-    fail(node, join(field, key), "expected one of: " + list + "; got '" + text(node) + "'");
-  }
-
-  bool boolean(const YAML::Node& map, const std::string& field, const char* key,
-               bool fallback) const {
-    const YAML::Node node = map[key];
-    if (!node) {
-      return fallback;
-    }
-    bool value = false;
-    if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value)) {
-      fail(node, join(field, key), "expected true or false, got '" + text(node) + "'");
-    }
-    return value;
-  }
-
-  static std::string join(const std::string& field, const std::string& key) {
-    return field.empty() ? key : field + "." + key;
-  }
-
- private:
-  static std::string text(const YAML::Node& node) {
-    if (node.IsScalar()) {
-      return node.Scalar();
-    }
-    return node.IsSequence() ? "a sequence" : node.IsMap() ? "a mapping" : "nothing";
-  }
-  static std::string format(double value) {
-    std::ostringstream s;
-    s << value;
-    return s.str();
-  }
-
-  std::string source_;
-};
-
-void read_camera(const Reader& r, const YAML::Node& node, servo::AnalyticScene& scene) {
+void read_camera(const YamlReader& r, const YAML::Node& node, servo::AnalyticScene& scene) {
   r.only_keys(node, "camera", {"resolution", "hfov_deg", "height_m", "pitch_deg"});
   int width = scene.intrinsics.width_px;
   int height = scene.intrinsics.height_px;
@@ -184,7 +41,7 @@ void read_camera(const Reader& r, const YAML::Node& node, servo::AnalyticScene& 
   scene.mount.pitch_rad = pitch_deg * kDeg;
 }
 
-servo::SceneObject read_object(const Reader& r, const YAML::Node& node, const std::string& field,
+servo::SceneObject read_object(const YamlReader& r, const YAML::Node& node, const std::string& field,
                                std::int32_t default_id) {
   r.only_keys(node, field, {"shape", "id", "position", "size", "radius_m", "height_m", "velocity"});
   servo::SceneObject o;
@@ -218,7 +75,7 @@ servo::SceneObject read_object(const Reader& r, const YAML::Node& node, const st
   return o;
 }
 
-void read_controller(const Reader& r, const YAML::Node& node, ControllerSpec& c) {
+void read_controller(const YamlReader& r, const YAML::Node& node, ControllerSpec& c) {
   r.only_keys(node, "controller",
               {"kind", "alpha", "beta", "gamma", "delta", "preferred_speed_mps", "lambda",
                "max_accel_mps2", "max_turn_rate", "use_depth", "leader"});
@@ -291,13 +148,8 @@ DemoScene default_demo_scene() {
 }
 
 DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& source_name) {
-  const Reader r(source_name);
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError(source_name, e.mark.line + 1, e.mark.column + 1, "", e.msg);
-  }
+  const YamlReader r(source_name);
+  const YAML::Node root = load_yaml(yaml_text, source_name);
   if (!root.IsMap()) {
     throw ConfigError(source_name, 1, 1, "", "expected a mapping with camera, agent, objects");
   }
@@ -355,16 +207,7 @@ DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& sour
 }
 
 DemoScene load_demo_scene(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) {
-    throw ConfigError(path.string(), "cannot open the scene file");
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) {
-    throw ConfigError(path.string(), "cannot read the scene file");
-  }
-  return parse_demo_scene(text.str(), path.string());
+  return parse_demo_scene(read_text_file(path.string(), "scene file"), path.string());
 }
 
 }  // namespace flowsteer::launch

@@ -1,5 +1,6 @@
 // The `flowsteer` command.
 #include <cstdlib>
+#include <unistd.h>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -10,6 +11,8 @@
 #include "flowsteer/launch/config_error.hpp"
 #include "flowsteer/launch/demo.hpp"
 #include "flowsteer/launch/demo_scene.hpp"
+#include "flowsteer/launch/scenario_file.hpp"
+#include "flowsteer/launch/simulation.hpp"
 
 namespace {
 
@@ -73,6 +76,26 @@ int main(int argc, char** argv) {
   demo->add_option("--resolution", resolution, "image width and height in pixels")
       ->check(CLI::Range(8, 4096));
 
+  CLI::App* sim = app.add_subcommand(
+      "sim", "Run agents that see a rendered world and steer by its optical flow");
+  std::string scenario_file;
+  std::string scenario_name;
+  std::string steersuite_file;
+  std::string out_dir = "flowsteer_out";
+  int sim_resolution = 0;
+  int steps = 0;
+  bool video = false;
+  sim->add_option("scenario_file", scenario_file, "scenario YAML (see launch/scenarios/room.yaml)");
+  sim->add_option("--scenario", scenario_name, "a built-in scenario (flowsteer scenarios lists them)");
+  sim->add_option("--steersuite", steersuite_file, "a SteerSuite test case (XML)");
+  sim->add_option("--out", out_dir, "folder for the outputs")->capture_default_str();
+  sim->add_option("--resolution", sim_resolution, "every agent's camera: N x N pixels")
+      ->check(CLI::Range(8, 4096));
+  sim->add_option("--steps", steps, "stop after N control steps")->check(CLI::PositiveNumber);
+  sim->add_flag("--video", video, "an MP4 per agent: its view, the flow and the features");
+
+  app.add_subcommand("scenarios", "List the built-in scenarios");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -80,6 +103,52 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (app.got_subcommand("scenarios")) {
+      for (const auto& s : flowsteer::launch::builtin_scenarios()) {
+        std::cout << s.name << std::string(s.name.size() < 18 ? 18 - s.name.size() : 1, ' ')
+                  << s.description << "\n";
+      }
+    }
+    if (*sim) {
+      const int sources = !scenario_file.empty() + !scenario_name.empty() + !steersuite_file.empty();
+      if (sources > 1) {
+        throw CLI::ValidationError("sim", "give one of SCENARIO_FILE, --scenario, --steersuite");
+      }
+      const flowsteer::sim_camera::WorldSpec world =
+          !scenario_file.empty()     ? flowsteer::launch::load_scenario(scenario_file)
+          : !steersuite_file.empty() ? flowsteer::launch::load_steersuite(steersuite_file)
+                                     : flowsteer::launch::builtin_scenario(
+                                           scenario_name.empty() ? "room" : scenario_name);
+      flowsteer::launch::SimOptions options;
+      options.out_dir = out_dir;
+      if (sim_resolution > 0) {
+        options.resolution = sim_resolution;
+      }
+      if (steps > 0) {
+        options.steps = steps;
+      }
+      options.video = video;
+      options.progress_bar = isatty(STDERR_FILENO) != 0;
+      std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size()
+                << " agents) -> " << out_dir << "\n";
+      const auto result = flowsteer::launch::run_simulation(world, options, std::cerr);
+      std::cout << "scenario " << result.scenario << ": " << result.steps << " steps, "
+                << result.duration_s << " s simulated, " << result.collisions.size()
+                << " collisions\n";
+      for (const auto& a : result.agents) {
+        std::cout << "  " << a.name << ": "
+                  << (a.reached_goal ? "reached its goal in " + std::to_string(a.time_to_goal_s) + " s"
+                      : a.final_distance_to_leader_m >= 0.0
+                          ? "ended " + std::to_string(a.final_distance_to_leader_m) + " m from its leader"
+                          : std::string("did not reach its goal"))
+                  << ", path " << a.path_length_m << " m, min clearance " << a.min_clearance_m
+                  << " m, " << a.collisions << " collisions\n";
+      }
+      const auto& t = result.per_agent_step_ms;
+      std::cout << "per agent step: " << t.total << " ms (render " << t.render << ", flow "
+                << t.flow << ", segment " << t.segment << ", features " << t.features
+                << ", control " << t.control << ")\n";
+    }
     if (*demo) {
       DemoScene scene = scene_file.empty() ? flowsteer::launch::default_demo_scene()
                                            : flowsteer::launch::load_demo_scene(scene_file);

@@ -244,7 +244,7 @@ struct Renderer::Impl {
   int fbo_height = 0;
   GLuint shadow_fbo = 0;
   GLuint shadow_texture = 0;
-  const World* shadow_world = nullptr;
+  std::uint64_t shadow_world_serial = 0;
   double shadow_time_s = -1.0;
   Eigen::Matrix4f light_view_projection = Eigen::Matrix4f::Identity();
   std::vector<DrawItem> items;
@@ -423,10 +423,11 @@ struct Renderer::Impl {
   // The sun's shadow map, once per world state: every view of that instant shares it.
   void render_shadow_map(const World& world) {
     const auto& sun = world.spec().lighting.sun;
-    if (!sun || !sun->shadows || (shadow_world == &world && shadow_time_s == world.time_s())) {
+    if (!sun || !sun->shadows ||
+        (shadow_world_serial == world.serial() && shadow_time_s == world.time_s())) {
       return;
     }
-    shadow_world = &world;
+    shadow_world_serial = world.serial();
     shadow_time_s = world.time_s();
     // Fit an orthographic light frustum around everything that stands on the ground.
     Eigen::AlignedBox2d bounds;
@@ -466,6 +467,8 @@ struct Renderer::Impl {
 
     glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
     glViewport(0, 0, kShadowMapSize, kShadowMapSize);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
     glClear(GL_DEPTH_BUFFER_BIT);
     glUseProgram(shadow_program);
     glUniformMatrix4fv(glGetUniformLocation(shadow_program, "u_light_view_projection"), 1,

@@ -1,6 +1,7 @@
 #include "flowsteer/sim_camera/world.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -11,6 +12,11 @@ namespace {
 
 constexpr std::int32_t kObstacleIdBase = 10000;
 constexpr std::int32_t kMovingIdBase = 20000;
+
+std::uint64_t next_serial() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
 
 std::string describe(const AgentSpec& a, std::size_t i) {
   return "agent " + std::to_string(i) + (a.name.empty() ? "" : " (" + a.name + ")");
@@ -45,7 +51,7 @@ double footprint_distance(const Solid& solid, const Eigen::Vector2d& point) {
   return outside + inside;
 }
 
-World::World(WorldSpec spec) : spec_(std::move(spec)) {
+World::World(WorldSpec spec) : spec_(std::move(spec)), serial_(next_serial()) {
   if (!(spec_.step_s > 0.0) || !(spec_.duration_s > 0.0)) {
     throw std::invalid_argument("world: step_s and duration_s must be positive");
   }

@@ -153,6 +153,8 @@ class World {
   explicit World(WorldSpec spec);
 
   const WorldSpec& spec() const { return spec_; }
+  // Unique among the worlds of this process, so that caches keyed on it never mix two worlds.
+  std::uint64_t serial() const { return serial_; }
   double time_s() const { return time_s_; }
   const std::vector<AgentState>& agents() const { return agents_; }
   const std::vector<MovingState>& moving() const { return moving_; }
@@ -175,6 +177,7 @@ class World {
   void advance_goals(std::size_t agent);
 
   WorldSpec spec_;
+  std::uint64_t serial_;
   double time_s_ = 0.0;
   std::vector<AgentState> agents_;
   std::vector<MovingState> moving_;

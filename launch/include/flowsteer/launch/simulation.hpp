@@ -1,0 +1,59 @@
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "flowsteer/sim_camera/world.hpp"
+
+namespace flowsteer::launch {
+
+struct SimOptions {
+  std::filesystem::path out_dir = "flowsteer_out";
+  std::optional<int> resolution;  // overrides every agent's camera: N×N pixels
+  std::optional<int> steps;       // stop after this many steps
+  bool video = false;             // an MP4 per agent of its view with the features drawn on it
+  bool progress_bar = false;      // a bar that redraws itself, for terminals
+  bool write_outputs = true;      // false: only the returned result (tests, benchmarks)
+};
+
+struct AgentResult {
+  std::string name;
+  bool reached_goal = false;
+  double time_to_goal_s = -1.0;
+  double path_length_m = 0.0;
+  double min_clearance_m = 0.0;
+  int collisions = 0;
+  double final_distance_to_leader_m = -1.0;  // followers only
+};
+
+// Mean time per agent and step of each stage, in milliseconds.
+struct StageTimes {
+  double render = 0.0;
+  double flow = 0.0;
+  double segment = 0.0;
+  double features = 0.0;
+  double control = 0.0;
+  double total = 0.0;
+};
+
+struct SimResult {
+  std::string scenario;
+  int steps = 0;
+  double duration_s = 0.0;
+  std::vector<AgentResult> agents;
+  std::vector<sim_camera::Collision> collisions;
+  StageTimes per_agent_step_ms;
+};
+
+// Runs the world to its end: each agent renders its view, the servo core turns it into a
+// command, the world moves. Writes trajectories.csv, costs.csv, topview.png and summary.json
+// (and agent_N.mp4 with --video) into out_dir, each file complete or not at all. Progress goes
+// to `log`. Throws std::runtime_error when no renderer can be created or out_dir is not
+// writable.
+SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& options,
+                         std::ostream& log);
+
+}  // namespace flowsteer::launch

@@ -1,0 +1,48 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "flowsteer/launch/simulation.hpp"
+
+namespace flowsteer::launch {
+
+// An output folder that is written all at once: files go to a staging folder inside it and
+// move into place on commit(); without a commit (an error on the way) the staging folder is
+// removed and the folder keeps what it had.
+class OutputDir {
+ public:
+  // Creates the folder; throws std::runtime_error naming it when that fails.
+  explicit OutputDir(std::filesystem::path dir);
+  ~OutputDir();
+  OutputDir(const OutputDir&) = delete;
+  OutputDir& operator=(const OutputDir&) = delete;
+
+  std::filesystem::path staging_path(const std::string& file_name) const;
+  void commit();
+
+ private:
+  std::filesystem::path dir_;
+  std::filesystem::path staging_;
+};
+
+// A table of numbers written as CSV (NaN as an empty cell).
+class CsvTable {
+ public:
+  explicit CsvTable(std::vector<std::string> header) : header_(std::move(header)) {}
+  void add(std::vector<double> row) { rows_.push_back(std::move(row)); }
+  // Throws std::runtime_error naming the file when it cannot be written.
+  void write(const std::filesystem::path& path) const;
+
+ private:
+  std::vector<std::string> header_;
+  std::vector<std::vector<double>> rows_;
+};
+
+void write_summary_json(const std::filesystem::path& path, const SimResult& result);
+
+// Writes `text` to `path`, or throws std::runtime_error naming the file.
+void write_text(const std::filesystem::path& path, const std::string& text);
+
+}  // namespace flowsteer::launch

@@ -1,0 +1,309 @@
+#include "flowsteer/launch/simulation.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "flowsteer/servo/servo.hpp"
+#include "flowsteer/sim_camera/renderer.hpp"
+#include "flowsteer/sim_camera/sim_camera.hpp"
+#include "output_files.hpp"
+#include "overlay.hpp"
+
+namespace flowsteer::launch {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using sim_camera::World;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
+  const sim_camera::ControllerSpec& c = agent.controller;
+  servo::AvoidanceOptions avoidance;
+  avoidance.agent_width_m = 2.0 * agent.radius_m;
+  avoidance.use_depth = c.use_depth;
+  const servo::ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
+  if (c.kind == "following") {
+    return servo::Controller(servo::following({c.alpha, c.beta, c.gamma}, avoidance), c.lambda,
+                             limits);
+  }
+  servo::GoalReachingWeights weights;
+  weights.alpha = c.alpha;
+  weights.beta = c.beta;
+  weights.gamma = c.gamma;
+  weights.delta = c.delta;
+  weights.preferred_speed_mps = agent.preferred_speed_mps;
+  return servo::Controller(servo::goal_reaching(weights, avoidance), c.lambda, limits);
+}
+
+// Copies the simulator's flow and depth into the servo core's field.
+void to_flow_field(const camera_io::SimChannels& sim, servo::FlowField& field) {
+  auto flow = field.flow();
+  auto depth = field.depth();
+  for (int row = 0; row < field.height(); ++row) {
+    const auto* f = sim.flow.ptr<cv::Vec2f>(row);
+    const auto* d = sim.depth_m.ptr<float>(row);
+    for (int col = 0; col < field.width(); ++col) {
+      const std::size_t i = field.index(col, row);
+      flow[i] = Eigen::Vector2f(f[col][0], f[col][1]);
+      depth[i] = d[col];
+    }
+  }
+}
+
+// Everything one agent keeps from step to step.
+struct AgentLoop {
+  std::unique_ptr<sim_camera::SimCamera> camera;
+  servo::Controller controller;
+  servo::FlowField field;
+  servo::FeatureExtractor extractor;
+  servo::Segmentation segmentation;
+  servo::ControlOutput output;
+  camera_io::Frame frame;
+  AgentResult result;
+  Eigen::Vector2d last_position;
+  std::unique_ptr<cv::VideoWriter> video;
+};
+
+class Progress {
+ public:
+  Progress(std::ostream& log, bool bar, int total) : log_(log), bar_(bar), total_(total) {}
+  void update(int step, double sim_time_s) {
+    const int percent = total_ > 0 ? 100 * step / total_ : 100;
+    if (bar_) {
+      const int filled = percent * 30 / 100;
+      log_ << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+           << std::string(static_cast<std::size_t>(30 - filled), ' ') << "] " << std::setw(3)
+           << percent << "%  t = " << std::fixed << std::setprecision(1) << sim_time_s << " s"
+           << std::flush;
+    } else if (percent >= next_percent_) {
+      log_ << "step " << step << "/" << total_ << " (" << percent << "%), t = " << std::fixed
+           << std::setprecision(1) << sim_time_s << " s\n";
+      next_percent_ = percent + 10;
+    }
+  }
+  void finish() {
+    if (bar_) {
+      log_ << "\n";
+    }
+  }
+
+ private:
+  std::ostream& log_;
+  bool bar_;
+  int total_;
+  int next_percent_ = 0;
+};
+
+}  // namespace
+
+SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptions& options,
+                         std::ostream& log) {
+  sim_camera::WorldSpec spec = world_spec;
+  if (options.resolution) {
+    for (auto& a : spec.agents) {
+      a.camera.width_px = a.camera.height_px = *options.resolution;
+    }
+  }
+  World world(spec);
+  std::unique_ptr<sim_camera::Renderer> renderer = sim_camera::Renderer::create();
+  std::optional<OutputDir> out;
+  if (options.write_outputs) {
+    out.emplace(options.out_dir);
+  }
+
+  std::vector<AgentLoop> loops;
+  for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+    auto camera = std::make_unique<sim_camera::SimCamera>(world, *renderer, i);
+    servo::FlowField field(camera->intrinsics(), true);
+    AgentLoop loop{std::move(camera),
+                   make_controller(spec.agents[i]),
+                   std::move(field),
+                   servo::FeatureExtractor(),
+                   {},
+                   {},
+                   {},
+                   {},
+                   spec.agents[i].start_m,
+                   nullptr};
+    loop.result.name = spec.agents[i].name;
+    loop.result.min_clearance_m = world.clearance(i);
+    loops.push_back(std::move(loop));
+  }
+
+  CsvTable trajectories({"t", "agent", "x", "y", "heading", "v", "a_c", "omega"});
+  std::vector<std::string> term_names;
+  std::set<std::string> seen_terms;
+  struct CostRow {
+    double t;
+    std::size_t agent;
+    std::map<std::string, double> terms;
+    double total;
+  };
+  std::vector<CostRow> cost_rows;
+
+  const int max_steps = static_cast<int>(std::ceil(spec.duration_s / spec.step_s - 1e-9));
+  const int total_steps = options.steps ? std::min(*options.steps, max_steps) : max_steps;
+  Progress progress(log, options.progress_bar, total_steps);
+  StageTimes sum;
+  long agent_steps = 0;
+  std::vector<std::pair<double, double>> commands(spec.agents.size());
+  std::vector<sim_camera::Collision> collisions;
+  std::vector<std::vector<Eigen::Vector2d>> paths(spec.agents.size());
+  int step = 0;
+  for (; step < total_steps && !world.finished(); ++step) {
+    for (std::size_t i = 0; i < loops.size(); ++i) {
+      AgentLoop& loop = loops[i];
+      const sim_camera::AgentSpec& agent = spec.agents[i];
+      const sim_camera::AgentState& state = world.agents()[i];
+      commands[i] = {0.0, 0.0};
+      if (state.reached_goal && !agent.leader) {
+        continue;
+      }
+      const auto start = Clock::now();
+      loop.camera->read(loop.frame, 0.0);
+      const double render_ms = ms_since(start);
+
+      auto stage = Clock::now();
+      to_flow_field(*loop.frame.sim, loop.field);
+      servo::derotate(loop.field,
+                      servo::camera_angular_velocity(state.turn_rate, agent.camera.pitch_rad));
+      const double flow_ms = ms_since(stage);
+
+      stage = Clock::now();
+      const cv::Mat& ids = loop.frame.sim->object_ids;
+      servo::segment_by_ids({ids.ptr<std::int32_t>(), ids.total()}, ids.cols, ids.rows, {},
+                            loop.segmentation);
+      const double segment_ms = ms_since(stage);
+
+      stage = Clock::now();
+      const auto objects = loop.extractor.extract(loop.field, loop.segmentation);
+      const double features_ms = ms_since(stage);
+
+      stage = Clock::now();
+      servo::Percept percept{objects, {}, {}, {}};
+      if (agent.leader) {
+        percept.leader_id = sim_camera::agent_render_id(static_cast<std::size_t>(*agent.leader));
+      } else if (state.next_goal < agent.goals.size()) {
+        const Eigen::Vector2d to_goal = agent.goals[state.next_goal] - state.position_m;
+        const double bearing_left = std::atan2(to_goal.y(), to_goal.x()) - state.yaw_rad;
+        percept.goal_bearing_rad = -std::remainder(bearing_left, 2.0 * std::numbers::pi);
+        percept.goal_distance_m = to_goal.norm();
+      }
+      loop.controller.step(percept, {state.speed_mps}, loop.output);
+      commands[i] = {loop.output.command.accel_mps2, loop.output.command.turn_rate};
+      const double control_ms = ms_since(stage);
+
+      sum.render += render_ms;
+      sum.flow += flow_ms;
+      sum.segment += segment_ms;
+      sum.features += features_ms;
+      sum.control += control_ms;
+      sum.total += ms_since(start);
+      ++agent_steps;
+
+      CostRow row{world.time_s(), i, {}, loop.output.cost};
+      for (const servo::TermEvaluation& t : loop.output.terms) {
+        row.terms[t.name] = t.gradient.cost;
+        if (seen_terms.insert(t.name).second) {
+          term_names.push_back(t.name);
+        }
+      }
+      cost_rows.push_back(std::move(row));
+
+      if (options.video && out) {
+        if (!loop.video) {
+          loop.video = open_video(out->staging_path("agent_" + std::to_string(i) + ".mp4"),
+                                  overlay_size(loop.frame.image.size()), 1.0 / spec.step_s);
+        }
+        loop.video->write(draw_overlay(loop.frame, loop.camera->intrinsics(), objects, percept));
+      }
+    }
+    for (std::size_t i = 0; i < loops.size(); ++i) {
+      const sim_camera::AgentState& s = world.agents()[i];
+      trajectories.add({world.time_s(), static_cast<double>(i), s.position_m.x(), s.position_m.y(),
+                        s.yaw_rad, s.speed_mps, commands[i].first, commands[i].second});
+      paths[i].push_back(s.position_m);
+    }
+    world.step(commands);
+    for (std::size_t i = 0; i < loops.size(); ++i) {
+      AgentLoop& loop = loops[i];
+      const Eigen::Vector2d p = world.agents()[i].position_m;
+      loop.result.path_length_m += (p - loop.last_position).norm();
+      loop.last_position = p;
+      loop.result.min_clearance_m = std::min(loop.result.min_clearance_m, world.clearance(i));
+    }
+    for (const sim_camera::Collision& c : world.new_collisions()) {
+      ++loops[c.agent].result.collisions;
+      collisions.push_back(c);
+    }
+    progress.update(step + 1, world.time_s());
+  }
+  progress.finish();
+
+  SimResult result;
+  result.scenario = spec.name;
+  result.steps = step;
+  result.duration_s = world.time_s();
+  for (std::size_t i = 0; i < loops.size(); ++i) {
+    AgentResult r = loops[i].result;
+    const sim_camera::AgentState& s = world.agents()[i];
+    r.reached_goal = s.reached_goal;
+    r.time_to_goal_s = s.time_to_goal_s;
+    if (const auto& leader = spec.agents[i].leader) {
+      r.final_distance_to_leader_m =
+          (world.agents()[static_cast<std::size_t>(*leader)].position_m - s.position_m).norm();
+    }
+    result.agents.push_back(r);
+  }
+  result.collisions = collisions;
+  if (agent_steps > 0) {
+    const double n = static_cast<double>(agent_steps);
+    result.per_agent_step_ms = {sum.render / n,   sum.flow / n,    sum.segment / n,
+                                sum.features / n, sum.control / n, sum.total / n};
+  }
+  if (out) {
+    trajectories.write(out->staging_path("trajectories.csv"));
+    CsvTable costs([&] {
+      std::vector<std::string> header = {"t", "agent"};
+      header.insert(header.end(), term_names.begin(), term_names.end());
+      header.push_back("total");
+      return header;
+    }());
+    for (const CostRow& row : cost_rows) {
+      std::vector<double> values = {row.t, static_cast<double>(row.agent)};
+      for (const std::string& name : term_names) {
+        const auto it = row.terms.find(name);
+        values.push_back(it != row.terms.end() ? it->second : std::nan(""));
+      }
+      values.push_back(row.total);
+      costs.add(values);
+    }
+    costs.write(out->staging_path("costs.csv"));
+    for (auto& loop : loops) {
+      if (loop.video) {
+        loop.video->release();
+      }
+    }
+    cv::imwrite(out->staging_path("topview.png").string(),
+                draw_topview(world, paths, result.collisions));
+    write_summary_json(out->staging_path("summary.json"), result);
+    out->commit();
+  }
+  return result;
+}
+
+}  // namespace flowsteer::launch
