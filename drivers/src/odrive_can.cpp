@@ -487,8 +487,9 @@ void OdriveCanDrive::write(const WheelSpeeds& wheels) {
   const double turns_per_rad = config_.motor_turns_per_wheel_turn / (2.0 * std::numbers::pi);
   const double wheel_radps[2] = {wheels.left_radps, wheels.right_radps};
   for (std::size_t i = 0; i < axes_.size(); ++i) {
+    // Adding +0 turns a mirrored −0 into +0, so a stop reads as all-zero bytes on the bus.
     const float vel =
-        static_cast<float>(wheel_radps[i] * turns_per_rad * axes_[i].config.direction);
+        static_cast<float>(wheel_radps[i] * turns_per_rad * axes_[i].config.direction) + 0.0f;
     if (!std::isfinite(vel)) {
       fail(name_ + ": wheel speed for the " + axes_[i].side + " axis not finite");
     }
