@@ -215,6 +215,21 @@ TEST_F(OdriveVm, StreamsTheCommandedWheelSpeedsAtTheLoopRate) {
   }
 }
 
+TEST_F(OdriveVm, MeasuresSpeedTurnRateAndOdometryFromTheAxesEstimates) {
+  double speed_mps = 0, turn_rate = 0, left_rad = 0, right_rad = 0;
+  std::size_t faults = 99;
+  ASSERT_EQ(std::sscanf(run_.probe["measured"].c_str(), "%lf %lf %lf %lf %zu", &speed_mps,
+                        &turn_rate, &left_rad, &right_rad, &faults),
+            5)
+      << run_.probe["measured"];
+  // The axes echo the commanded velocity; estimates lag by at most a loop period.
+  EXPECT_NEAR(speed_mps, 0.5, 1e-4);
+  EXPECT_NEAR(turn_rate, 0.6, 1e-4);  // back in the controller's sign: turning right
+  EXPECT_GT(left_rad, right_rad);     // both forward (the mirrored axis turned back)
+  EXPECT_GT(right_rad, 0.0);
+  EXPECT_EQ(faults, 0u);
+}
+
 TEST_F(OdriveVm, WatchdogStopsTheWheelsWithinTimeoutPlusOnePeriod) {
   const double last_s = stamp(run_, "last-command");
   const double deactivate_s = stamp(run_, "deactivate");

@@ -110,18 +110,23 @@ class SimulatedAxes {
 };
 
 // Calls update() every loop period for duration_s; `command` says whether to send a fresh
-// command first. Returns the realtime of the last command sent.
+// command first. Returns the realtime of the last command sent; `commanded` gets the state
+// the last update after a command returned.
 template <typename Command>
-double run_loop(Base& base, double duration_s, Command command) {
+double run_loop(Base& base, double duration_s, Command command, BaseState* commanded = nullptr) {
   double last_command_realtime_s = 0.0;
   const double start_s = monotonic_s();
   for (double next_s = start_s; monotonic_s() - start_s < duration_s; next_s += kLoopPeriodS) {
     std::this_thread::sleep_for(std::chrono::duration<double>(next_s - monotonic_s()));
-    if (command(monotonic_s() - start_s)) {
+    const bool fresh = command(monotonic_s() - start_s);
+    if (fresh) {
       base.command({5.0, 0.6}, monotonic_s());
       last_command_realtime_s = realtime_s();
     }
-    base.update(monotonic_s());
+    const BaseState state = base.update(monotonic_s());
+    if (fresh && commanded != nullptr) {
+      *commanded = state;
+    }
   }
   return last_command_realtime_s;
 }
@@ -160,8 +165,14 @@ int run() {
   base.activate(monotonic_s());
   std::printf("PROBE stream %.6f\n", realtime_s());
   // Commands for 1 s, then none for 0.6 s while the loop goes on.
-  const double last_command_s = run_loop(base, 1.6, [](double t_s) { return t_s < 1.0; });
+  BaseState commanded;
+  const double last_command_s = run_loop(
+      base, 1.6, [](double t_s) { return t_s < 1.0; }, &commanded);
   std::printf("PROBE last-command %.6f\n", last_command_s);
+  // What the drive measured from the simulated axes' encoder estimates while commanded.
+  std::printf("PROBE measured %.6f %.6f %.6f %.6f %zu\n", commanded.measured.speed_mps,
+              commanded.measured.turn_rate, commanded.drive.odometry.left_rad,
+              commanded.drive.odometry.right_rad, commanded.drive.faults.size());
   std::printf("PROBE deactivate %.6f\n", realtime_s());
   base.deactivate();
   std::printf("PROBE deactivated %.6f\n", realtime_s());
