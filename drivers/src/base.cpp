@@ -1,0 +1,133 @@
+#include "flowsteer/drivers/base.hpp"
+
+#include <stdexcept>
+#include <utility>
+
+namespace flowsteer::drivers {
+
+namespace {
+
+const char* lifecycle_name(Lifecycle lifecycle) {
+  switch (lifecycle) {
+    case Lifecycle::unconfigured:
+      return "unconfigured";
+    case Lifecycle::inactive:
+      return "inactive";
+    case Lifecycle::active:
+      return "active";
+    case Lifecycle::failed:
+      return "failed";
+  }
+  return "unknown";
+}
+
+}  // namespace
+
+Base::Base(std::unique_ptr<Drive> drive, const CommandStageConfig& config)
+    : drive_(std::move(drive)), stage_(config) {
+  if (!drive_) {
+    throw std::invalid_argument("base: no drive given");
+  }
+}
+
+Base::~Base() {
+  if (lifecycle_ == Lifecycle::active) {
+    try {
+      drive_->deactivate();
+    } catch (const std::exception&) {
+      // Nothing to report to: the drive already tried to stop before throwing.
+    }
+  }
+}
+
+void Base::require(Lifecycle expected, const char* operation) const {
+  if (lifecycle_ != expected) {
+    throw DriveError(std::string(drive_->name()) + ": " + operation + " needs the base " +
+                     lifecycle_name(expected) + ", it is " + lifecycle_name(lifecycle_));
+  }
+}
+
+void Base::fail(const std::string& during, const std::exception& error) {
+  lifecycle_ = Lifecycle::failed;
+  try {
+    drive_->write({});
+  } catch (const std::exception&) {
+    // The link may be what failed; deactivate() below tries again its own way.
+  }
+  try {
+    drive_->deactivate();
+  } catch (const std::exception&) {
+    // Already failing: the first error is the one worth reporting.
+  }
+  throw DriveError(std::string(drive_->name()) + ": " + during +
+                   " failed, base stopped: " + error.what());
+}
+
+void Base::configure() {
+  if (lifecycle_ != Lifecycle::unconfigured && lifecycle_ != Lifecycle::failed) {
+    require(Lifecycle::unconfigured, "configure");
+  }
+  try {
+    drive_->configure();
+  } catch (const std::exception& e) {
+    lifecycle_ = Lifecycle::failed;
+    throw DriveError(std::string(drive_->name()) + ": configure failed: " + e.what());
+  }
+  lifecycle_ = Lifecycle::inactive;
+}
+
+void Base::activate(double now_s) {
+  require(Lifecycle::inactive, "activate");
+  stage_.reset(now_s);
+  try {
+    drive_->activate();
+  } catch (const std::exception& e) {
+    fail("activate", e);
+  }
+  lifecycle_ = Lifecycle::active;
+}
+
+void Base::deactivate() {
+  require(Lifecycle::active, "deactivate");
+  try {
+    drive_->deactivate();
+  } catch (const std::exception& e) {
+    fail("deactivate", e);
+  }
+  lifecycle_ = Lifecycle::inactive;
+}
+
+std::optional<std::string> Base::command(const servo::Command& command, double now_s) {
+  return stage_.command(command, now_s);
+}
+
+BaseState Base::update(double now_s) {
+  require(Lifecycle::active, "update");
+  BaseState state;
+  state.sent = stage_.update(now_s);
+  try {
+    drive_->write(state.sent.wheels);
+    state.drive = drive_->read();
+  } catch (const std::exception& e) {
+    fail("update", e);
+  }
+  state.measured = from_wheels(state.drive.measured, stage_.config().geometry);
+  return state;
+}
+
+void Base::emergency_stop() {
+  stage_.emergency_stop();
+  if (lifecycle_ == Lifecycle::active) {
+    try {
+      drive_->write({});
+    } catch (const std::exception& e) {
+      fail("emergency stop", e);
+    }
+  }
+}
+
+void Base::clear_emergency_stop() {
+  stage_.clear_emergency_stop();
+}
+
+}  // namespace flowsteer::drivers

@@ -1,0 +1,304 @@
+// Boots the CAN test VM (tests/vm/run_can_vm.sh), in which tests/vm/odrive_vm_probe drives a
+// simulated ODrive pair on vcan0 while candump records the bus, and checks candump's record:
+// the exact frames for activate and deactivate, the velocity stream, the watchdog's stop and
+// the stop after an axis error.
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+struct Frame {
+  double time_s = 0.0;
+  unsigned id = 0;
+  bool rtr = false;
+  std::string hex;  // payload as candump prints it, upper case
+  unsigned node() const { return id >> 5; }
+  unsigned cmd() const { return id & 0x1f; }
+  float f32(int index) const {
+    std::uint8_t b[4];
+    for (int i = 0; i < 4; ++i) {
+      b[i] = static_cast<std::uint8_t>(std::stoul(hex.substr(8 * index + 2 * i, 2), nullptr, 16));
+    }
+    float value;
+    std::memcpy(&value, b, 4);
+    return value;
+  }
+  std::string text() const {
+    char id_text[8];
+    std::snprintf(id_text, sizeof id_text, "%03X", id);
+    return std::string(id_text) + "#" + (rtr ? "R" : hex);
+  }
+};
+
+struct VmRun {
+  std::string console;
+  std::map<std::string, std::string> probe;  // "activate" → "1700000000.123456", ...
+  std::vector<Frame> frames;
+};
+
+std::string run_command(const std::string& command, int& status) {
+  std::string out;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) {
+    status = -1;
+    return "popen failed";
+  }
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr) {
+    out += buf;
+  }
+  const int raw = ::pclose(pipe);
+  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return out;
+}
+
+// "(1700000000.123456) vcan0 06B#0200000001000000" → Frame.
+std::optional<Frame> parse_candump(const std::string& line) {
+  Frame f;
+  char iface[32];
+  char body[64];
+  if (std::sscanf(line.c_str(), " (%lf) %31s %63s", &f.time_s, iface, body) != 3) {
+    return std::nullopt;
+  }
+  const std::string text = body;
+  const std::size_t hash = text.find('#');
+  if (hash == std::string::npos || hash > 3) {  // standard 11-bit ids only
+    return std::nullopt;
+  }
+  f.id = static_cast<unsigned>(std::stoul(text.substr(0, hash), nullptr, 16));
+  const std::string data = text.substr(hash + 1);
+  f.rtr = !data.empty() && data[0] == 'R';
+  f.hex = f.rtr ? "" : data;
+  return f;
+}
+
+VmRun parse(const std::string& console) {
+  VmRun run;
+  run.console = console;
+  std::istringstream in(console);
+  std::string line;
+  bool in_capture = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') {
+      line.pop_back();
+    }
+    if (line.find("=== CAPTURE BEGIN ===") != std::string::npos) {
+      in_capture = true;
+    } else if (line.find("=== CAPTURE END ===") != std::string::npos) {
+      in_capture = false;
+    } else if (in_capture) {
+      if (const auto frame = parse_candump(line)) {
+        run.frames.push_back(*frame);
+      }
+    } else if (const std::size_t at = line.find("PROBE "); at != std::string::npos) {
+      const std::string rest = line.substr(at + 6);
+      const std::size_t space = rest.find_first_of(" :");
+      run.probe[rest.substr(0, space)] = space == std::string::npos ? "" : rest.substr(space + 1);
+    }
+  }
+  return run;
+}
+
+double stamp(const VmRun& run, const std::string& key) {
+  const auto it = run.probe.find(key);
+  return it == run.probe.end() ? NAN : std::atof(it->second.c_str());
+}
+
+// Frames the drive sends (not the axes' heartbeats and estimates, not the RTR requests).
+bool from_drive(const Frame& f) {
+  return !f.rtr && (f.cmd() == 0x07 || f.cmd() == 0x0b || f.cmd() == 0x0d);
+}
+
+std::vector<std::string> drive_frames_between(const VmRun& run, double from_s, double to_s) {
+  std::vector<std::string> out;
+  for (const Frame& f : run.frames) {
+    if (f.time_s >= from_s && f.time_s <= to_s && from_drive(f)) {
+      out.push_back(f.text());
+    }
+  }
+  return out;
+}
+
+class OdriveVm : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    int status = 0;
+    const std::string out =
+        run_command(std::string("bash '") + FLOWSTEER_VM_SCRIPT + "' '" + FLOWSTEER_VM_WORK_DIR +
+                        "' '" + FLOWSTEER_VM_PROBE + "' 2>&1",
+                    status);
+    status_ = status;
+    script_output_ = out;
+    std::ifstream log(std::string(FLOWSTEER_VM_WORK_DIR) + "/console.log");
+    std::stringstream console;
+    console << log.rdbuf();
+    run_ = parse(console.str());
+  }
+  void SetUp() override {
+    if (status_ == 77) {
+      GTEST_SKIP() << "qemu cannot run: " << script_output_;
+    }
+    ASSERT_EQ(status_, 0) << script_output_ << "\n--- console ---\n" << run_.console;
+    ASSERT_TRUE(run_.probe.count("done")) << run_.console;
+    ASSERT_FALSE(run_.frames.empty()) << run_.console;
+  }
+
+  static inline int status_ = 0;
+  static inline std::string script_output_;
+  static inline VmRun run_;
+};
+
+constexpr double kTimeoutS = 0.3;  // the probe's watchdog timeout
+constexpr double kPeriodS = 0.02;  // the probe's loop period
+// candump stamps a frame when the kernel hands it over; the probe stamps just after the call.
+constexpr double kStampSlackS = 0.005;
+
+TEST_F(OdriveVm, MissingInterfaceIsAClearError) {
+  EXPECT_NE(run_.probe["missing-interface"].find("CAN interface vcan7 not found: No such device"),
+            std::string::npos)
+      << run_.probe["missing-interface"];
+}
+
+TEST_F(OdriveVm, ActivateSendsVelocityModeZeroVelocityAndClosedLoop) {
+  const std::vector<std::string> frames =
+      drive_frames_between(run_, stamp(run_, "activate"), stamp(run_, "stream"));
+  const std::vector<std::string> expected = {
+      "06B#0200000001000000",  // node 3 Set_Controller_Modes: velocity control, passthrough
+      "06D#0000000000000000",  // node 3 Set_Input_Vel 0
+      "067#08000000",          // node 3 Set_Axis_Requested_State: closed-loop control
+      "0AB#0200000001000000",  // node 5 likewise
+      "0AD#0000000000000000", "0A7#08000000",
+  };
+  EXPECT_EQ(frames, expected);
+}
+
+TEST_F(OdriveVm, StreamsTheCommandedWheelSpeedsAtTheLoopRate) {
+  const double from_s = stamp(run_, "stream");
+  const double last_s = stamp(run_, "last-command");
+  // At 0.5 m/s (the speed limit) and ω_cy = 0.6 rad/s (a right turn, ω_z = −0.6): left wheel
+  // (0.5 + 0.6·0.2) / 0.05 rad/s forward; the right motor is mirrored (direction −1).
+  const double left_turns = (0.5 + 0.6 * 0.2) / 0.05 / (2.0 * std::numbers::pi);
+  const double right_turns = -(0.5 - 0.6 * 0.2) / 0.05 / (2.0 * std::numbers::pi);
+  std::map<unsigned, std::vector<Frame>> vel;
+  for (const Frame& f : run_.frames) {
+    if (f.time_s > from_s && f.time_s <= last_s + kStampSlackS && f.cmd() == 0x0d && !f.rtr) {
+      vel[f.node()].push_back(f);
+    }
+  }
+  ASSERT_EQ(vel.size(), 2u);
+  for (const auto& [node, frames] : vel) {
+    SCOPED_TRACE("node " + std::to_string(node));
+    // 1 s of commands at 50 Hz: allow for a slow emulated machine, not for a missing stream.
+    EXPECT_GE(frames.size(), 35u);
+    for (std::size_t i = 1; i < frames.size(); ++i) {
+      EXPECT_LT(frames[i].time_s - frames[i - 1].time_s, 0.1) << "the stream paused";
+    }
+    EXPECT_NEAR(frames.back().f32(0), node == 3 ? left_turns : right_turns, 1e-5);
+    EXPECT_EQ(frames.back().hex.substr(8), "00000000");  // no torque feed-forward
+  }
+}
+
+TEST_F(OdriveVm, MeasuresSpeedTurnRateAndOdometryFromTheAxesEstimates) {
+  double speed_mps = 0, turn_rate = 0, left_rad = 0, right_rad = 0;
+  std::size_t faults = 99;
+  ASSERT_EQ(std::sscanf(run_.probe["measured"].c_str(), "%lf %lf %lf %lf %zu", &speed_mps,
+                        &turn_rate, &left_rad, &right_rad, &faults),
+            5)
+      << run_.probe["measured"];
+  // The axes echo the commanded velocity; estimates lag by at most a loop period.
+  EXPECT_NEAR(speed_mps, 0.5, 1e-4);
+  EXPECT_NEAR(turn_rate, 0.6, 1e-4);  // back in the controller's sign: turning right
+  EXPECT_GT(left_rad, right_rad);     // both forward (the mirrored axis turned back)
+  EXPECT_GT(right_rad, 0.0);
+  EXPECT_EQ(faults, 0u);
+}
+
+TEST_F(OdriveVm, WatchdogStopsTheWheelsWithinTimeoutPlusOnePeriod) {
+  const double last_s = stamp(run_, "last-command");
+  const double deactivate_s = stamp(run_, "deactivate");
+  for (const unsigned node : {3u, 5u}) {
+    SCOPED_TRACE("node " + std::to_string(node));
+    std::optional<double> first_zero_s;
+    double previous = INFINITY;
+    for (const Frame& f : run_.frames) {
+      if (f.time_s <= last_s || f.time_s >= deactivate_s || f.node() != node || f.cmd() != 0x0d ||
+          f.rtr) {
+        continue;
+      }
+      const double magnitude = std::abs(f.f32(0));
+      if (first_zero_s) {
+        EXPECT_EQ(f.hex, "0000000000000000") << "moving again after the watchdog's stop";
+      } else {
+        EXPECT_LE(magnitude, previous + 1e-6) << "the ramp to zero went up";
+        previous = magnitude;
+        if (f.hex == "0000000000000000") {
+          first_zero_s = f.time_s;
+        }
+      }
+    }
+    ASSERT_TRUE(first_zero_s) << "no zero velocity after the last command";
+    EXPECT_LE(*first_zero_s - last_s, kTimeoutS + kPeriodS + kStampSlackS);
+    EXPECT_GT(*first_zero_s - last_s, kTimeoutS - kPeriodS);  // a ramp, not an instant stop
+  }
+}
+
+TEST_F(OdriveVm, DeactivateSendsZeroVelocityThenIdle) {
+  const std::vector<std::string> frames =
+      drive_frames_between(run_, stamp(run_, "deactivate"), stamp(run_, "deactivated"));
+  const std::vector<std::string> expected = {
+      "06D#0000000000000000", "067#01000000",  // node 3: zero, then idle
+      "0AD#0000000000000000", "0A7#01000000",  // node 5
+  };
+  ASSERT_GE(frames.size(), 4u);
+  // An update() just before may have streamed one more zero; the last four are deactivate's.
+  EXPECT_EQ(std::vector<std::string>(frames.end() - 4, frames.end()), expected);
+}
+
+TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStopped) {
+  const std::string& message = run_.probe["axis-error"];
+  EXPECT_NE(message.find("ODrive node 5 (right) on vcan0 reports axis error 0x00000200 "
+                         "(CONTROLLER_FAILED)"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("base stopped"), std::string::npos) << message;
+  // The first heartbeat with the error, then the stops for both axes, and no motion after.
+  const auto error_hb = std::find_if(run_.frames.begin(), run_.frames.end(), [](const Frame& f) {
+    return f.id == 0x0a1 && f.hex.starts_with("00020000");
+  });
+  ASSERT_NE(error_hb, run_.frames.end());
+  std::vector<std::string> after;
+  for (auto it = error_hb; it != run_.frames.end(); ++it) {
+    if (from_drive(*it)) {
+      after.push_back(it->text());
+    }
+  }
+  for (const char* stop :
+       {"06D#0000000000000000", "067#01000000", "0AD#0000000000000000", "0A7#01000000"}) {
+    EXPECT_NE(std::find(after.begin(), after.end(), stop), after.end()) << stop;
+  }
+  const auto first_idle = std::find(after.begin(), after.end(), "067#01000000");
+  for (auto it = first_idle; it != after.end(); ++it) {
+    EXPECT_TRUE(it->starts_with("06D#00000000") || it->starts_with("0AD#00000000") ||
+                it->ends_with("#01000000"))
+        << "motion after the stop: " << *it;
+  }
+}
+
+}  // namespace

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Usage: make_initramfs.sh KERNEL_ROOT OUT.cpio.gz INIT [--modules "m1 m2"] [--binaries "b1 b2"]
+# Builds a busybox-static initramfs for the kernel unpacked at KERNEL_ROOT (fetch_kernel.sh):
+# INIT becomes /init, the named modules and everything they depend on go under /lib/modules
+# (depmod -b, so busybox's modprobe finds them), and each binary goes to /bin with the shared
+# libraries ldd names, at their own paths.
+set -euo pipefail
+
+kroot=${1:?usage}; out=${2:?usage}; init=${3:?usage}; shift 3
+modules=""; binaries=""
+while [[ $# -gt 0 ]]; do
+  case $1 in
+    --modules) modules=$2; shift 2 ;;
+    --binaries) binaries=$2; shift 2 ;;
+    *) echo "make_initramfs: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+
+release=$(ls "$kroot/lib/modules")
+busybox=/bin/busybox
+# ldd fails on a static binary; a dynamic busybox would need its libraries in the image too.
+if [[ ! -x $busybox ]] || ldd "$busybox" > /dev/null 2>&1; then
+  echo "make_initramfs: $busybox is not busybox-static (apt-get install busybox-static)" >&2
+  exit 1
+fi
+
+stage=$(mktemp -d)
+trap 'rm -rf "$stage"' EXIT
+mkdir -p "$stage"/{bin,dev,proc,sys,tmp,etc} "$stage/lib/modules/$release"
+cp "$busybox" "$stage/bin/busybox"
+for applet in $("$busybox" --list); do
+  [[ $applet == busybox ]] || ln -s busybox "$stage/bin/$applet"
+done
+ln -s bin "$stage/sbin"
+
+for module in $modules; do
+  modprobe -d "$kroot" -S "$release" --show-depends "$module" |
+    awk '$1 == "insmod" { print $2 }'
+done | sort -u | while read -r path; do
+  rel=${path#"$kroot"}
+  mkdir -p "$stage/$(dirname "$rel")"
+  cp "$path" "$stage/$rel"
+done
+cp "$kroot/lib/modules/$release"/modules.{order,builtin,builtin.modinfo} "$stage/lib/modules/$release/"
+depmod -b "$stage" "$release"
+
+copy_with_path() {
+  mkdir -p "$stage/$(dirname "$1")"
+  cp -L "$1" "$stage/$1"
+}
+for binary in $binaries; do
+  cp "$binary" "$stage/bin/"
+  # Lines look like "libc.so.6 => /lib/x86_64-linux-gnu/libc.so.6 (0x...)" or
+  # "/lib64/ld-linux-x86-64.so.2 (0x...)".
+  ldd "$binary" | awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\// { print $1 }' |
+    while read -r lib; do copy_with_path "$lib"; done
+done
+
+cp "$init" "$stage/init"
+chmod +x "$stage/init"
+(cd "$stage" && find . | cpio -o -H newc --quiet | gzip -1) > "$out"

@@ -1,0 +1,207 @@
+// Runs inside the test VM (tests/vm/run_can_vm.sh): a simulated pair of ODrive axes and the
+// ODrive CAN drive behind a Base on vcan0, through activate, a velocity stream, commands that
+// cease (the watchdog must stop the wheels), deactivate and an axis error. It prints what it
+// did as "PROBE ..." lines with CLOCK_REALTIME stamps, the clock candump stamps frames with;
+// the host test checks those against candump's capture of the bus.
+
+#include <time.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "flowsteer/drivers/base.hpp"
+#include "flowsteer/drivers/odrive_can.hpp"
+
+namespace {
+
+using namespace flowsteer::drivers;
+
+constexpr double kLoopPeriodS = 0.02;
+constexpr std::uint8_t kLeftNode = 3;
+constexpr std::uint8_t kRightNode = 5;
+
+double realtime_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+double monotonic_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// Two ODrive axes as firmware 0.5.x presents them on the bus: heartbeats every 20 ms,
+// Set_Axis_Requested_State obeyed, Set_Input_Vel integrated into the position, encoder
+// estimates on request. `fail_node` makes that axis report CONTROLLER_FAILED and drop to idle.
+class SimulatedAxes {
+ public:
+  SimulatedAxes() : socket_("vcan0"), thread_([this] { run(); }) {}
+  ~SimulatedAxes() {
+    stop_ = true;
+    thread_.join();
+  }
+  std::atomic<int> fail_node{-1};
+
+ private:
+  struct Axis {
+    std::uint8_t node;
+    std::uint8_t state = odrive::kAxisStateIdle;
+    float vel_turns_per_s = 0.0f;
+    float pos_turns = 0.0f;
+  };
+
+  void run() {
+    double last_heartbeat_s = 0.0;
+    double last_s = monotonic_s();
+    while (!stop_) {
+      const double now_s = monotonic_s();
+      for (Axis& axis : axes_) {
+        axis.pos_turns += static_cast<float>(axis.vel_turns_per_s * (now_s - last_s));
+      }
+      last_s = now_s;
+      if (now_s - last_heartbeat_s >= 0.02) {
+        last_heartbeat_s = now_s;
+        for (Axis& axis : axes_) {
+          odrive::Heartbeat hb;
+          if (fail_node == axis.node) {
+            hb.axis_error = 0x200;
+            axis.state = odrive::kAxisStateIdle;
+            axis.vel_turns_per_s = 0.0f;
+          }
+          hb.axis_state = axis.state;
+          socket_.send(odrive::heartbeat_frame(axis.node, hb), 0.1);
+        }
+      }
+      const auto frame = socket_.receive(0.005);
+      if (!frame) {
+        continue;
+      }
+      for (Axis& axis : axes_) {
+        if (odrive::node_of(frame->can_id) != axis.node) {
+          continue;
+        }
+        const std::uint32_t cmd = odrive::cmd_of(frame->can_id);
+        if (cmd == odrive::kSetAxisRequestedState && frame->can_dlc >= 4) {
+          std::uint32_t requested = 0;
+          std::memcpy(&requested, frame->data, 4);
+          if (fail_node != axis.node) {
+            axis.state = static_cast<std::uint8_t>(requested);
+          }
+        } else if (cmd == odrive::kSetInputVel && frame->can_dlc == 8) {
+          std::memcpy(&axis.vel_turns_per_s, frame->data, 4);
+        } else if (cmd == odrive::kGetEncoderEstimates && (frame->can_id & CAN_RTR_FLAG) != 0) {
+          const float vel = axis.state == odrive::kAxisStateClosedLoop ? axis.vel_turns_per_s : 0;
+          socket_.send(odrive::encoder_estimates_frame(axis.node, {axis.pos_turns, vel}), 0.1);
+        }
+      }
+    }
+  }
+
+  CanSocket socket_;
+  Axis axes_[2] = {{kLeftNode}, {kRightNode}};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// Calls update() every loop period for duration_s; `command` says whether to send a fresh
+// command first. Returns the realtime of the last command sent; `commanded` gets the state
+// the last update after a command returned.
+template <typename Command>
+double run_loop(Base& base, double duration_s, Command command, BaseState* commanded = nullptr) {
+  double last_command_realtime_s = 0.0;
+  const double start_s = monotonic_s();
+  for (double next_s = start_s; monotonic_s() - start_s < duration_s; next_s += kLoopPeriodS) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(next_s - monotonic_s()));
+    const bool fresh = command(monotonic_s() - start_s);
+    if (fresh) {
+      base.command({5.0, 0.6}, monotonic_s());
+      last_command_realtime_s = realtime_s();
+    }
+    const BaseState state = base.update(monotonic_s());
+    if (fresh && commanded != nullptr) {
+      *commanded = state;
+    }
+  }
+  return last_command_realtime_s;
+}
+
+int run() {
+  OdriveCanConfig drive_config;
+  drive_config.interface = "vcan0";
+  drive_config.left = {kLeftNode, 1.0};
+  drive_config.right = {kRightNode, -1.0};
+  drive_config.timeout_s = 0.3;
+
+  // A missing interface: a clear error, quickly.
+  {
+    OdriveCanConfig missing = drive_config;
+    missing.interface = "vcan7";
+    OdriveCanDrive drive(missing);
+    try {
+      drive.configure();
+      std::printf("PROBE missing-interface: no error\n");
+    } catch (const DriveError& e) {
+      std::printf("PROBE missing-interface: %s\n", e.what());
+    }
+  }
+
+  SimulatedAxes axes;
+  CommandStageConfig stage;
+  stage.geometry = {0.4, 0.05};
+  stage.limits.max_speed_mps = 0.5;
+  stage.limits.max_accel_mps2 = 5.0;
+  stage.limits.max_turn_rate = 1.0;
+  stage.watchdog = {0.3, 0.1};
+  Base base(std::make_unique<OdriveCanDrive>(drive_config), stage);
+
+  base.configure();
+  std::printf("PROBE activate %.6f\n", realtime_s());
+  base.activate(monotonic_s());
+  std::printf("PROBE stream %.6f\n", realtime_s());
+  // Commands for 1 s, then none for 0.6 s while the loop goes on.
+  BaseState commanded;
+  const double last_command_s = run_loop(
+      base, 1.6, [](double t_s) { return t_s < 1.0; }, &commanded);
+  std::printf("PROBE last-command %.6f\n", last_command_s);
+  // What the drive measured from the simulated axes' encoder estimates while commanded.
+  std::printf("PROBE measured %.6f %.6f %.6f %.6f %zu\n", commanded.measured.speed_mps,
+              commanded.measured.turn_rate, commanded.drive.odometry.left_rad,
+              commanded.drive.odometry.right_rad, commanded.drive.faults.size());
+  std::printf("PROBE deactivate %.6f\n", realtime_s());
+  base.deactivate();
+  std::printf("PROBE deactivated %.6f\n", realtime_s());
+
+  // An axis error while driving: the base stops and says which axis and what.
+  base.activate(monotonic_s());
+  try {
+    run_loop(base, 2.0, [&](double t_s) {
+      if (t_s > 0.3) {
+        axes.fail_node = kRightNode;
+      }
+      return true;
+    });
+    std::printf("PROBE axis-error: no error\n");
+  } catch (const DriveError& e) {
+    std::printf("PROBE axis-error %.6f: %s\n", realtime_s(), e.what());
+  }
+  std::printf("PROBE done\n");
+  return 0;
+}
+
+}  // namespace
+
+int main() {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  try {
+    return run();
+  } catch (const std::exception& e) {
+    std::printf("PROBE failed: %s\n", e.what());
+    return 1;
+  }
+}
