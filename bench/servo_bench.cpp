@@ -51,7 +51,7 @@ void FeaturesAndControl(benchmark::State& state) {
   segment_by_ids(p.render.ids, p.render.flow.width(), p.render.flow.height(), p.ground,
                  segmentation);
   FeatureExtractor extractor;
-  const Controller controller(goal_reaching({}), 1.0, {1.0, 1.0});
+  Controller controller(goal_reaching({}), 1.0, {1.0, 1.0});
   ControlOutput out;
   for (auto _ : state) {
     const auto objects = extractor.extract(p.render.flow, segmentation);

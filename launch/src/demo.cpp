@@ -58,7 +58,7 @@ void run_demo(const DemoScene& demo, std::ostream& out) {
     percept.goal_bearing_rad = -std::atan2(demo.goal_m->y(), demo.goal_m->x());
     percept.goal_distance_m = demo.goal_m->norm();
   }
-  const servo::Controller controller(navigation_for(demo.controller), demo.controller.lambda,
+  servo::Controller controller(navigation_for(demo.controller), demo.controller.lambda,
                                      demo.controller.limits);
   const servo::ControlOutput command = controller.step(percept, {scene.agent_speed_mps});
 

@@ -144,6 +144,11 @@ int main(int argc, char** argv) {
                   << ", path " << a.path_length_m << " m, min clearance " << a.min_clearance_m
                   << " m, " << a.collisions << " collisions\n";
       }
+      for (const auto& c : result.collisions) {
+        std::cout << "  collision at t = " << c.time_s << " s: "
+                  << result.agents[c.agent].name << " with " << c.with << " at ("
+                  << c.position_m.x() << ", " << c.position_m.y() << ")\n";
+      }
       const auto& t = result.per_agent_step_ms;
       std::cout << "per agent step: " << t.total << " ms (render " << t.render << ", flow "
                 << t.flow << ", segment " << t.segment << ", features " << t.features

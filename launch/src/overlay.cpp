@@ -1,5 +1,6 @@
 #include "overlay.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -14,6 +15,18 @@ namespace {
 const cv::Scalar kFoeColor(255, 120, 0);
 const cv::Scalar kCentreColor(0, 140, 255);
 const cv::Scalar kGoalColor(200, 80, 255);
+
+// The corners of a box's footprint; a cylinder's bounding square.
+std::array<Eigen::Vector2d, 4> footprint_corners(const sim_camera::Solid& s) {
+  const Eigen::Vector2d half = s.shape == sim_camera::Solid::Shape::box
+                                   ? Eigen::Vector2d(0.5 * s.size_m)
+                                   : Eigen::Vector2d(s.radius_m, s.radius_m);
+  const Eigen::Rotation2D<double> rotation(s.yaw_rad);
+  return {s.centre_m + rotation * Eigen::Vector2d(-half.x(), -half.y()),
+          s.centre_m + rotation * Eigen::Vector2d(half.x(), -half.y()),
+          s.centre_m + rotation * Eigen::Vector2d(half.x(), half.y()),
+          s.centre_m + rotation * Eigen::Vector2d(-half.x(), half.y())};
+}
 
 cv::Scalar agent_color(std::size_t i) {
   static const cv::Scalar palette[] = {{200, 60, 30},  {40, 160, 40},  {30, 60, 220},
@@ -110,9 +123,9 @@ cv::Mat draw_topview(const sim_camera::World& world,
     }
   }
   for (const auto& o : spec.obstacles) {
-    const double r = o.shape == sim_camera::Solid::Shape::box ? 0.5 * o.size_m.norm() : o.radius_m;
-    bounds.extend(o.centre_m + Eigen::Vector2d(r, r));
-    bounds.extend(o.centre_m - Eigen::Vector2d(r, r));
+    for (const Eigen::Vector2d& corner : footprint_corners(o)) {
+      bounds.extend(corner);
+    }
   }
   const Eigen::Vector2d margin(1.5, 1.5);
   const Eigen::Vector2d lo = bounds.min() - margin;
@@ -131,11 +144,9 @@ cv::Mat draw_topview(const sim_camera::World& world,
                  cv::LINE_AA);
       return;
     }
-    const Eigen::Rotation2D<double> rotation(s.yaw_rad);
     std::vector<cv::Point> corners;
-    for (const auto& [dx, dy] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
-      corners.push_back(px(s.centre_m + rotation * Eigen::Vector2d(0.5 * dx * s.size_m.x(),
-                                                                   0.5 * dy * s.size_m.y())));
+    for (const Eigen::Vector2d& corner : footprint_corners(s)) {
+      corners.push_back(px(corner));
     }
     if (thickness == cv::FILLED) {
       cv::fillConvexPoly(image, corners, color, cv::LINE_AA);

@@ -129,7 +129,7 @@ sim_camera::ControllerSpec read_controller(const YamlReader& r, const YAML::Node
     return c;
   }
   r.only_keys(node, field, {"kind", "alpha", "beta", "gamma", "delta", "lambda", "max_accel_mps2",
-                            "max_turn_rate", "use_depth"});
+                            "max_turn_rate", "use_depth", "clearance_margin_m"});
   c.kind = r.word(node, field, "kind", {"goal_reaching", "following"}, c.kind.c_str());
   c.alpha = r.non_negative(node, field, "alpha", c.alpha);
   c.beta = r.non_negative(node, field, "beta", c.beta);
@@ -143,6 +143,7 @@ sim_camera::ControllerSpec read_controller(const YamlReader& r, const YAML::Node
   c.max_accel_mps2 = r.positive(node, field, "max_accel_mps2", c.max_accel_mps2);
   c.max_turn_rate = r.positive(node, field, "max_turn_rate", c.max_turn_rate);
   c.use_depth = r.boolean(node, field, "use_depth", c.use_depth);
+  c.clearance_margin_m = r.non_negative(node, field, "clearance_margin_m", c.clearance_margin_m);
   return c;
 }
 

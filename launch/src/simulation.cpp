@@ -33,7 +33,7 @@ double ms_since(Clock::time_point start) {
 servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
   const sim_camera::ControllerSpec& c = agent.controller;
   servo::AvoidanceOptions avoidance;
-  avoidance.agent_width_m = 2.0 * agent.radius_m;
+  avoidance.agent_width_m = 2.0 * agent.radius_m + c.clearance_margin_m;
   avoidance.use_depth = c.use_depth;
   const servo::ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
   if (c.kind == "following") {

@@ -19,14 +19,44 @@ constexpr double kLn10 = 2.302585092994046;
 constexpr double kMaxGoalBearing = 80.0 * std::numbers::pi / 180.0;
 
 // The gradient of L = w·exp(−|s|/σ) (w constant) through the rate of s: L̇ = −L sign(s)/σ · ṡ.
-// A separation of exactly zero is treated as positive, so a head-on obstacle turns the agent
-// left.
-TermGradient exp_falloff(double weight, double s, double sigma, const FeatureRate& rate) {
+// `side` is the sign of s that the gradient takes (see SideMemory).
+TermGradient exp_falloff(double weight, double s, double side, double sigma,
+                         const FeatureRate& rate) {
   const double value = weight * std::exp(-std::abs(s) / sigma);
-  const double sign = s >= 0.0 ? 1.0 : -1.0;
-  const double d = -value * sign / sigma;
+  const double d = -value * side / sigma;
   return {value, d * rate.per_accel, d * rate.per_turn};
 }
+
+// Which side of the cusp of exp(−|s|/σ) an object is on: sign(s), except that an object whose
+// s is within band·σ of the cusp keeps the side it had at the previous step. At the cusp the
+// gradient flips with the sign of s, and a saturated command that carries s across it in one
+// control period flips back at the next: the agent chatters between both sides and goes
+// straight on. Keeping the side taken commits the agent to passing on one side, as a person
+// does. Objects are recognised by source id; those without one (-1) get no memory.
+class SideMemory {
+ public:
+  double side(std::int32_t id, double s, double sigma, double band) {
+    double side = s >= 0.0 ? 1.0 : -1.0;
+    if (id >= 0) {
+      for (const auto& [previous_id, previous_side] : previous_) {
+        if (previous_id == id && std::abs(s) < band * sigma) {
+          side = previous_side;
+        }
+      }
+      current_.emplace_back(id, side);
+    }
+    return side;
+  }
+  // Call once per step, after every object: forgets the objects no longer seen.
+  void next_step() {
+    previous_.swap(current_);
+    current_.clear();
+  }
+
+ private:
+  std::vector<std::pair<std::int32_t, double>> previous_;
+  std::vector<std::pair<std::int32_t, double>> current_;
+};
 
 // The gradient of L = ½ s² through the rate of s: L̇ = s ṡ.
 TermGradient half_square(double s, const FeatureRate& rate) {
@@ -59,7 +89,7 @@ const ObjectFeatures* find_leader(const Percept& percept) {
 class GoalTerm final : public CostTerm {
  public:
   std::string_view name() const override { return "goal"; }
-  TermGradient evaluate(const Percept& percept, const AgentState& agent) const override {
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     if (!percept.goal_bearing_rad || !std::isfinite(*percept.goal_bearing_rad)) {
       return {};
     }
@@ -76,7 +106,7 @@ class SpeedTerm final : public CostTerm {
  public:
   explicit SpeedTerm(double preferred_speed_mps) : preferred_(preferred_speed_mps) {}
   std::string_view name() const override { return "speed"; }
-  TermGradient evaluate(const Percept&, const AgentState& agent) const override {
+  TermGradient evaluate(const Percept&, const AgentState& agent) override {
     // v̇_c = a_c.
     return half_square(agent.speed_mps - preferred_, FeatureRate{0.0, 1.0, 0.0});
   }
@@ -91,7 +121,7 @@ class AvoidanceTerm final : public CostTerm {
   std::string_view name() const override { return "avoidance"; }
 
   // CGF Eq. 9 and 10; the gradient sign follows DESIGN.md ("Signs"), not the printed Eq. 17.
-  TermGradient evaluate(const Percept& percept, const AgentState& agent) const override {
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {
       if (object.kind != RegionKind::visible || object.status != MotionStatus::approaching ||
@@ -114,15 +144,19 @@ class AvoidanceTerm final : public CostTerm {
       }
       const double sigma = (object.width + options_.agent_width_m / depth) / kLn10;
       const double separation = object.centre.x() - object.foe.x();
-      accumulate(sum, exp_falloff(importance, separation, sigma,
+      const double side =
+          sides_.side(object.source_id, separation, sigma, options_.commit_band);
+      accumulate(sum, exp_falloff(importance, separation, side, sigma,
                                   separation_rate(object.centre.x(), object.foe.x(), tau,
                                                   tau_over_depth, agent.speed_mps)));
     }
+    sides_.next_step();
     return sum;
   }
 
  private:
   AvoidanceOptions options_;
+  SideMemory sides_;
 };
 
 class DarkTerm final : public CostTerm {
@@ -133,7 +167,7 @@ class DarkTerm final : public CostTerm {
   // MIG Eq. 3. A dark region has no flow to fit; it is taken as static, so its FOE is straight
   // ahead and its centre moves as ġ = g/τ − (1 + g²) ω whatever its depth. MIG Eq. 7 prints
   // (1 − g²) for that factor; the sign of the g² term does not survive the derivation.
-  TermGradient evaluate(const Percept& percept, const AgentState&) const override {
+  TermGradient evaluate(const Percept& percept, const AgentState&) override {
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {
       if (object.kind != RegionKind::dark || object.pixel_count == 0 ||
@@ -147,13 +181,17 @@ class DarkTerm final : public CostTerm {
       const double g = object.centre.x();
       // The drift does not enter the gradient; an infinite τ leaves it out.
       const FeatureRate rate = centre_x_rate(g, 0.0, std::numeric_limits<double>::infinity());
-      accumulate(sum, exp_falloff(1.0, g, width / kLn10, rate));
+      const double sigma = width / kLn10;
+      const double side = sides_.side(object.source_id, g, sigma, options_.commit_band);
+      accumulate(sum, exp_falloff(1.0, g, side, sigma, rate));
     }
+    sides_.next_step();
     return sum;
   }
 
  private:
   AvoidanceOptions options_;
+  SideMemory sides_;
 };
 
 class AlignTerm final : public CostTerm {
@@ -162,7 +200,7 @@ class AlignTerm final : public CostTerm {
   std::string_view name() const override { return "align"; }
 
   // CGF Eq. 11 with Eq. 6 averaged over the leader's pixels: L = U², U = (Σ u_j)/N.
-  TermGradient evaluate(const Percept& percept, const AgentState& agent) const override {
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     const ObjectFeatures* leader = find_leader(percept);
     if (leader == nullptr) {
       return {};
@@ -197,7 +235,7 @@ class LeaderSpeedTerm final : public CostTerm {
   // CGF Eq. 13 with v_z = −Z/τ. The printed Eq. 19 takes v_z = +Z/τ, which would speed the
   // agent up behind a slower leader. Needs the leader's depth: without it the relative speed
   // is not observable from flow alone and the term is zero.
-  TermGradient evaluate(const Percept& percept, const AgentState&) const override {
+  TermGradient evaluate(const Percept& percept, const AgentState&) override {
     const ObjectFeatures* leader = find_leader(percept);
     if (leader == nullptr || !options_.use_depth || !leader->depth_m) {
       return {};
@@ -285,11 +323,11 @@ NavigationFunction& NavigationFunction::add(double weight, std::unique_ptr<CostT
 }
 
 TermGradient NavigationFunction::evaluate(const Percept& percept, const AgentState& agent,
-                                          std::vector<TermEvaluation>& out) const {
+                                          std::vector<TermEvaluation>& out) {
   out.resize(terms_.size());
   TermGradient total;
   for (std::size_t k = 0; k < terms_.size(); ++k) {
-    const auto& [weight, term] = terms_[k];
+    auto& [weight, term] = terms_[k];
     out[k].name = term->name();
     out[k].weight = weight;
     out[k].gradient = term->evaluate(percept, agent);
@@ -342,7 +380,7 @@ Controller::Controller(NavigationFunction navigation, double lambda, const Contr
   }
 }
 
-void Controller::step(const Percept& percept, const AgentState& agent, ControlOutput& out) const {
+void Controller::step(const Percept& percept, const AgentState& agent, ControlOutput& out) {
   if (!std::isfinite(agent.speed_mps)) {
     throw std::invalid_argument("controller: agent speed is not finite");
   }
@@ -362,7 +400,7 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
       std::clamp(out.unclamped.turn_rate, -limits_.max_turn_rate, limits_.max_turn_rate)};
 }
 
-ControlOutput Controller::step(const Percept& percept, const AgentState& agent) const {
+ControlOutput Controller::step(const Percept& percept, const AgentState& agent) {
   ControlOutput out;
   step(percept, agent, out);
   return out;

@@ -335,12 +335,19 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     }
     sample_offsets_[r + 1] = sample_offsets_[r] + take;
     samples_.resize(static_cast<std::size_t>(sample_offsets_[r + 1]));
+    // With a depth for every pixel, each vector is scaled to the region's mean depth: across a
+    // slanted or curved surface τ_j = −Z_j / v_z varies, and u_j Z_j / Z̄ = (x_j − f) / τ̄ holds
+    // exactly where the shared-τ model of CGF §5 holds only for a surface facing the camera.
+    const Accumulator& a = accumulators_[r];
+    const bool scale_by_depth = options_.use_depth && a.depth_count == a.pixels && a.pixels > 0;
+    const double inverse_mean_depth = scale_by_depth ? a.pixels / a.sum_depth : 0.0;
     for (int k = 0; k < take; ++k) {
       const std::uint32_t i = pixels[static_cast<std::size_t>(k * stride)];
       const auto col = static_cast<int>(i % static_cast<std::uint32_t>(field.width()));
       const auto row = static_cast<int>(i / static_cast<std::uint32_t>(field.width()));
+      const double scale = scale_by_depth ? depth[i] * inverse_mean_depth : 1.0;
       samples_[static_cast<std::size_t>(sample_offsets_[r] + k)] = {{field.x(col), field.y(row)},
-                                                                    flow[i].cast<double>()};
+                                                                    scale * flow[i].cast<double>()};
     }
   }
 

@@ -37,7 +37,7 @@ RunResult run(std::vector<SceneObject> world, const Eigen::Vector2d& goal) {
   constexpr double kAgentRadius = 0.25;
   AvoidanceOptions avoidance;
   avoidance.agent_width_m = 2.0 * kAgentRadius;
-  const Controller controller(goal_reaching({}, avoidance), 1.0, {1.0, 1.5});
+  Controller controller(goal_reaching({}, avoidance), 1.0, {1.0, 1.5});
   FeatureExtractor extractor;
   Segmentation segmentation;
   ControlOutput out;

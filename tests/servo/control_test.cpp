@@ -57,7 +57,7 @@ TEST(ControlSigns, DarkRegionOnTheRightTurnsLeft) {
   const std::vector<ObjectFeatures> objects = {dark};
   GoalReachingWeights weights;
   weights.delta = 1.0;
-  const Controller controller(goal_reaching(weights), 1.0, {10.0, 10.0});
+  Controller controller(goal_reaching(weights), 1.0, {10.0, 10.0});
   const ControlOutput out = controller.step({objects, 0.0, 10.0, {}}, {1.0});
   EXPECT_LT(out.command.turn_rate, 0.0);
   // Without dark-region awareness the agent ignores it.
@@ -69,7 +69,7 @@ TEST(ControlSigns, SlowerLeaderAheadSlowsTheFollower) {
   ObjectFeatures leader = object(0.0, 0.0, 8.0, 4.0);
   leader.source_id = 42;
   const std::vector<ObjectFeatures> objects = {leader};
-  const Controller controller(following({}), 1.0, {10.0, 10.0});
+  Controller controller(following({}), 1.0, {10.0, 10.0});
   const ControlOutput out = controller.step({objects, {}, {}, 42}, {1.0});
   EXPECT_LT(out.command.accel_mps2, 0.0);
   EXPECT_NEAR(out.command.accel_mps2, -0.5, 1e-12);  // a_c = λ β v_z
@@ -98,7 +98,7 @@ TEST(ControlSigns, LeaderDriftingRightIsFollowedToTheRight) {
 TEST(ControlSigns, SpeedTermPullsTowardsThePreferredSpeed) {
   GoalReachingWeights w;
   w.preferred_speed_mps = 1.0;
-  const Controller c(goal_reaching(w), 1.0, {10.0, 10.0});
+  Controller c(goal_reaching(w), 1.0, {10.0, 10.0});
   EXPECT_NEAR(c.step({}, {0.5}).command.accel_mps2, 0.1 * 0.5, 1e-12);
   EXPECT_NEAR(c.step({}, {1.5}).command.accel_mps2, -0.1 * 0.5, 1e-12);
 }
@@ -173,7 +173,7 @@ TEST(ControlInput, ZeroSpeedWithoutDepthStaysFinite) {
 }
 
 TEST(ControlInput, LimitsClampAndTheUnclampedCommandIsKept) {
-  const Controller c(goal_reaching({}), 1.0, {0.5, 0.2});
+  Controller c(goal_reaching({}), 1.0, {0.5, 0.2});
   const ControlOutput out = c.step({{}, 1.2, 5.0, {}}, {1.0});
   EXPECT_EQ(out.command.turn_rate, 0.2);
   EXPECT_GT(out.unclamped.turn_rate, 0.2);

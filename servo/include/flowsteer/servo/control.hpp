@@ -50,7 +50,8 @@ class CostTerm {
  public:
   virtual ~CostTerm() = default;
   virtual std::string_view name() const = 0;
-  virtual TermGradient evaluate(const Percept& percept, const AgentState& agent) const = 0;
+  // Not const: a term may remember what it decided at the previous step (see commit_band).
+  virtual TermGradient evaluate(const Percept& percept, const AgentState& agent) = 0;
 };
 
 // How the avoidance terms size objects and guess what depth does not tell them.
@@ -66,6 +67,10 @@ struct AvoidanceOptions {
   double depth_free_ratio = 0.5;
   // The depth-free guess Z = τ v_c / ratio needs a speed; below this one it uses this one.
   double min_speed_mps = 0.1;
+  // An object within this many σ of the cusp of its cost (|g − f| small) keeps the side the
+  // agent chose to pass it on at the previous step, instead of flipping with the sign of g − f
+  // (0 turns this off). Needs objects with a source id.
+  double commit_band = 1.0;
 };
 
 // L_t = ½ t_x² (CGF Eq. 7). Needs the goal's bearing; zero without one.
@@ -93,7 +98,7 @@ class NavigationFunction {
   NavigationFunction& add(double weight, std::unique_ptr<CostTerm> term);
   // Fills `out` with one entry per term (reusing its storage) and returns the weighted sum.
   TermGradient evaluate(const Percept& percept, const AgentState& agent,
-                        std::vector<TermEvaluation>& out) const;
+                        std::vector<TermEvaluation>& out);
   std::size_t term_count() const { return terms_.size(); }
 
  private:
@@ -141,8 +146,8 @@ class Controller {
   Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits);
 
   // Reuses `out.terms`' storage.
-  void step(const Percept& percept, const AgentState& agent, ControlOutput& out) const;
-  ControlOutput step(const Percept& percept, const AgentState& agent) const;
+  void step(const Percept& percept, const AgentState& agent, ControlOutput& out);
+  ControlOutput step(const Percept& percept, const AgentState& agent);
 
   const ControlLimits& limits() const { return limits_; }
 

@@ -99,6 +99,9 @@ double ttc_from_foe(std::span<const FlowSample> samples, const Eigen::Vector2d& 
 struct FeatureOptions {
   int min_pixels = 12;        // smaller regions are reported with status no_flow
   int max_fit_samples = 256;  // pixels of a region the robust fit uses, evenly spread
+  // Where the field has depth (a simulator), fit the flow scaled to the region's mean depth, so
+  // that slanted and curved surfaces give the FOE and the TTC at that depth exactly.
+  bool use_depth = true;
   RadialFitOptions fit;
 };
 

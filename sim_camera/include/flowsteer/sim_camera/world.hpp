@@ -79,6 +79,9 @@ struct ControllerSpec {
   double max_accel_mps2 = 1.0;
   double max_turn_rate = 1.0;
   bool use_depth = true;
+  // Added to the agent's diameter as the width it keeps clear (CGF §6.2's agent width): room
+  // for the path's curvature and the step, like a person's personal space.
+  double clearance_margin_m = 0.5;
 };
 
 struct AgentSpec {
