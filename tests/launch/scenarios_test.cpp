@@ -1,0 +1,206 @@
+// The scenarios of the papers, run headless with synthetic flow at a small resolution, and the
+// files `flowsteer sim` reads and writes.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/launch/scenario_file.hpp"
+#include "flowsteer/launch/simulation.hpp"
+
+namespace flowsteer::launch {
+namespace {
+
+SimResult run(const std::string& scenario, int resolution = 64) {
+  SimOptions options;
+  options.resolution = resolution;
+  options.write_outputs = false;
+  std::ostringstream log;
+  return run_simulation(builtin_scenario(scenario), options, log);
+}
+
+std::string error_of(const std::string& yaml) {
+  try {
+    parse_scenario(yaml, "scenario.yaml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no error for:\n" << yaml;
+  return "";
+}
+
+class GoalScenario : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(GoalScenario, EveryAgentReachesItsGoalWithoutCollision) {
+  const SimResult result = run(GetParam());
+  EXPECT_EQ(result.collisions.size(), 0U);
+  for (const AgentResult& a : result.agents) {
+    EXPECT_TRUE(a.reached_goal) << a.name;
+    EXPECT_EQ(a.collisions, 0) << a.name;
+    EXPECT_GT(a.min_clearance_m, 0.0) << a.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Papers, GoalScenario, ::testing::Values("room", "circle6", "crossing"));
+
+class FollowScenario : public ::testing::TestWithParam<const char*> {};
+
+// Following matches the leader's velocity (CGF Eq. 18), not a distance: the followers must keep
+// up with the leader to its last waypoint, without collisions.
+TEST_P(FollowScenario, FollowersKeepUpWithTheLeader) {
+  const SimResult result = run(GetParam());
+  EXPECT_EQ(result.collisions.size(), 0U);
+  ASSERT_TRUE(result.agents.front().reached_goal);
+  for (std::size_t i = 1; i < result.agents.size(); ++i) {
+    const AgentResult& a = result.agents[i];
+    EXPECT_GE(a.final_distance_to_leader_m, 0.0) << a.name;
+    EXPECT_LT(a.final_distance_to_leader_m, 8.0) << a.name;
+    EXPECT_GT(a.path_length_m, 0.6 * result.agents.front().path_length_m) << a.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Papers, FollowScenario, ::testing::Values("follow", "follow_obstacles"));
+
+TEST(Scenarios, EveryBuiltinOneLoadsAndRuns) {
+  const auto all = builtin_scenarios();
+  EXPECT_EQ(all.size(), 9U);
+  for (const auto& s : all) {
+    SimOptions options;
+    options.resolution = 32;
+    options.steps = 3;
+    options.write_outputs = false;
+    std::ostringstream log;
+    const SimResult r = run_simulation(builtin_scenario(s.name), options, log);
+    EXPECT_EQ(r.steps, 3) << s.name;
+    EXPECT_FALSE(s.description.empty()) << s.name;
+  }
+}
+
+TEST(Scenarios, UnknownNameListsTheKnownOnes) {
+  try {
+    builtin_scenario("hallway");
+    FAIL() << "expected an error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("room"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScenarioFile, ErrorsNameFileLineAndField) {
+  EXPECT_EQ(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], radius_m: -1}\n"),
+            "scenario.yaml:2:45: agents[0].radius_m: must be positive, got -1");
+  EXPECT_NE(error_of("agents: [").find("scenario.yaml:"), std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0]}\n").find("agents[0].goal: missing"),
+            std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [1, 1], speed: 2}\n")
+                .find("agents[0].speed: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], leader: 0}\n").find("agents[0].leader"),
+            std::string::npos);
+  // An agent that starts inside an obstacle.
+  EXPECT_NE(error_of("obstacles:\n  - {position: [0, 0], size: [2, 2]}\n"
+                     "agents:\n  - {start: [0.5, 0], goal: [5, 0]}\n")
+                .find("starts inside obstacle 0"),
+            std::string::npos);
+  EXPECT_NE(error_of("moving:\n  - {waypoints: [[0, 0]], speed_mps: 1}\n"
+                     "agents:\n  - {start: [5, 5], goal: [6, 6]}\n")
+                .find("moving[0].waypoints: needs at least two"),
+            std::string::npos);
+}
+
+TEST(SteerSuite, TestCaseBecomesAWorld) {
+  const sim_camera::WorldSpec w = load_steersuite(FLOWSTEER_TEST_DATA "/corridor.xml");
+  EXPECT_EQ(w.name, "corridor");
+  ASSERT_EQ(w.obstacles.size(), 2U);
+  // SteerSuite z ∈ [3, 4] is world y ∈ [−4, −3].
+  EXPECT_NEAR(w.obstacles[0].centre_m.y(), -3.5, 1e-12);
+  EXPECT_NEAR(w.obstacles[0].size_m.x(), 12.0, 1e-12);
+  EXPECT_NEAR(w.obstacles[0].height_m, 1.5, 1e-12);
+  ASSERT_EQ(w.agents.size(), 5U);
+  EXPECT_EQ(w.agents[0].name, "west");
+  EXPECT_NEAR(w.agents[0].start_m.y(), -1.0, 1e-12);
+  EXPECT_NEAR(w.agents[0].radius_m, 0.3, 1e-12);
+  EXPECT_NEAR(w.agents[0].preferred_speed_mps, 1.2, 1e-12);
+  ASSERT_EQ(w.agents[0].goals.size(), 1U);
+  EXPECT_NEAR(w.agents[0].goals[0].x(), 9.0, 1e-12);
+  EXPECT_NEAR(std::cos(w.agents[1].heading_rad), -1.0, 1e-12);  // facing −x
+  for (std::size_t i = 2; i < 5; ++i) {
+    EXPECT_GE(w.agents[i].start_m.x(), -16.0);
+    EXPECT_LE(w.agents[i].start_m.x(), -12.0);
+    EXPECT_LE(std::abs(w.agents[i].start_m.y()), 2.0);
+  }
+  // The same file gives the same world: random placements are seeded.
+  const sim_camera::WorldSpec again = load_steersuite(FLOWSTEER_TEST_DATA "/corridor.xml");
+  EXPECT_EQ(again.agents[3].start_m, w.agents[3].start_m);
+}
+
+TEST(SteerSuite, MalformedFilesAreRejectedWithTheirLine) {
+  auto error_of_xml = [](const std::string& xml) -> std::string {
+    try {
+      parse_steersuite(xml, "case.xml");
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of_xml("<SteerBenchTestCase><header>").find("case.xml:"), std::string::npos);
+  EXPECT_NE(error_of_xml("<Other/>").find("<SteerBenchTestCase>"), std::string::npos);
+  const std::string no_position =
+      "<SteerBenchTestCase>\n<header><worldBounds><xmin>-5</xmin><xmax>5</xmax><zmin>-5</zmin>"
+      "<zmax>5</zmax></worldBounds></header>\n<agent>\n<initialConditions><radius>0.5</radius>"
+      "</initialConditions>\n</agent>\n</SteerBenchTestCase>";
+  EXPECT_NE(error_of_xml(no_position).find("case.xml:4:"), std::string::npos)
+      << error_of_xml(no_position);
+  EXPECT_NE(error_of_xml(no_position).find("missing <position>"), std::string::npos);
+}
+
+TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "flowsteer_sim_test";
+  std::filesystem::remove_all(dir);
+  SimOptions options;
+  options.out_dir = dir;
+  options.resolution = 32;
+  options.steps = 10;
+  options.video = true;
+  std::ostringstream log;
+  const SimResult r = run_simulation(builtin_scenario("crossing"), options, log);
+  EXPECT_EQ(r.steps, 10);
+  for (const char* file : {"trajectories.csv", "costs.csv", "topview.png", "summary.json",
+                           "agent_0.mp4", "agent_5.mp4"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
+  }
+  std::ifstream trajectories(dir / "trajectories.csv");
+  std::string header;
+  std::getline(trajectories, header);
+  EXPECT_EQ(header, "t,agent,x,y,heading,v,a_c,omega");
+  int rows = 0;
+  for (std::string line; std::getline(trajectories, line);) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, 10 * 6);
+  std::ifstream costs(dir / "costs.csv");
+  std::getline(costs, header);
+  EXPECT_EQ(header, "t,agent,goal,speed,avoidance,total");
+  std::stringstream summary;
+  summary << std::ifstream(dir / "summary.json").rdbuf();
+  for (const char* key : {"\"reached_goal\"", "\"time_to_goal_s\"", "\"path_length_m\"",
+                          "\"min_clearance_m\"", "\"collisions\"", "\"collisions_total\"",
+                          "\"per_agent_step_ms\"", "\"render\"", "\"features\"", "\"total\""}) {
+    EXPECT_NE(summary.str().find(key), std::string::npos) << key;
+  }
+  const cv::Mat top = cv::imread((dir / "topview.png").string());
+  EXPECT_GT(top.cols, 100);
+  // Nothing left behind but the outputs.
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) {
+    ++entries;
+  }
+  EXPECT_EQ(entries, 10);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace flowsteer::launch
