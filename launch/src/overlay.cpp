@@ -39,14 +39,14 @@ cv::Scalar agent_color(std::size_t i) {
 
 cv::Size overlay_size(cv::Size image) { return {2 * image.width, image.height}; }
 
-cv::Mat flow_to_color(const cv::Mat& flow, double max_magnitude) {
-  cv::Mat hsv(flow.size(), CV_8UC3);
-  for (int row = 0; row < flow.rows; ++row) {
-    const auto* f = flow.ptr<cv::Vec2f>(row);
+cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude) {
+  cv::Mat hsv(flow.height(), flow.width(), CV_8UC3);
+  for (int row = 0; row < flow.height(); ++row) {
     auto* out = hsv.ptr<cv::Vec3b>(row);
-    for (int col = 0; col < flow.cols; ++col) {
-      const double angle = std::atan2(f[col][1], f[col][0]);
-      const double magnitude = std::hypot(f[col][0], f[col][1]);
+    for (int col = 0; col < flow.width(); ++col) {
+      const Eigen::Vector2f& f = flow.at(col, row);
+      const double angle = std::atan2(f.y(), f.x());
+      const double magnitude = f.norm();
       const double value = std::isfinite(magnitude) ? std::min(1.0, magnitude / max_magnitude) : 0.0;
       out[col] = cv::Vec3b(static_cast<uchar>((angle + M_PI) / (2.0 * M_PI) * 179.0), 255,
                            static_cast<uchar>(255.0 * value));
@@ -57,22 +57,20 @@ cv::Mat flow_to_color(const cv::Mat& flow, double max_magnitude) {
   return bgr;
 }
 
-cv::Mat draw_overlay(const camera_io::Frame& frame, const servo::CameraIntrinsics& k,
-                     std::span<const servo::ObjectFeatures> objects,
-                     const servo::Percept& percept) {
-  const cv::Size size = frame.image.size();
+cv::Mat draw_overlay(const AgentPipeline& pipeline) {
+  const servo::CameraIntrinsics& k = pipeline.intrinsics();
+  const servo::Percept& percept = pipeline.percept();
+  const cv::Size size = pipeline.frame().image.size();
   cv::Mat canvas(overlay_size(size), CV_8UC3, cv::Scalar::all(0));
   cv::Mat view = canvas(cv::Rect(0, 0, size.width, size.height));
-  frame.image.copyTo(view);
-  if (frame.sim) {
-    flow_to_color(frame.sim->flow, 0.5).copyTo(canvas(cv::Rect(size.width, 0, size.width, size.height)));
-  }
+  pipeline.frame().image.copyTo(view);
+  flow_to_color(pipeline.flow(), 0.5).copyTo(canvas(cv::Rect(size.width, 0, size.width, size.height)));
   auto to_pixel = [&](const Eigen::Vector2d& p) {
     return cv::Point(static_cast<int>(std::lround(k.fx_px * p.x() + k.cx_px)),
                      static_cast<int>(std::lround(k.fy_px * p.y() + k.cy_px)));
   };
   const double font = std::max(0.3, size.width / 400.0);
-  for (const servo::ObjectFeatures& o : objects) {
+  for (const servo::ObjectFeatures& o : pipeline.objects()) {
     const cv::Point centre = to_pixel(o.centre);
     cv::circle(view, centre, 3, kCentreColor, cv::FILLED);
     if (o.has_foe()) {

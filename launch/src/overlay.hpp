@@ -8,20 +8,18 @@
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "flowsteer/camera_io/frame_source.hpp"
-#include "flowsteer/servo/control.hpp"
+#include "flowsteer/launch/agent_pipeline.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::launch {
 
-// The view beside its colour-coded flow, with the features drawn on the view: FOE (blue),
-// centre (orange) and TTC of each object, the goal's bearing (pink) (CGF Fig. 3).
-cv::Mat draw_overlay(const camera_io::Frame& frame, const servo::CameraIntrinsics& intrinsics,
-                     std::span<const servo::ObjectFeatures> objects, const servo::Percept& percept);
+// An agent's view beside its colour-coded derotated flow, with the features drawn on the view:
+// FOE (blue), centre (orange) and TTC of each object, the goal's bearing (pink) (CGF Fig. 3).
+cv::Mat draw_overlay(const AgentPipeline& pipeline);
 cv::Size overlay_size(cv::Size image);
 
 // Flow as colour: hue for the direction, brightness for the magnitude (up to max_magnitude).
-cv::Mat flow_to_color(const cv::Mat& flow, double max_magnitude);
+cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude);
 
 // Throws std::runtime_error naming the file when OpenCV cannot encode MP4 there.
 std::unique_ptr<cv::VideoWriter> open_video(const std::filesystem::path& path, cv::Size size,

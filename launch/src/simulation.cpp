@@ -1,6 +1,5 @@
 #include "flowsteer/launch/simulation.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -13,9 +12,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "flowsteer/servo/servo.hpp"
-#include "flowsteer/sim_camera/renderer.hpp"
-#include "flowsteer/sim_camera/sim_camera.hpp"
+#include "flowsteer/launch/agent_pipeline.hpp"
 #include "output_files.hpp"
 #include "overlay.hpp"
 
@@ -23,56 +20,9 @@ namespace flowsteer::launch {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-using sim_camera::World;
-
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
-  const sim_camera::ControllerSpec& c = agent.controller;
-  servo::AvoidanceOptions avoidance;
-  avoidance.agent_width_m = 2.0 * agent.radius_m + c.clearance_margin_m;
-  avoidance.use_depth = c.use_depth;
-  const servo::ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
-  if (c.kind == "following") {
-    return servo::Controller(servo::following({c.alpha, c.beta, c.gamma}, avoidance), c.lambda,
-                             limits);
-  }
-  servo::GoalReachingWeights weights;
-  weights.alpha = c.alpha;
-  weights.beta = c.beta;
-  weights.gamma = c.gamma;
-  weights.delta = c.delta;
-  weights.preferred_speed_mps = agent.preferred_speed_mps;
-  return servo::Controller(servo::goal_reaching(weights, avoidance), c.lambda, limits);
-}
-
-// Copies the simulator's flow and depth into the servo core's field.
-void to_flow_field(const camera_io::SimChannels& sim, servo::FlowField& field) {
-  auto flow = field.flow();
-  auto depth = field.depth();
-  for (int row = 0; row < field.height(); ++row) {
-    const auto* f = sim.flow.ptr<cv::Vec2f>(row);
-    const auto* d = sim.depth_m.ptr<float>(row);
-    for (int col = 0; col < field.width(); ++col) {
-      const std::size_t i = field.index(col, row);
-      flow[i] = Eigen::Vector2f(f[col][0], f[col][1]);
-      depth[i] = d[col];
-    }
-  }
-}
-
 // Everything one agent keeps from step to step.
 struct AgentLoop {
-  std::unique_ptr<sim_camera::SimCamera> camera;
-  servo::Controller controller;
-  servo::FlowField field;
-  servo::FeatureExtractor extractor;
-  servo::Segmentation segmentation;
-  servo::ControlOutput output;
-  camera_io::Frame frame;
+  std::unique_ptr<AgentPipeline> pipeline;
   AgentResult result;
   Eigen::Vector2d last_position;
   std::unique_ptr<cv::VideoWriter> video;
@@ -118,7 +68,7 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
       a.camera.width_px = a.camera.height_px = *options.resolution;
     }
   }
-  World world(spec);
+  sim_camera::World world(spec);
   std::unique_ptr<sim_camera::Renderer> renderer = sim_camera::Renderer::create();
   std::optional<OutputDir> out;
   if (options.write_outputs) {
@@ -127,17 +77,7 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
 
   std::vector<AgentLoop> loops;
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-    auto camera = std::make_unique<sim_camera::SimCamera>(world, *renderer, i);
-    servo::FlowField field(camera->intrinsics(), true);
-    AgentLoop loop{std::move(camera),
-                   make_controller(spec.agents[i]),
-                   std::move(field),
-                   servo::FeatureExtractor(),
-                   {},
-                   {},
-                   {},
-                   {},
-                   spec.agents[i].start_m,
+    AgentLoop loop{std::make_unique<AgentPipeline>(world, *renderer, i), {}, spec.agents[i].start_m,
                    nullptr};
     loop.result.name = spec.agents[i].name;
     loop.result.min_clearance_m = world.clearance(i);
@@ -173,50 +113,14 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
       if (state.reached_goal && !agent.leader) {
         continue;
       }
-      const auto start = Clock::now();
-      loop.camera->read(loop.frame, 0.0);
-      const double render_ms = ms_since(start);
-
-      auto stage = Clock::now();
-      to_flow_field(*loop.frame.sim, loop.field);
-      servo::derotate(loop.field,
-                      servo::camera_angular_velocity(state.turn_rate, agent.camera.pitch_rad));
-      const double flow_ms = ms_since(stage);
-
-      stage = Clock::now();
-      const cv::Mat& ids = loop.frame.sim->object_ids;
-      servo::segment_by_ids({ids.ptr<std::int32_t>(), ids.total()}, ids.cols, ids.rows, {},
-                            loop.segmentation);
-      const double segment_ms = ms_since(stage);
-
-      stage = Clock::now();
-      const auto objects = loop.extractor.extract(loop.field, loop.segmentation);
-      const double features_ms = ms_since(stage);
-
-      stage = Clock::now();
-      servo::Percept percept{objects, {}, {}, {}};
-      if (agent.leader) {
-        percept.leader_id = sim_camera::agent_render_id(static_cast<std::size_t>(*agent.leader));
-      } else if (state.next_goal < agent.goals.size()) {
-        const Eigen::Vector2d to_goal = agent.goals[state.next_goal] - state.position_m;
-        const double bearing_left = std::atan2(to_goal.y(), to_goal.x()) - state.yaw_rad;
-        percept.goal_bearing_rad = -std::remainder(bearing_left, 2.0 * std::numbers::pi);
-        percept.goal_distance_m = to_goal.norm();
-      }
-      loop.controller.step(percept, {state.speed_mps}, loop.output);
-      commands[i] = {loop.output.command.accel_mps2, loop.output.command.turn_rate};
-      const double control_ms = ms_since(stage);
-
-      sum.render += render_ms;
-      sum.flow += flow_ms;
-      sum.segment += segment_ms;
-      sum.features += features_ms;
-      sum.control += control_ms;
-      sum.total += ms_since(start);
+      StageTimes times;
+      const servo::ControlOutput& output = loop.pipeline->step(times);
+      commands[i] = {output.command.accel_mps2, output.command.turn_rate};
+      sum += times;
       ++agent_steps;
 
-      CostRow row{world.time_s(), i, {}, loop.output.cost};
-      for (const servo::TermEvaluation& t : loop.output.terms) {
+      CostRow row{world.time_s(), i, {}, output.cost};
+      for (const servo::TermEvaluation& t : output.terms) {
         row.terms[t.name] = t.gradient.cost;
         if (seen_terms.insert(t.name).second) {
           term_names.push_back(t.name);
@@ -227,9 +131,10 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
       if (options.video && out) {
         if (!loop.video) {
           loop.video = open_video(out->staging_path("agent_" + std::to_string(i) + ".mp4"),
-                                  overlay_size(loop.frame.image.size()), 1.0 / spec.step_s);
+                                  overlay_size(loop.pipeline->frame().image.size()),
+                                  1.0 / spec.step_s);
         }
-        loop.video->write(draw_overlay(loop.frame, loop.camera->intrinsics(), objects, percept));
+        loop.video->write(draw_overlay(*loop.pipeline));
       }
     }
     for (std::size_t i = 0; i < loops.size(); ++i) {

@@ -25,7 +25,8 @@ namespace flowsteer::sim_camera {
 
 namespace {
 
-constexpr int kShadowMapSize = 2048;
+constexpr int kShadowMapSize = 1024;
+constexpr int kNoiseSize = 256;
 constexpr int kMaxPointLights = 8;
 constexpr float kNear = 0.05F;
 constexpr float kFar = 500.0F;
@@ -217,6 +218,45 @@ Eigen::Matrix4f model_matrix(const Eigen::Vector2d& centre, double yaw, const Ei
   return t.matrix().cast<float>();
 }
 
+// Tileable value noise of several octaves, in [0, 255]: the texture that gives surfaces
+// contrast. Computed once; a fixed seed keeps renders identical from run to run.
+std::vector<std::uint8_t> noise_texture() {
+  std::vector<float> lattice(static_cast<std::size_t>(kNoiseSize * kNoiseSize));
+  std::uint32_t state = 12345;
+  for (float& v : lattice) {
+    state = state * 1664525U + 1013904223U;  // LCG: repeatable, good enough for texture
+    v = static_cast<float>(state >> 8) / static_cast<float>(1U << 24);
+  }
+  std::vector<float> sum(lattice.size(), 0.0F);
+  float amplitude = 1.0F;
+  float total = 0.0F;
+  for (int cell = 32; cell >= 2; cell /= 2, amplitude *= 0.6F) {
+    const int cells = kNoiseSize / cell;
+    for (int y = 0; y < kNoiseSize; ++y) {
+      for (int x = 0; x < kNoiseSize; ++x) {
+        const int x0 = x / cell;
+        const int y0 = y / cell;
+        const float fx = static_cast<float>(x % cell) / static_cast<float>(cell);
+        const float fy = static_cast<float>(y % cell) / static_cast<float>(cell);
+        const float sx = fx * fx * (3.0F - 2.0F * fx);
+        const float sy = fy * fy * (3.0F - 2.0F * fy);
+        auto at = [&](int i, int j) {
+          return lattice[static_cast<std::size_t>((j % cells) * kNoiseSize + (i % cells))];
+        };
+        const float top = at(x0, y0) + sx * (at(x0 + 1, y0) - at(x0, y0));
+        const float bottom = at(x0, y0 + 1) + sx * (at(x0 + 1, y0 + 1) - at(x0, y0 + 1));
+        sum[static_cast<std::size_t>(y * kNoiseSize + x)] += amplitude * (top + sy * (bottom - top));
+      }
+    }
+    total += amplitude;
+  }
+  std::vector<std::uint8_t> texels(sum.size());
+  for (std::size_t i = 0; i < sum.size(); ++i) {
+    texels[i] = static_cast<std::uint8_t>(std::lround(255.0F * sum[i] / total));
+  }
+  return texels;
+}
+
 // What one draw needs: the shape, its pose and size, how it looks, who it is and how it moves.
 struct DrawItem {
   const Mesh* mesh;
@@ -244,6 +284,7 @@ struct Renderer::Impl {
   int fbo_height = 0;
   GLuint shadow_fbo = 0;
   GLuint shadow_texture = 0;
+  GLuint noise_texture_id = 0;
   std::uint64_t shadow_world_serial = 0;
   double shadow_time_s = -1.0;
   Eigen::Matrix4f light_view_projection = Eigen::Matrix4f::Identity();
@@ -258,6 +299,7 @@ struct Renderer::Impl {
       glDeleteRenderbuffers(static_cast<GLsizei>(renderbuffers.size()), renderbuffers.data());
       glDeleteFramebuffers(1, &fbo);
       glDeleteTextures(1, &shadow_texture);
+      glDeleteTextures(1, &noise_texture_id);
       glDeleteFramebuffers(1, &shadow_fbo);
       glDeleteProgram(scene_program);
       glDeleteProgram(shadow_program);
@@ -359,6 +401,17 @@ struct Renderer::Impl {
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
       throw std::runtime_error("OpenGL: the shadow-map framebuffer is incomplete");
     }
+    const std::vector<std::uint8_t> noise = noise_texture();
+    glGenTextures(1, &noise_texture_id);
+    glBindTexture(GL_TEXTURE_2D, noise_texture_id);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R8, kNoiseSize, kNoiseSize, 0, GL_RED, GL_UNSIGNED_BYTE,
+                 noise.data());
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
     glGenFramebuffers(1, &fbo);
     check_gl("creating the renderer's resources");
   }
@@ -565,6 +618,9 @@ struct Renderer::Impl {
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, shadow_texture);
     glUniform1i(location("u_shadow_map"), 0);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, noise_texture_id);
+    glUniform1i(location("u_noise"), 1);
     // Fixed lights, then the lights agents carry.
     std::vector<PointLight> points = lighting.points;
     for (std::size_t i = 0; i < spec.agents.size(); ++i) {
@@ -606,15 +662,15 @@ struct Renderer::Impl {
       set_material(material);
       mesh.draw();
     };
-    const Eigen::Vector2d ground_centre = view.position_m;
-    draw(ground, model_matrix(ground_centre, 0.0, {spec.ground_size_m, spec.ground_size_m, 1.0}),
-         spec.ground, servo::kGroundId, Eigen::Vector3d::Zero());
     collect_items(world, view.self);
     for (const DrawItem& item : items) {
       if (item.mesh != nullptr) {
         draw(*item.mesh, item.model, *item.material, item.id, item.velocity_mps);
       }
     }
+    // The ground last: the depth test then skips shading it behind everything else.
+    draw(ground, model_matrix(view.position_m, 0.0, {spec.ground_size_m, spec.ground_size_m, 1.0}),
+         spec.ground, servo::kGroundId, Eigen::Vector3d::Zero());
     check_gl("rendering the view");
     read_back(k, omega, out);
   }

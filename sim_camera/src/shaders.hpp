@@ -51,34 +51,25 @@ layout(location = 1) out int o_id;
 layout(location = 2) out vec2 o_flow;
 layout(location = 3) out float o_depth;
 
-float hash(vec3 p) {
-  p = fract(p * 0.1031);
-  p += dot(p, p.zyx + 31.32);
-  return fract((p.x + p.y) * p.z);
+uniform sampler2D u_noise;  // tileable value noise, mipmapped
+
+// The noise texture projected along the surface's dominant axis, at two scales.
+float noise(vec3 p, vec3 n) {
+  vec3 a = abs(n);
+  vec2 uv = a.z > 0.5 ? p.xy : (a.x > a.y ? p.yz : p.xz);
+  return 0.65 * texture(u_noise, uv * 0.125).r + 0.35 * texture(u_noise, uv * 0.34 + 0.37).r;
 }
 
-float value_noise(vec3 p) {
-  vec3 i = floor(p);
-  vec3 f = fract(p);
-  f = f * f * (3.0 - 2.0 * f);
-  float x00 = mix(hash(i), hash(i + vec3(1, 0, 0)), f.x);
-  float x10 = mix(hash(i + vec3(0, 1, 0)), hash(i + vec3(1, 1, 0)), f.x);
-  float x01 = mix(hash(i + vec3(0, 0, 1)), hash(i + vec3(1, 0, 1)), f.x);
-  float x11 = mix(hash(i + vec3(0, 1, 1)), hash(i + vec3(1, 1, 1)), f.x);
-  return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
-}
-
-float pattern_value(vec3 w) {
+float pattern_value(vec3 w, vec3 n) {
   vec3 p = w / u_pattern_scale;
   if (u_pattern == 1) {
     return mod(floor(p.x) + floor(p.y) + floor(p.z), 2.0);
   }
   if (u_pattern == 2) {
-    return 0.55 * value_noise(p) + 0.3 * value_noise(2.7 * p + 17.0) +
-           0.15 * value_noise(7.3 * p + 5.0);
+    return noise(p, n);
   }
   if (u_pattern == 3) {
-    return 0.7 * step(0.5, fract(p.z)) + 0.3 * value_noise(3.0 * p);
+    return 0.7 * step(0.5, fract(p.z)) + 0.3 * noise(3.0 * p, n);
   }
   return 1.0;
 }
@@ -92,14 +83,8 @@ float sun_visibility() {
   if (any(lessThan(uvz.xy, vec2(0.0))) || any(greaterThan(uvz.xy, vec2(1.0)))) {
     return 1.0;
   }
-  vec2 texel = 1.0 / vec2(textureSize(u_shadow_map, 0));
-  float lit = 0.0;
-  for (int dx = -1; dx <= 1; ++dx) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      lit += texture(u_shadow_map, vec3(uvz.xy + vec2(dx, dy) * texel, uvz.z - 0.0015));
-    }
-  }
-  return lit / 9.0;
+  // One tap: with linear filtering the comparison is already blended over 2×2 texels.
+  return texture(u_shadow_map, vec3(uvz.xy, uvz.z - 0.0015));
 }
 
 void main() {
@@ -112,7 +97,7 @@ void main() {
     float falloff = clamp(1.0 - d / u_point_range[k], 0.0, 1.0);
     light += u_point_intensity[k] * falloff * falloff * max(dot(n, to_light / d), 0.0);
   }
-  float texture_factor = 1.0 - u_pattern_contrast + u_pattern_contrast * pattern_value(v_world);
+  float texture_factor = 1.0 - u_pattern_contrast + u_pattern_contrast * pattern_value(v_world, n);
   vec3 linear = u_albedo * texture_factor * light;
   o_color = vec4(pow(clamp(linear, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
   o_id = u_id;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "flowsteer/launch/agent_pipeline.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::launch {
@@ -29,23 +30,13 @@ struct AgentResult {
   double final_distance_to_leader_m = -1.0;  // followers only
 };
 
-// Mean time per agent and step of each stage, in milliseconds.
-struct StageTimes {
-  double render = 0.0;
-  double flow = 0.0;
-  double segment = 0.0;
-  double features = 0.0;
-  double control = 0.0;
-  double total = 0.0;
-};
-
 struct SimResult {
   std::string scenario;
   int steps = 0;
   double duration_s = 0.0;
   std::vector<AgentResult> agents;
   std::vector<sim_camera::Collision> collisions;
-  StageTimes per_agent_step_ms;
+  StageTimes per_agent_step_ms;  // mean over agents and steps
 };
 
 // Runs the world to its end: each agent renders its view, the servo core turns it into a

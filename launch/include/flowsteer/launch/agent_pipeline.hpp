@@ -1,0 +1,61 @@
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <span>
+
+#include "flowsteer/camera_io/frame_source.hpp"
+#include "flowsteer/servo/servo.hpp"
+#include "flowsteer/sim_camera/renderer.hpp"
+#include "flowsteer/sim_camera/sim_camera.hpp"
+#include "flowsteer/sim_camera/world.hpp"
+
+namespace flowsteer::launch {
+
+// Time of each stage of one agent step, in milliseconds.
+struct StageTimes {
+  double render = 0.0;
+  double flow = 0.0;
+  double segment = 0.0;
+  double features = 0.0;
+  double control = 0.0;
+  double total = 0.0;
+
+  StageTimes& operator+=(const StageTimes& other);
+};
+
+// One simulated agent's perception-action loop: its head camera renders the world, the servo
+// core turns the synthetic flow into features (derotated with the agent's turn rate, segmented
+// by object id) and its controller into a command.
+class AgentPipeline {
+ public:
+  // The world and the renderer must outlive the pipeline.
+  AgentPipeline(const sim_camera::World& world, sim_camera::Renderer& renderer, std::size_t agent);
+
+  // Runs one step at the world's current state; `times` receives what each stage took.
+  const servo::ControlOutput& step(StageTimes& times);
+
+  const camera_io::Frame& frame() const { return frame_; }
+  const servo::FlowField& flow() const { return field_; }
+  std::span<const servo::ObjectFeatures> objects() const { return objects_; }
+  const servo::Percept& percept() const { return percept_; }
+  const servo::CameraIntrinsics& intrinsics() const { return camera_.intrinsics(); }
+
+ private:
+  const sim_camera::World& world_;
+  std::size_t agent_;
+  sim_camera::SimCamera camera_;
+  servo::Controller controller_;
+  servo::FlowField field_;
+  servo::FeatureExtractor extractor_;
+  servo::Segmentation segmentation_;
+  camera_io::Frame frame_;
+  std::span<const servo::ObjectFeatures> objects_;
+  servo::Percept percept_;
+  servo::ControlOutput output_;
+};
+
+// The servo controller a scenario's agent asks for.
+servo::Controller make_controller(const sim_camera::AgentSpec& agent);
+
+}  // namespace flowsteer::launch

@@ -1,0 +1,110 @@
+#include "flowsteer/launch/agent_pipeline.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+namespace flowsteer::launch {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Copies the simulator's flow and depth into the servo core's field.
+void to_flow_field(const camera_io::SimChannels& sim, servo::FlowField& field) {
+  auto flow = field.flow();
+  auto depth = field.depth();
+  for (int row = 0; row < field.height(); ++row) {
+    const auto* f = sim.flow.ptr<cv::Vec2f>(row);
+    const auto* d = sim.depth_m.ptr<float>(row);
+    for (int col = 0; col < field.width(); ++col) {
+      const std::size_t i = field.index(col, row);
+      flow[i] = Eigen::Vector2f(f[col][0], f[col][1]);
+      depth[i] = d[col];
+    }
+  }
+}
+
+}  // namespace
+
+StageTimes& StageTimes::operator+=(const StageTimes& other) {
+  render += other.render;
+  flow += other.flow;
+  segment += other.segment;
+  features += other.features;
+  control += other.control;
+  total += other.total;
+  return *this;
+}
+
+servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
+  const sim_camera::ControllerSpec& c = agent.controller;
+  servo::AvoidanceOptions avoidance;
+  avoidance.agent_width_m = 2.0 * agent.radius_m + c.clearance_margin_m;
+  avoidance.use_depth = c.use_depth;
+  const servo::ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
+  if (c.kind == "following") {
+    return servo::Controller(servo::following({c.alpha, c.beta, c.gamma}, avoidance), c.lambda,
+                             limits);
+  }
+  servo::GoalReachingWeights weights;
+  weights.alpha = c.alpha;
+  weights.beta = c.beta;
+  weights.gamma = c.gamma;
+  weights.delta = c.delta;
+  weights.preferred_speed_mps = agent.preferred_speed_mps;
+  return servo::Controller(servo::goal_reaching(weights, avoidance), c.lambda, limits);
+}
+
+AgentPipeline::AgentPipeline(const sim_camera::World& world, sim_camera::Renderer& renderer,
+                             std::size_t agent)
+    : world_(world),
+      agent_(agent),
+      camera_(world, renderer, agent),
+      controller_(make_controller(world.spec().agents.at(agent))),
+      field_(camera_.intrinsics(), true) {}
+
+const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
+  const sim_camera::AgentSpec& agent = world_.spec().agents[agent_];
+  const sim_camera::AgentState& state = world_.agents()[agent_];
+  const auto start = Clock::now();
+  camera_.read(frame_, 0.0);
+  times.render = ms_since(start);
+
+  auto stage = Clock::now();
+  to_flow_field(*frame_.sim, field_);
+  servo::derotate(field_, servo::camera_angular_velocity(state.turn_rate, agent.camera.pitch_rad));
+  times.flow = ms_since(stage);
+
+  stage = Clock::now();
+  const cv::Mat& ids = frame_.sim->object_ids;
+  servo::segment_by_ids({ids.ptr<std::int32_t>(), ids.total()}, ids.cols, ids.rows, {},
+                        segmentation_);
+  times.segment = ms_since(stage);
+
+  stage = Clock::now();
+  objects_ = extractor_.extract(field_, segmentation_);
+  times.features = ms_since(stage);
+
+  stage = Clock::now();
+  percept_ = servo::Percept{objects_, {}, {}, {}};
+  if (agent.leader) {
+    percept_.leader_id = sim_camera::agent_render_id(static_cast<std::size_t>(*agent.leader));
+  } else if (state.next_goal < agent.goals.size()) {
+    // The goal is a known point (CGF §6.1): its bearing, positive to the right.
+    const Eigen::Vector2d to_goal = agent.goals[state.next_goal] - state.position_m;
+    const double bearing_left = std::atan2(to_goal.y(), to_goal.x()) - state.yaw_rad;
+    percept_.goal_bearing_rad = -std::remainder(bearing_left, 2.0 * std::numbers::pi);
+    percept_.goal_distance_m = to_goal.norm();
+  }
+  controller_.step(percept_, {state.speed_mps}, output_);
+  times.control = ms_since(stage);
+  times.total = ms_since(start);
+  return output_;
+}
+
+}  // namespace flowsteer::launch
