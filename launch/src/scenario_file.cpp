@@ -64,8 +64,8 @@ Solid read_solid(const YamlReader& r, const YAML::Node& node, const std::string&
     if (!node["from"] || !node["to"]) {
       r.fail(node, field, "a wall needs from: [x, y] and to: [x, y]");
     }
-    const Eigen::Vector2d from = r.pair(node, field, "from", {});
-    const Eigen::Vector2d to = r.pair(node, field, "to", {});
+    const Eigen::Vector2d from = r.pair(node, field, "from", Eigen::Vector2d::Zero());
+    const Eigen::Vector2d to = r.pair(node, field, "to", Eigen::Vector2d::Zero());
     if ((to - from).norm() < 1e-6) {
       r.fail(node["to"], field + ".to", "a wall needs two distinct ends");
     }
@@ -79,7 +79,7 @@ Solid read_solid(const YamlReader& r, const YAML::Node& node, const std::string&
   if (!node["position"]) {
     r.fail(node, field + ".position", "missing: where is it?");
   }
-  s.centre_m = r.pair(node, field, "position", {});
+  s.centre_m = r.pair(node, field, "position", Eigen::Vector2d::Zero());
   s.height_m = r.positive(node, field, "height_m", 1.0);
   s.yaw_rad = r.number(node, field, "yaw_deg", 0.0) * kDeg;
   if (shape == "cylinder") {
@@ -273,7 +273,7 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     if (!node["start"]) {
       r.fail(node, field + ".start", "missing: where does the agent start?");
     }
-    a.start_m = r.pair(node, field, "start", {});
+    a.start_m = r.pair(node, field, "start", Eigen::Vector2d::Zero());
     a.heading_rad = r.number(node, field, "heading_deg", 0.0) * kDeg;
     a.preferred_speed_mps = r.non_negative(node, field, "preferred_speed_mps", 1.0);
     a.start_speed_mps = r.non_negative(node, field, "speed_mps", a.preferred_speed_mps);
@@ -285,7 +285,7 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
       r.fail(node["goals"], field + ".goals", "give goal or goals, not both");
     }
     if (node["goal"]) {
-      a.goals = {r.pair(node, field, "goal", {})};
+      a.goals = {r.pair(node, field, "goal", Eigen::Vector2d::Zero())};
     } else if (node["goals"]) {
       a.goals = read_points(r, node["goals"], field + ".goals");
     }
