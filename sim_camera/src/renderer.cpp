@@ -261,10 +261,9 @@ std::vector<std::uint8_t> noise_texture() {
 struct DrawItem {
   const Mesh* mesh;
   Eigen::Matrix4f model;
-  const Material* material;
+  Material material;  // a copy: moving obstacles' poses are temporaries
   std::int32_t id;
   Eigen::Vector3d velocity_mps;  // world frame
-  bool casts_shadow;
 };
 
 }  // namespace
@@ -453,7 +452,7 @@ struct Renderer::Impl {
       const AgentState& s = world.agents()[i];
       const Eigen::Vector2d v = s.velocity_mps();
       items.push_back({&cylinder, model_matrix(s.position_m, 0.0, {a.radius_m, a.radius_m, a.height_m}),
-                       &a.material, agent_render_id(i), {v.x(), v.y(), 0.0}, true});
+                       a.material, agent_render_id(i), {v.x(), v.y(), 0.0}});
       if (self && *self == i) {
         items.back().mesh = nullptr;  // casts a shadow, but its own camera does not see it
       }
@@ -463,7 +462,7 @@ struct Renderer::Impl {
       const Eigen::Vector3d scale = box_shape ? Eigen::Vector3d(s.size_m.x(), s.size_m.y(), s.height_m)
                                               : Eigen::Vector3d(s.radius_m, s.radius_m, s.height_m);
       items.push_back({box_shape ? &box : &cylinder, model_matrix(s.centre_m, s.yaw_rad, scale),
-                       &s.material, id, {velocity.x(), velocity.y(), 0.0}, true});
+                       s.material, id, {velocity.x(), velocity.y(), 0.0}});
     };
     for (std::size_t k = 0; k < spec.obstacles.size(); ++k) {
       add_solid(spec.obstacles[k], obstacle_render_id(k), Eigen::Vector2d::Zero());
@@ -665,7 +664,7 @@ struct Renderer::Impl {
     collect_items(world, view.self);
     for (const DrawItem& item : items) {
       if (item.mesh != nullptr) {
-        draw(*item.mesh, item.model, *item.material, item.id, item.velocity_mps);
+        draw(*item.mesh, item.model, item.material, item.id, item.velocity_mps);
       }
     }
     // The ground last: the depth test then skips shading it behind everything else.
