@@ -211,6 +211,34 @@ TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
   EXPECT_GT(objects[1].width, 0.0);
 }
 
+TEST(FeatureExtractor, RegionsReachingTheImageEdgeAreMarkedCut) {
+  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
+  FlowField field(k);
+  Segmentation s;
+  s.width = 8;
+  s.height = 6;
+  s.labels.assign(48, Segmentation::kNoRegion);
+  s.kinds = {RegionKind::visible, RegionKind::visible, RegionKind::visible};
+  s.source_ids = {10, 11, 12};
+  for (int col = 0; col < 8; ++col) {
+    s.labels[static_cast<std::size_t>(8 + col)] = col < 3 ? 0 : (col < 6 ? 1 : 2);
+    s.labels[static_cast<std::size_t>(40 + col)] = 1;  // region 1 spans the bottom row
+  }
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(field, s);
+  ASSERT_EQ(objects.size(), 3U);
+  EXPECT_TRUE(objects[0].cut_left);
+  EXPECT_FALSE(objects[0].cut_right);
+  EXPECT_TRUE(objects[1].cut_left);
+  EXPECT_TRUE(objects[1].cut_right);
+  EXPECT_FALSE(objects[2].cut_left);
+  EXPECT_TRUE(objects[2].cut_right);
+  EXPECT_NEAR(objects[0].min_x, field.x(0), 1e-12);
+  EXPECT_NEAR(objects[0].max_x, field.x(2), 1e-12);
+  EXPECT_NEAR(objects[2].min_x, field.x(6), 1e-12);
+  EXPECT_NEAR(objects[2].width, field.x(7) - field.x(6) + 1.0 / k.fx_px, 1e-12);
+}
+
 TEST(FeatureExtractor, DarkRegionsGetGeometryButNoFit) {
   const Case c = approaching_cases().front();
   AnalyticScene scene = base_scene();

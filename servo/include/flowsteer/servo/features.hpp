@@ -49,7 +49,13 @@ struct ObjectFeatures {
 
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // g: centroid, normalised
   double width = 0.0;                                // horizontal extent, normalised
-  std::optional<double> depth_m;                     // mean depth when the field has depth
+  double min_x = 0.0;  // leftmost and rightmost pixel centres, normalised
+  double max_x = 0.0;
+  // The region reaches the left / right edge of the image. The object may go on past that edge:
+  // on a cut side, centre, width and min_x / max_x describe the visible part only.
+  bool cut_left = false;
+  bool cut_right = false;
+  std::optional<double> depth_m;  // mean depth when the field has depth
 
   MotionStatus status = MotionStatus::no_flow;
   Eigen::Vector2d foe = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
