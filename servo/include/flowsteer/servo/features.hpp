@@ -103,7 +103,12 @@ double ttc_from_foe(std::span<const FlowSample> samples, const Eigen::Vector2d& 
                     double sign_from);
 
 struct FeatureOptions {
-  int min_pixels = 12;        // smaller regions are reported with status no_flow
+  // Smaller regions are reported with status no_flow. Four pixels give the fit eight equations
+  // for its three parameters. A higher floor hides objects that are small only because the
+  // image is coarse: at 48² with a 150° view a car 14 m away near the edge of the view is two
+  // rows by a few columns; with 12 it dropped in and out of the percept, and each time it came
+  // back it gave a full-size command.
+  int min_pixels = 4;
   int max_fit_samples = 256;  // pixels of a region the robust fit uses, evenly spread
   // Where the field has depth (a simulator), fit the flow scaled to the region's mean depth, so
   // that slanted and curved surfaces give the FOE and the TTC at that depth exactly.
