@@ -143,12 +143,25 @@ class AvoidanceTerm final : public CostTerm {
         depth = tau / tau_over_depth;
       }
       const double sigma = (object.width + options_.agent_width_m / depth) / kLn10;
-      const double separation = object.centre.x() - object.foe.x();
-      const double side =
-          sides_.side(object.source_id, separation, sigma, options_.commit_band);
-      accumulate(sum, exp_falloff(importance, separation, side, sigma,
-                                  separation_rate(object.centre.x(), object.foe.x(), tau,
-                                                  tau_over_depth, agent.speed_mps)));
+      const double foe = object.foe.x();
+      double centre = object.centre.x();
+      double separation = centre - foe;
+      const double side = sides_.side(object.source_id, separation, sigma, options_.commit_band);
+      // An object cut by the image edge may go on past it, and an FOE beyond the cut side may
+      // then lie on its hidden part: a car crossing close in front fills the image while the
+      // FOE of a slow agent runs far out (f = v_x / v_z). Its visible centroid is then no
+      // measure of how far the FOE is from the object. The worst case that the image allows
+      // is taken: the term is that of the object's point at the FOE, |g − f| = 0, whose
+      // separation from the FOE changes by Eq. 10 with g = f. Its gradient brakes (f a_c
+      // term), which moves the FOE further out, until the object's end comes into view. The
+      // side stays that of the visible part, the side the FOE is being moved away from.
+      if ((object.cut_left && foe < object.min_x) || (object.cut_right && foe > object.max_x)) {
+        centre = foe;
+        separation = 0.0;
+      }
+      accumulate(sum,
+                 exp_falloff(importance, separation, side, sigma,
+                             separation_rate(centre, foe, tau, tau_over_depth, agent.speed_mps)));
     }
     sides_.next_step();
     return sum;

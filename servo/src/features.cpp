@@ -367,6 +367,10 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     }
     f.centre = Eigen::Vector2d(a.sum_x, a.sum_y) / a.pixels;
     f.width = a.max_x - a.min_x + pixel_width;
+    f.min_x = a.min_x;
+    f.max_x = a.max_x;
+    f.cut_left = a.min_x <= field.x(0);
+    f.cut_right = a.max_x >= field.x(field.width() - 1);
     if (a.depth_count > 0) {
       f.depth_m = a.sum_depth / a.depth_count;
     }

@@ -144,6 +144,51 @@ TEST(ControlGradient, LeaderSpeedGradientMatchesSimulation) {
   EXPECT_NEAR(g.per_accel, (test::rate_of(s, 0.8, 0.0, cost) - base) / 0.8, 1e-4);
 }
 
+TEST(ControlBorder, FoeBeyondTheCutSideOfAnObjectCountsAsOnIt) {
+  // A car crossing close in front of a slow agent overflows the image on the left; the FOE is
+  // far out on that side (f = v_x / v_z with a small v_z), past the visible part.
+  ObjectFeatures car = object(-1.5, -12.0, 3.0, 0.8, 2.0);
+  car.min_x = -3.7;
+  car.max_x = 0.7;
+  const std::vector<ObjectFeatures> uncut = {car};
+  const ControlOutput seen_whole = goal_controller().step({uncut, 0.0, 10.0, {}}, {0.3});
+  EXPECT_LT(seen_whole.terms[2].gradient.cost, 1e-3);  // |g − f| ≫ w: almost no cost
+
+  car.cut_left = true;
+  const std::vector<ObjectFeatures> cut = {car};
+  const ControlOutput out = goal_controller().step({cut, 0.0, 10.0, {}}, {0.3});
+  const double importance = -2.0 * 3.0 + 10.0;
+  EXPECT_NEAR(out.terms[2].gradient.cost, importance, 1e-12);  // the FOE may be on the car
+  // The object's point at the FOE (g = f in Eq. 10): a_c = −λ γ ∂L̇/∂a_c with
+  // ∂L̇/∂a_c = −I sign(g − f)/σ · (τ/Z) f; the visible part is right of the FOE.
+  // The speed term adds β (v* − v_c).
+  const double sigma = (2.0 + AvoidanceOptions{}.agent_width_m / 0.8) / kLn10;
+  const double tau_over_depth = 3.0 / 0.8;
+  const double speed_term = 0.1 * (1.0 - 0.3);
+  EXPECT_NEAR(out.unclamped.accel_mps2, speed_term + importance / sigma * tau_over_depth * -12.0,
+              1e-9);
+  EXPECT_LT(out.command.accel_mps2, 0.0);  // brakes: lets the car pass
+  // With g = f only −τ v_c / Z is left of the ω factor; the goal is straight ahead.
+  EXPECT_NEAR(out.unclamped.turn_rate, -importance / sigma * tau_over_depth * 0.3, 1e-9);
+
+  // Mirrored: cut on the right with the FOE beyond it also brakes.
+  ObjectFeatures mirrored = object(1.5, 12.0, 3.0, 0.8, 2.0);
+  mirrored.min_x = -0.7;
+  mirrored.max_x = 3.7;
+  mirrored.cut_right = true;
+  const std::vector<ObjectFeatures> right = {mirrored};
+  const ControlOutput out_right = goal_controller().step({right, 0.0, 10.0, {}}, {0.3});
+  EXPECT_NEAR(out_right.terms[2].gradient.cost, importance, 1e-12);
+  EXPECT_NEAR(out_right.unclamped.accel_mps2, out.unclamped.accel_mps2, 1e-9);
+  EXPECT_NEAR(out_right.unclamped.turn_rate, -out.unclamped.turn_rate, 1e-9);
+
+  // The FOE on the uncut side, or within the visible part, is measured as before.
+  car.foe = {4.0, 0.0};
+  const std::vector<ObjectFeatures> other_side = {car};
+  EXPECT_LT(goal_controller().step({other_side, 0.0, 10.0, {}}, {0.3}).terms[2].gradient.cost,
+            0.1 * importance);
+}
+
 TEST(ControlInput, ObjectsThatCannotCollideAreIgnored) {
   std::vector<ObjectFeatures> objects = {object(0.1, 0.0, 6.0, 6.0),    // beyond the 5 s horizon
                                          object(0.1, 0.0, -2.0, 2.0)};  // receding

@@ -211,6 +211,63 @@ TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
   EXPECT_GT(objects[1].width, 0.0);
 }
 
+TEST(FeatureExtractor, RegionsReachingTheImageEdgeAreMarkedCut) {
+  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
+  FlowField field(k);
+  Segmentation s;
+  s.width = 8;
+  s.height = 6;
+  s.labels.assign(48, Segmentation::kNoRegion);
+  s.kinds = {RegionKind::visible, RegionKind::visible, RegionKind::visible};
+  s.source_ids = {10, 11, 12};
+  for (int col = 0; col < 8; ++col) {
+    s.labels[static_cast<std::size_t>(8 + col)] = col < 3 ? 0 : (col < 6 ? 1 : 2);
+    s.labels[static_cast<std::size_t>(40 + col)] = 1;  // region 1 spans the bottom row
+  }
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(field, s);
+  ASSERT_EQ(objects.size(), 3U);
+  EXPECT_TRUE(objects[0].cut_left);
+  EXPECT_FALSE(objects[0].cut_right);
+  EXPECT_TRUE(objects[1].cut_left);
+  EXPECT_TRUE(objects[1].cut_right);
+  EXPECT_FALSE(objects[2].cut_left);
+  EXPECT_TRUE(objects[2].cut_right);
+  EXPECT_NEAR(objects[0].min_x, field.x(0), 1e-12);
+  EXPECT_NEAR(objects[0].max_x, field.x(2), 1e-12);
+  EXPECT_NEAR(objects[2].min_x, field.x(6), 1e-12);
+  EXPECT_NEAR(objects[2].width, field.x(7) - field.x(6) + 1.0 / k.fx_px, 1e-12);
+}
+
+TEST(FeatureExtractor, AFourPixelRegionIsFittedByDefault) {
+  // A distant object at the edge of a coarse image covers a few pixels only.
+  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 150.0 * kDeg);
+  FlowField field(k);
+  Segmentation s;
+  s.width = 8;
+  s.height = 6;
+  s.labels.assign(48, Segmentation::kNoRegion);
+  s.kinds = {RegionKind::visible, RegionKind::visible};
+  s.source_ids = {10, 11};
+  const Eigen::Vector2d foe(-2.0, 0.1);
+  const double ttc = 2.5;
+  auto flow = field.flow();
+  constexpr int kPixels[][3] = {{0, 2, 0}, {1, 2, 0}, {0, 3, 0}, {1, 3, 0},  // column, row, label
+                                {6, 2, 1}, {7, 2, 1}, {7, 3, 1}};
+  for (const auto& [col, row, label] : kPixels) {
+    const std::size_t i = field.index(col, row);
+    s.labels[i] = label;
+    flow[i] = ((Eigen::Vector2d(field.x(col), field.y(row)) - foe) / ttc).cast<float>();
+  }
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(field, s);
+  ASSERT_EQ(objects.size(), 2U);
+  ASSERT_EQ(objects[0].status, MotionStatus::approaching);
+  EXPECT_LT((objects[0].foe - foe).norm(), 1e-4);
+  EXPECT_NEAR(objects[0].ttc_s, ttc, 1e-4);
+  EXPECT_EQ(objects[1].status, MotionStatus::no_flow);  // three pixels: below the floor
+}
+
 TEST(FeatureExtractor, DarkRegionsGetGeometryButNoFit) {
   const Case c = approaching_cases().front();
   AnalyticScene scene = base_scene();

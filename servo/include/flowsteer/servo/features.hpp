@@ -49,7 +49,13 @@ struct ObjectFeatures {
 
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // g: centroid, normalised
   double width = 0.0;                                // horizontal extent, normalised
-  std::optional<double> depth_m;                     // mean depth when the field has depth
+  double min_x = 0.0;  // leftmost and rightmost pixel centres, normalised
+  double max_x = 0.0;
+  // The region reaches the left / right edge of the image. The object may go on past that edge:
+  // on a cut side, centre, width and min_x / max_x describe the visible part only.
+  bool cut_left = false;
+  bool cut_right = false;
+  std::optional<double> depth_m;  // mean depth when the field has depth
 
   MotionStatus status = MotionStatus::no_flow;
   Eigen::Vector2d foe = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -97,7 +103,12 @@ double ttc_from_foe(std::span<const FlowSample> samples, const Eigen::Vector2d& 
                     double sign_from);
 
 struct FeatureOptions {
-  int min_pixels = 12;        // smaller regions are reported with status no_flow
+  // Smaller regions are reported with status no_flow. Four pixels give the fit eight equations
+  // for its three parameters. A higher floor hides objects that are small only because the
+  // image is coarse: at 48² with a 150° view a car 14 m away near the edge of the view is two
+  // rows by a few columns; with 12 it dropped in and out of the percept, and each time it came
+  // back it gave a full-size command.
+  int min_pixels = 4;
   int max_fit_samples = 256;  // pixels of a region the robust fit uses, evenly spread
   // Where the field has depth (a simulator), fit the flow scaled to the region's mean depth, so
   // that slanted and curved surfaces give the FOE and the TTC at that depth exactly.
