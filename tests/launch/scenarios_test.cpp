@@ -45,7 +45,26 @@ TEST_P(GoalScenario, EveryAgentReachesItsGoalWithoutCollision) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Papers, GoalScenario, ::testing::Values("room", "circle6", "crossing"));
+INSTANTIATE_TEST_SUITE_P(Papers, GoalScenario,
+                         ::testing::Values("room", "circle6", "crossing", "street"));
+
+// The street is a real test of avoidance: agents that ignore what they see are hit by cars.
+TEST(Scenarios, StreetCarsHitAgentsThatDoNotAvoid) {
+  sim_camera::WorldSpec street = builtin_scenario("street");
+  for (auto& a : street.agents) {
+    a.controller.gamma = 0.0;
+  }
+  SimOptions options;
+  options.resolution = 48;
+  options.write_outputs = false;
+  std::ostringstream log;
+  const SimResult blind = run_simulation(street, options, log);
+  int with_cars = 0;
+  for (const auto& c : blind.collisions) {
+    with_cars += c.with.starts_with("moving") ? 1 : 0;
+  }
+  EXPECT_GE(with_cars, 2);
+}
 
 class FollowScenario : public ::testing::TestWithParam<const char*> {};
 
