@@ -53,11 +53,11 @@ layout(location = 3) out float o_depth;
 
 uniform sampler2D u_noise;  // tileable value noise, mipmapped
 
-// The noise texture projected along the surface's dominant axis, at two scales.
+// The noise texture (several octaves already) projected along the surface's dominant axis.
 float noise(vec3 p, vec3 n) {
   vec3 a = abs(n);
   vec2 uv = a.z > 0.5 ? p.xy : (a.x > a.y ? p.yz : p.xz);
-  return 0.65 * texture(u_noise, uv * 0.125).r + 0.35 * texture(u_noise, uv * 0.34 + 0.37).r;
+  return texture(u_noise, uv * 0.125).r;
 }
 
 float pattern_value(vec3 w, vec3 n) {
