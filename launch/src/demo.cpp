@@ -59,7 +59,7 @@ void run_demo(const DemoScene& demo, std::ostream& out) {
     percept.goal_distance_m = demo.goal_m->norm();
   }
   servo::Controller controller(navigation_for(demo.controller), demo.controller.lambda,
-                                     demo.controller.limits);
+                               demo.controller.limits);
   const servo::ControlOutput command = controller.step(percept, {scene.agent_speed_mps});
 
   const double deg = 180.0 / std::numbers::pi;

@@ -41,8 +41,8 @@ void read_camera(const YamlReader& r, const YAML::Node& node, servo::AnalyticSce
   scene.mount.pitch_rad = pitch_deg * kDeg;
 }
 
-servo::SceneObject read_object(const YamlReader& r, const YAML::Node& node, const std::string& field,
-                               std::int32_t default_id) {
+servo::SceneObject read_object(const YamlReader& r, const YAML::Node& node,
+                               const std::string& field, std::int32_t default_id) {
   r.only_keys(node, field, {"shape", "id", "position", "size", "radius_m", "height_m", "velocity"});
   servo::SceneObject o;
   o.shape = r.word(node, field, "shape", {"box", "cylinder"}, "box") == "box"

@@ -47,8 +47,9 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
   if (!drive) {
     throw ConfigError(source_name, 1, 1, "drive", "missing: the launch file has no drive section");
   }
-  r.only_keys(drive, "drive", {"type", "loop_rate_hz", "geometry", "limits", "watchdog", "sim",
-                               "odrive", "arduino_bridge", "roboclaw"});
+  r.only_keys(drive, "drive",
+              {"type", "loop_rate_hz", "geometry", "limits", "watchdog", "sim", "odrive",
+               "arduino_bridge", "roboclaw"});
   DriveSection s;
   const std::string type =
       r.word(drive, "drive", "type", {"sim", "odrive_can", "arduino_bridge", "roboclaw"}, "");
@@ -73,8 +74,9 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
         r.positive(g, "drive.geometry", "wheel_radius_m", s.stage.geometry.wheel_radius_m);
   }
   if (const YAML::Node l = drive["limits"]) {
-    r.only_keys(l, "drive.limits", {"max_speed_mps", "max_reverse_speed_mps", "max_accel_mps2",
-                                    "max_turn_rate", "max_wheel_speed_radps"});
+    r.only_keys(l, "drive.limits",
+                {"max_speed_mps", "max_reverse_speed_mps", "max_accel_mps2", "max_turn_rate",
+                 "max_wheel_speed_radps"});
     auto& lim = s.stage.limits;
     lim.max_speed_mps = r.positive(l, "drive.limits", "max_speed_mps", lim.max_speed_mps);
     lim.max_reverse_speed_mps =
@@ -86,8 +88,10 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
   }
   if (const YAML::Node w = drive["watchdog"]) {
     r.only_keys(w, "drive.watchdog", {"timeout_s", "ramp_s"});
-    s.stage.watchdog.timeout_s = r.positive(w, "drive.watchdog", "timeout_s", s.stage.watchdog.timeout_s);
-    s.stage.watchdog.ramp_s = r.non_negative(w, "drive.watchdog", "ramp_s", s.stage.watchdog.ramp_s);
+    s.stage.watchdog.timeout_s =
+        r.positive(w, "drive.watchdog", "timeout_s", s.stage.watchdog.timeout_s);
+    s.stage.watchdog.ramp_s =
+        r.non_negative(w, "drive.watchdog", "ramp_s", s.stage.watchdog.ramp_s);
     if (s.stage.watchdog.ramp_s > s.stage.watchdog.timeout_s) {
       r.fail(w["ramp_s"], "drive.watchdog.ramp_s", "must not exceed timeout_s");
     }
@@ -121,8 +125,8 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
       if (c.left.node_id == c.right.node_id) {
         r.fail(own_node, field, "left and right need different node ids");
       }
-      c.motor_turns_per_wheel_turn = r.positive(own_node, field, "motor_turns_per_wheel_turn",
-                                                c.motor_turns_per_wheel_turn);
+      c.motor_turns_per_wheel_turn =
+          r.positive(own_node, field, "motor_turns_per_wheel_turn", c.motor_turns_per_wheel_turn);
       c.timeout_s = r.positive(own_node, field, "timeout_s", c.timeout_s);
     }
     s.drive = c;
@@ -131,8 +135,9 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
       r.fail(drive, field, "missing: the serial drive's settings (device, ticks_per_wheel_rev)");
     }
     if (type == "arduino_bridge") {
-      r.only_keys(own_node, field, {"device", "baud", "timeout_s", "ticks_per_wheel_rev",
-                                    "pid_rate_hz", "boot_wait_s"});
+      r.only_keys(
+          own_node, field,
+          {"device", "baud", "timeout_s", "ticks_per_wheel_rev", "pid_rate_hz", "boot_wait_s"});
       drivers::ArduinoBridgeConfig c;
       c.serial = read_serial(r, own_node, field, 57600);
       c.ticks_per_wheel_rev = r.positive(own_node, field, "ticks_per_wheel_rev", 0.0);
@@ -140,8 +145,9 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
       c.boot_wait_s = r.non_negative(own_node, field, "boot_wait_s", c.boot_wait_s);
       s.drive = c;
     } else {
-      r.only_keys(own_node, field, {"device", "baud", "timeout_s", "address",
-                                    "ticks_per_wheel_rev", "board_timeout_s", "left_is_m1"});
+      r.only_keys(own_node, field,
+                  {"device", "baud", "timeout_s", "address", "ticks_per_wheel_rev",
+                   "board_timeout_s", "left_is_m1"});
       drivers::RoboClawConfig c;
       c.serial = read_serial(r, own_node, field, 38400);
       if (own_node["address"]) {

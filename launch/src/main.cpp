@@ -1,6 +1,6 @@
 // The `flowsteer` command.
-#include <cstdlib>
 #include <unistd.h>
+#include <cstdlib>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -86,7 +86,8 @@ int main(int argc, char** argv) {
   int steps = 0;
   bool video = false;
   sim->add_option("scenario_file", scenario_file, "scenario YAML (see launch/scenarios/room.yaml)");
-  sim->add_option("--scenario", scenario_name, "a built-in scenario (flowsteer scenarios lists them)");
+  sim->add_option("--scenario", scenario_name,
+                  "a built-in scenario (flowsteer scenarios lists them)");
   sim->add_option("--steersuite", steersuite_file, "a SteerSuite test case (XML)");
   sim->add_option("--out", out_dir, "folder for the outputs")->capture_default_str();
   sim->add_option("--resolution", sim_resolution, "every agent's camera: N x N pixels")
@@ -110,15 +111,16 @@ int main(int argc, char** argv) {
       }
     }
     if (*sim) {
-      const int sources = !scenario_file.empty() + !scenario_name.empty() + !steersuite_file.empty();
+      const int sources =
+          !scenario_file.empty() + !scenario_name.empty() + !steersuite_file.empty();
       if (sources > 1) {
         throw CLI::ValidationError("sim", "give one of SCENARIO_FILE, --scenario, --steersuite");
       }
       const flowsteer::sim_camera::WorldSpec world =
-          !scenario_file.empty()     ? flowsteer::launch::load_scenario(scenario_file)
-          : !steersuite_file.empty() ? flowsteer::launch::load_steersuite(steersuite_file)
-                                     : flowsteer::launch::builtin_scenario(
-                                           scenario_name.empty() ? "room" : scenario_name);
+          !scenario_file.empty() ? flowsteer::launch::load_scenario(scenario_file)
+          : !steersuite_file.empty()
+              ? flowsteer::launch::load_steersuite(steersuite_file)
+              : flowsteer::launch::builtin_scenario(scenario_name.empty() ? "room" : scenario_name);
       flowsteer::launch::SimOptions options;
       options.out_dir = out_dir;
       if (sim_resolution > 0) {
@@ -129,25 +131,27 @@ int main(int argc, char** argv) {
       }
       options.video = video;
       options.progress_bar = isatty(STDERR_FILENO) != 0;
-      std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size()
-                << " agents) -> " << out_dir << "\n";
+      std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size() << " agents) -> "
+                << out_dir << "\n";
       const auto result = flowsteer::launch::run_simulation(world, options, std::cerr);
       std::cout << "scenario " << result.scenario << ": " << result.steps << " steps, "
                 << result.duration_s << " s simulated, " << result.collisions.size()
                 << " collisions\n";
       for (const auto& a : result.agents) {
         std::cout << "  " << a.name << ": "
-                  << (a.reached_goal ? "reached its goal in " + std::to_string(a.time_to_goal_s) + " s"
+                  << (a.reached_goal
+                          ? "reached its goal in " + std::to_string(a.time_to_goal_s) + " s"
                       : a.final_distance_to_leader_m >= 0.0
-                          ? "ended " + std::to_string(a.final_distance_to_leader_m) + " m from its leader"
+                          ? "ended " + std::to_string(a.final_distance_to_leader_m) +
+                                " m from its leader"
                           : std::string("did not reach its goal"))
                   << ", path " << a.path_length_m << " m, min clearance " << a.min_clearance_m
                   << " m, " << a.collisions << " collisions\n";
       }
       for (const auto& c : result.collisions) {
-        std::cout << "  collision at t = " << c.time_s << " s: "
-                  << result.agents[c.agent].name << " with " << c.with << " at ("
-                  << c.position_m.x() << ", " << c.position_m.y() << ")\n";
+        std::cout << "  collision at t = " << c.time_s << " s: " << result.agents[c.agent].name
+                  << " with " << c.with << " at (" << c.position_m.x() << ", " << c.position_m.y()
+                  << ")\n";
       }
       const auto& t = result.per_agent_step_ms;
       std::cout << "per agent step: " << t.total << " ms (render " << t.render << ", flow "

@@ -118,9 +118,8 @@ void CsvTable::write(const std::filesystem::path& path) const {
 
 void write_summary_json(const std::filesystem::path& path, const SimResult& result) {
   std::ostringstream out;
-  out << "{\n  \"scenario\": " << json_string(result.scenario) << ",\n  \"steps\": "
-      << result.steps << ",\n  \"duration_s\": " << json_number(result.duration_s)
-      << ",\n  \"agents\": [\n";
+  out << "{\n  \"scenario\": " << json_string(result.scenario) << ",\n  \"steps\": " << result.steps
+      << ",\n  \"duration_s\": " << json_number(result.duration_s) << ",\n  \"agents\": [\n";
   for (std::size_t i = 0; i < result.agents.size(); ++i) {
     const AgentResult& a = result.agents[i];
     out << "    {\"name\": " << json_string(a.name)

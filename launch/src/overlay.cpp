@@ -37,7 +37,9 @@ cv::Scalar agent_color(std::size_t i) {
 
 }  // namespace
 
-cv::Size overlay_size(cv::Size image) { return {2 * image.width, image.height}; }
+cv::Size overlay_size(cv::Size image) {
+  return {2 * image.width, image.height};
+}
 
 cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude) {
   cv::Mat hsv(flow.height(), flow.width(), CV_8UC3);
@@ -47,7 +49,8 @@ cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude) {
       const Eigen::Vector2f& f = flow.at(col, row);
       const double angle = std::atan2(f.y(), f.x());
       const double magnitude = f.norm();
-      const double value = std::isfinite(magnitude) ? std::min(1.0, magnitude / max_magnitude) : 0.0;
+      const double value =
+          std::isfinite(magnitude) ? std::min(1.0, magnitude / max_magnitude) : 0.0;
       out[col] = cv::Vec3b(static_cast<uchar>((angle + M_PI) / (2.0 * M_PI) * 179.0), 255,
                            static_cast<uchar>(255.0 * value));
     }
@@ -64,7 +67,8 @@ cv::Mat draw_overlay(const AgentPipeline& pipeline) {
   cv::Mat canvas(overlay_size(size), CV_8UC3, cv::Scalar::all(0));
   cv::Mat view = canvas(cv::Rect(0, 0, size.width, size.height));
   pipeline.frame().image.copyTo(view);
-  flow_to_color(pipeline.flow(), 0.5).copyTo(canvas(cv::Rect(size.width, 0, size.width, size.height)));
+  flow_to_color(pipeline.flow(), 0.5)
+      .copyTo(canvas(cv::Rect(size.width, 0, size.width, size.height)));
   auto to_pixel = [&](const Eigen::Vector2d& p) {
     return cv::Point(static_cast<int>(std::lround(k.fx_px * p.x() + k.cx_px)),
                      static_cast<int>(std::lround(k.fy_px * p.y() + k.cy_px)));
@@ -129,7 +133,8 @@ cv::Mat draw_topview(const sim_camera::World& world,
   const Eigen::Vector2d lo = bounds.min() - margin;
   const Eigen::Vector2d extent = bounds.max() + margin - lo;
   const double scale = 900.0 / std::max(extent.x(), extent.y());
-  const cv::Size size(static_cast<int>(extent.x() * scale), static_cast<int>(extent.y() * scale) + 30);
+  const cv::Size size(static_cast<int>(extent.x() * scale),
+                      static_cast<int>(extent.y() * scale) + 30);
   cv::Mat image(size, CV_8UC3, cv::Scalar(250, 250, 250));
   // World y points up in the picture.
   auto px = [&](const Eigen::Vector2d& p) {

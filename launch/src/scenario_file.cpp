@@ -53,8 +53,9 @@ Material read_material(const YamlReader& r, const YAML::Node& node, const std::s
 
 Solid read_solid(const YamlReader& r, const YAML::Node& node, const std::string& field,
                  bool allow_wall) {
-  r.only_keys(node, field, {"shape", "position", "size", "radius_m", "height_m", "yaw_deg", "from",
-                            "to", "thickness_m", "material"});
+  r.only_keys(node, field,
+              {"shape", "position", "size", "radius_m", "height_m", "yaw_deg", "from", "to",
+               "thickness_m", "material"});
   Solid s;
   const std::string shape = allow_wall
                                 ? r.word(node, field, "shape", {"box", "cylinder", "wall"}, "box")
@@ -123,13 +124,13 @@ sim_camera::CameraSpec read_camera(const YamlReader& r, const YAML::Node& node,
 }
 
 sim_camera::ControllerSpec read_controller(const YamlReader& r, const YAML::Node& node,
-                                           const std::string& field,
-                                           sim_camera::ControllerSpec c) {
+                                           const std::string& field, sim_camera::ControllerSpec c) {
   if (!node) {
     return c;
   }
-  r.only_keys(node, field, {"kind", "alpha", "beta", "gamma", "delta", "lambda", "max_accel_mps2",
-                            "max_turn_rate", "use_depth", "clearance_margin_m"});
+  r.only_keys(node, field,
+              {"kind", "alpha", "beta", "gamma", "delta", "lambda", "max_accel_mps2",
+               "max_turn_rate", "use_depth", "clearance_margin_m"});
   c.kind = r.word(node, field, "kind", {"goal_reaching", "following"}, c.kind.c_str());
   c.alpha = r.non_negative(node, field, "alpha", c.alpha);
   c.beta = r.non_negative(node, field, "beta", c.beta);
@@ -182,8 +183,9 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
   if (!root.IsMap()) {
     throw ConfigError(source_name, 1, 1, "", "expected a mapping with at least agents:");
   }
-  r.only_keys(root, "", {"name", "description", "step_s", "duration_s", "camera", "controller",
-                         "lighting", "ground", "obstacles", "moving", "agents"});
+  r.only_keys(root, "",
+              {"name", "description", "step_s", "duration_s", "camera", "controller", "lighting",
+               "ground", "obstacles", "moving", "agents"});
   sim_camera::WorldSpec w;
   w.name = root["name"] ? root["name"].as<std::string>() : source_name;
   w.description = root["description"] ? root["description"].as<std::string>() : "";
@@ -209,7 +211,8 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
         if (!(s.elevation_rad > 0.0 && s.elevation_rad < std::numbers::pi / 2)) {
           r.fail(sun["elevation_deg"], "lighting.sun.elevation_deg", "must be in (0, 90)");
         }
-        s.intensity = static_cast<float>(r.non_negative(sun, "lighting.sun", "intensity", s.intensity));
+        s.intensity =
+            static_cast<float>(r.non_negative(sun, "lighting.sun", "intensity", s.intensity));
         s.shadows = r.boolean(sun, "lighting.sun", "shadows", s.shadows);
         w.lighting.sun = s;
       }
@@ -236,8 +239,9 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     for (std::size_t k = 0; k < moving.size(); ++k) {
       const std::string field = "moving[" + std::to_string(k) + "]";
       const YAML::Node node = moving[k];
-      r.only_keys(node, field, {"shape", "size", "radius_m", "height_m", "material", "waypoints",
-                                "speed_mps", "loop"});
+      r.only_keys(
+          node, field,
+          {"shape", "size", "radius_m", "height_m", "material", "waypoints", "speed_mps", "loop"});
       YAML::Node body = YAML::Clone(node);
       body.remove("waypoints");
       body.remove("speed_mps");
@@ -264,10 +268,10 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
   for (std::size_t i = 0; i < agents.size(); ++i) {
     const std::string field = "agents[" + std::to_string(i) + "]";
     const YAML::Node node = agents[i];
-    r.only_keys(node, field, {"name", "start", "heading_deg", "speed_mps", "preferred_speed_mps",
-                              "max_speed_mps", "radius_m", "height_m", "goal", "goals",
-                              "goal_radius_m", "leader", "controller", "camera", "material",
-                              "carried_light"});
+    r.only_keys(node, field,
+                {"name", "start", "heading_deg", "speed_mps", "preferred_speed_mps",
+                 "max_speed_mps", "radius_m", "height_m", "goal", "goals", "goal_radius_m",
+                 "leader", "controller", "camera", "material", "carried_light"});
     AgentSpec a;
     a.name = node["name"] ? node["name"].as<std::string>() : "agent" + std::to_string(i);
     if (!node["start"]) {
@@ -292,7 +296,8 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     a.controller = read_controller(r, node["controller"], field + ".controller", controller);
     if (const YAML::Node leader = node["leader"]) {
       const int index = r.integer(leader, field + ".leader", 0);
-      if (static_cast<std::size_t>(index) >= agents.size() || static_cast<std::size_t>(index) == i) {
+      if (static_cast<std::size_t>(index) >= agents.size() ||
+          static_cast<std::size_t>(index) == i) {
         r.fail(leader, field + ".leader", "must be the index of another agent");
       }
       a.leader = index;
@@ -314,7 +319,8 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
       sim_camera::PointLight p;
       p.position_m = {r.number(light, field + ".carried_light", "ahead_m", 0.4), 0.0,
                       r.positive(light, field + ".carried_light", "height_m", 1.2)};
-      p.intensity = static_cast<float>(r.non_negative(light, field + ".carried_light", "intensity", 1.5));
+      p.intensity =
+          static_cast<float>(r.non_negative(light, field + ".carried_light", "intensity", 1.5));
       p.range_m = r.positive(light, field + ".carried_light", "range_m", 6.0);
       a.carried_light = p;
     }

@@ -77,8 +77,8 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
 
   std::vector<AgentLoop> loops;
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-    AgentLoop loop{std::make_unique<AgentPipeline>(world, *renderer, i), {}, spec.agents[i].start_m,
-                   nullptr};
+    AgentLoop loop{
+        std::make_unique<AgentPipeline>(world, *renderer, i), {}, spec.agents[i].start_m, nullptr};
     loop.result.name = spec.agents[i].name;
     loop.result.min_clearance_m = world.clearance(i);
     loops.push_back(std::move(loop));
@@ -130,9 +130,9 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
 
       if (options.video && out) {
         if (!loop.video) {
-          loop.video = open_video(out->staging_path("agent_" + std::to_string(i) + ".mp4"),
-                                  overlay_size(loop.pipeline->frame().image.size()),
-                                  1.0 / spec.step_s);
+          loop.video =
+              open_video(out->staging_path("agent_" + std::to_string(i) + ".mp4"),
+                         overlay_size(loop.pipeline->frame().image.size()), 1.0 / spec.step_s);
         }
         loop.video->write(draw_overlay(*loop.pipeline));
       }

@@ -103,7 +103,8 @@ void read_goals(const XmlReader& r, const XMLElement* sequence, const Bounds& wo
 
 }  // namespace
 
-sim_camera::WorldSpec parse_steersuite(const std::string& xml_text, const std::string& source_name) {
+sim_camera::WorldSpec parse_steersuite(const std::string& xml_text,
+                                       const std::string& source_name) {
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml_text.c_str(), xml_text.size()) != tinyxml2::XML_SUCCESS) {
     throw ConfigError(source_name, doc.ErrorLineNum(), 1, "", doc.ErrorStr());
@@ -143,7 +144,8 @@ sim_camera::WorldSpec parse_steersuite(const std::string& xml_text, const std::s
   for (const XMLElement* e = root->FirstChildElement("agent"); e != nullptr;
        e = e->NextSiblingElement("agent")) {
     sim_camera::AgentSpec a;
-    if (const XMLElement* n = e->FirstChildElement("name"); n != nullptr && n->GetText() != nullptr) {
+    if (const XMLElement* n = e->FirstChildElement("name");
+        n != nullptr && n->GetText() != nullptr) {
       a.name = n->GetText();
     }
     const XMLElement* initial = r.child(e, "initialConditions");

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <yaml-cpp/yaml.h>
+#include <Eigen/Core>
 
 #include "flowsteer/launch/config_error.hpp"
 

@@ -7,8 +7,8 @@
 #include <GL/glext.h>
 
 #include <array>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -56,8 +56,8 @@ GLuint compile(GLenum type, const char* source, const char* name) {
     std::array<char, 4096> log{};
     glGetShaderInfoLog(shader, log.size(), nullptr, log.data());
     glDeleteShader(shader);
-    throw std::runtime_error(std::string("OpenGL: shader ") + name + " does not compile: " +
-                             log.data());
+    throw std::runtime_error(std::string("OpenGL: shader ") + name +
+                             " does not compile: " + log.data());
   }
   return shader;
 }
@@ -77,8 +77,8 @@ GLuint link(const char* vertex, const char* fragment, const char* name) {
     std::array<char, 4096> log{};
     glGetProgramInfoLog(program, log.size(), nullptr, log.data());
     glDeleteProgram(program);
-    throw std::runtime_error(std::string("OpenGL: program ") + name + " does not link: " +
-                             log.data());
+    throw std::runtime_error(std::string("OpenGL: program ") + name +
+                             " does not link: " + log.data());
   }
   return program;
 }
@@ -129,8 +129,8 @@ void add_quad(std::vector<Vertex>& v, std::vector<GLuint>& idx, const Eigen::Vec
               const Eigen::Vector3f& normal) {
   const auto base = static_cast<GLuint>(v.size());
   for (int k = 0; k < 4; ++k) {
-    v.push_back({{corners[k].x(), corners[k].y(), corners[k].z()},
-                 {normal.x(), normal.y(), normal.z()}});
+    v.push_back(
+        {{corners[k].x(), corners[k].y(), corners[k].z()}, {normal.x(), normal.y(), normal.z()}});
   }
   for (GLuint k : {0U, 1U, 2U, 0U, 2U, 3U}) {
     idx.push_back(base + k);
@@ -180,8 +180,9 @@ Mesh cylinder_mesh() {
                              0.0F);
     const auto base = static_cast<GLuint>(v.size());
     const Eigen::Vector3f up(0, 0, 1);
-    for (const auto& [p, n] : {std::pair{p0, p0}, std::pair{p1, p1}, std::pair{Eigen::Vector3f(p1 + up), p1},
-                               std::pair{Eigen::Vector3f(p0 + up), p0}}) {
+    for (const auto& [p, n] :
+         {std::pair{p0, p0}, std::pair{p1, p1}, std::pair{Eigen::Vector3f(p1 + up), p1},
+          std::pair{Eigen::Vector3f(p0 + up), p0}}) {
       v.push_back({{p.x(), p.y(), p.z()}, {n.x(), n.y(), n.z()}});
     }
     for (GLuint i : {0U, 1U, 2U, 0U, 2U, 3U}) {
@@ -204,15 +205,16 @@ Mesh cylinder_mesh() {
 Mesh ground_mesh() {
   std::vector<Vertex> v;
   std::vector<GLuint> idx;
-  const Eigen::Vector3f corners[4] = {{-0.5F, -0.5F, 0}, {0.5F, -0.5F, 0}, {0.5F, 0.5F, 0},
-                                      {-0.5F, 0.5F, 0}};
+  const Eigen::Vector3f corners[4] = {
+      {-0.5F, -0.5F, 0}, {0.5F, -0.5F, 0}, {0.5F, 0.5F, 0}, {-0.5F, 0.5F, 0}};
   add_quad(v, idx, corners, Eigen::Vector3f(0, 0, 1));
   Mesh m;
   m.upload(v, idx);
   return m;
 }
 
-Eigen::Matrix4f model_matrix(const Eigen::Vector2d& centre, double yaw, const Eigen::Vector3d& scale) {
+Eigen::Matrix4f model_matrix(const Eigen::Vector2d& centre, double yaw,
+                             const Eigen::Vector3d& scale) {
   Eigen::Affine3d t = Eigen::Translation3d(centre.x(), centre.y(), 0.0) *
                       Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::Scaling(scale);
   return t.matrix().cast<float>();
@@ -245,7 +247,8 @@ std::vector<std::uint8_t> noise_texture() {
         };
         const float top = at(x0, y0) + sx * (at(x0 + 1, y0) - at(x0, y0));
         const float bottom = at(x0, y0 + 1) + sx * (at(x0 + 1, y0 + 1) - at(x0, y0 + 1));
-        sum[static_cast<std::size_t>(y * kNoiseSize + x)] += amplitude * (top + sy * (bottom - top));
+        sum[static_cast<std::size_t>(y * kNoiseSize + x)] +=
+            amplitude * (top + sy * (bottom - top));
       }
     }
     total += amplitude;
@@ -319,13 +322,12 @@ struct Renderer::Impl {
           "vendor library such as libegl-mesa0 installed?)");
     }
     // A GPU through the device platform first, then Mesa's surfaceless platform (llvmpipe).
-    const auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(
-        eglGetProcAddress("eglQueryDevicesEXT"));
+    const auto query_devices =
+        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
     if (query_devices != nullptr) {
       std::array<EGLDeviceEXT, 8> devices{};
       EGLint count = 0;
-      if (query_devices(static_cast<EGLint>(devices.size()), devices.data(), &count) &&
-          count > 0) {
+      if (query_devices(static_cast<EGLint>(devices.size()), devices.data(), &count) && count > 0) {
         for (EGLint k = 0; k < count && display == EGL_NO_DISPLAY; ++k) {
           EGLDisplay d = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[k], nullptr);
           if (d != EGL_NO_DISPLAY && eglInitialize(d, nullptr, nullptr)) {
@@ -341,13 +343,13 @@ struct Renderer::Impl {
       }
     }
     if (display == EGL_NO_DISPLAY) {
-      EGLDisplay d = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY,
-                                          nullptr);
+      EGLDisplay d =
+          get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
       if (d == EGL_NO_DISPLAY || !eglInitialize(d, nullptr, nullptr)) {
-        throw std::runtime_error("no EGL display available: " +
-                                 egl_error("the surfaceless platform (Mesa)") +
-                                 "; install libegl-mesa0 and libgl1-mesa-dri, or run where a "
-                                 "GPU's EGL driver is present");
+        throw std::runtime_error(
+            "no EGL display available: " + egl_error("the surfaceless platform (Mesa)") +
+            "; install libegl-mesa0 and libgl1-mesa-dri, or run where a "
+            "GPU's EGL driver is present");
       }
       display = d;
     }
@@ -371,9 +373,8 @@ struct Renderer::Impl {
     if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
       throw std::runtime_error(egl_error("eglMakeCurrent without a surface"));
     }
-    description = std::string("OpenGL ") +
-                  reinterpret_cast<const char*>(glGetString(GL_VERSION)) + ", " +
-                  reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    description = std::string("OpenGL ") + reinterpret_cast<const char*>(glGetString(GL_VERSION)) +
+                  ", " + reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   }
 
   void create_resources() {
@@ -432,8 +433,8 @@ struct Renderer::Impl {
           k < 4 ? GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(k) : GL_DEPTH_ATTACHMENT;
       glFramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, renderbuffers[k]);
     }
-    const GLenum draw_buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1,
-                                   GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    const GLenum draw_buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
+                                   GL_COLOR_ATTACHMENT3};
     glDrawBuffers(4, draw_buffers);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
       throw std::runtime_error("OpenGL: the " + std::to_string(width) + "x" +
@@ -451,18 +452,25 @@ struct Renderer::Impl {
       const AgentSpec& a = spec.agents[i];
       const AgentState& s = world.agents()[i];
       const Eigen::Vector2d v = s.velocity_mps();
-      items.push_back({&cylinder, model_matrix(s.position_m, 0.0, {a.radius_m, a.radius_m, a.height_m}),
-                       a.material, agent_render_id(i), {v.x(), v.y(), 0.0}});
+      items.push_back({&cylinder,
+                       model_matrix(s.position_m, 0.0, {a.radius_m, a.radius_m, a.height_m}),
+                       a.material,
+                       agent_render_id(i),
+                       {v.x(), v.y(), 0.0}});
       if (self && *self == i) {
         items.back().mesh = nullptr;  // casts a shadow, but its own camera does not see it
       }
     }
     auto add_solid = [&](const Solid& s, std::int32_t id, const Eigen::Vector2d& velocity) {
       const bool box_shape = s.shape == Solid::Shape::box;
-      const Eigen::Vector3d scale = box_shape ? Eigen::Vector3d(s.size_m.x(), s.size_m.y(), s.height_m)
-                                              : Eigen::Vector3d(s.radius_m, s.radius_m, s.height_m);
-      items.push_back({box_shape ? &box : &cylinder, model_matrix(s.centre_m, s.yaw_rad, scale),
-                       s.material, id, {velocity.x(), velocity.y(), 0.0}});
+      const Eigen::Vector3d scale = box_shape
+                                        ? Eigen::Vector3d(s.size_m.x(), s.size_m.y(), s.height_m)
+                                        : Eigen::Vector3d(s.radius_m, s.radius_m, s.height_m);
+      items.push_back({box_shape ? &box : &cylinder,
+                       model_matrix(s.centre_m, s.yaw_rad, scale),
+                       s.material,
+                       id,
+                       {velocity.x(), velocity.y(), 0.0}});
     };
     for (std::size_t k = 0; k < spec.obstacles.size(); ++k) {
       add_solid(spec.obstacles[k], obstacle_render_id(k), Eigen::Vector2d::Zero());
@@ -500,7 +508,8 @@ struct Renderer::Impl {
                                  std::sin(sun->elevation_rad));
     const Eigen::Vector3d eye = centre + 2.0 * radius * to_sun;
     const Eigen::Vector3d forward = (centre - eye).normalized();
-    Eigen::Vector3d up = std::abs(forward.z()) > 0.99 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+    Eigen::Vector3d up =
+        std::abs(forward.z()) > 0.99 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d right = forward.cross(up).normalized();
     up = right.cross(forward);
     Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
@@ -523,8 +532,8 @@ struct Renderer::Impl {
     glDepthFunc(GL_LESS);
     glClear(GL_DEPTH_BUFFER_BIT);
     glUseProgram(shadow_program);
-    glUniformMatrix4fv(glGetUniformLocation(shadow_program, "u_light_view_projection"), 1,
-                       GL_FALSE, light_view_projection.data());
+    glUniformMatrix4fv(glGetUniformLocation(shadow_program, "u_light_view_projection"), 1, GL_FALSE,
+                       light_view_projection.data());
     const GLint model_location = glGetUniformLocation(shadow_program, "u_model");
     collect_items(world, std::nullopt);
     for (const DrawItem& item : items) {
@@ -573,7 +582,8 @@ struct Renderer::Impl {
     projection(2, 3) = -2.0F * kFar * kNear / (kFar - kNear);
     projection(3, 2) = 1.0F;
     const Eigen::Vector3d agent_velocity(view.speed_mps * c, view.speed_mps * s, 0.0);
-    const Eigen::Vector3d omega = servo::camera_angular_velocity(view.turn_rate, view.camera.pitch_rad);
+    const Eigen::Vector3d omega =
+        servo::camera_angular_velocity(view.turn_rate, view.camera.pitch_rad);
 
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
     glViewport(0, 0, k.width_px, k.height_px);
@@ -581,8 +591,10 @@ struct Renderer::Impl {
     glDepthFunc(GL_LESS);
     glDisable(GL_CULL_FACE);
     const Lighting& lighting = spec.lighting;
-    const float sky_light = lighting.ambient + (lighting.sun ? 0.6F * lighting.sun->intensity : 0.0F);
-    const std::array<float, 4> sky = {std::min(1.0F, 0.55F * sky_light), std::min(1.0F, 0.7F * sky_light),
+    const float sky_light =
+        lighting.ambient + (lighting.sun ? 0.6F * lighting.sun->intensity : 0.0F);
+    const std::array<float, 4> sky = {std::min(1.0F, 0.55F * sky_light),
+                                      std::min(1.0F, 0.7F * sky_light),
                                       std::min(1.0F, 0.9F * sky_light), 1.0F};
     const std::array<GLint, 4> no_id = {servo::kSkyId, 0, 0, 0};
     const std::array<float, 4> zero = {0, 0, 0, 0};
@@ -598,9 +610,10 @@ struct Renderer::Impl {
     auto location = [&](const char* name) { return glGetUniformLocation(scene_program, name); };
     glUniformMatrix4fv(location("u_world_to_camera"), 1, GL_FALSE, world_to_camera.data());
     glUniformMatrix4fv(location("u_projection"), 1, GL_FALSE, projection.data());
-    glUniformMatrix4fv(location("u_light_view_projection"), 1, GL_FALSE, light_view_projection.data());
-    glUniform3f(location("u_camera_omega"), static_cast<float>(omega.x()), static_cast<float>(omega.y()),
-                static_cast<float>(omega.z()));
+    glUniformMatrix4fv(location("u_light_view_projection"), 1, GL_FALSE,
+                       light_view_projection.data());
+    glUniform3f(location("u_camera_omega"), static_cast<float>(omega.x()),
+                static_cast<float>(omega.y()), static_cast<float>(omega.z()));
     glUniform1f(location("u_ambient"), lighting.ambient);
     if (lighting.sun) {
       const SunLight& sun = *lighting.sun;
@@ -625,7 +638,8 @@ struct Renderer::Impl {
     for (std::size_t i = 0; i < spec.agents.size(); ++i) {
       if (const auto& carried = spec.agents[i].carried_light) {
         const AgentState& a = world.agents()[i];
-        const Eigen::Vector2d offset = Eigen::Rotation2Dd(a.yaw_rad) * carried->position_m.head<2>();
+        const Eigen::Vector2d offset =
+            Eigen::Rotation2Dd(a.yaw_rad) * carried->position_m.head<2>();
         PointLight p = *carried;
         p.position_m = Eigen::Vector3d(a.position_m.x() + offset.x(), a.position_m.y() + offset.y(),
                                        carried->position_m.z());
@@ -639,7 +653,8 @@ struct Renderer::Impl {
       char name[32];
       std::snprintf(name, sizeof name, "u_point_position[%d]", p);
       glUniform3f(location(name), static_cast<float>(light.position_m.x()),
-                  static_cast<float>(light.position_m.y()), static_cast<float>(light.position_m.z()));
+                  static_cast<float>(light.position_m.y()),
+                  static_cast<float>(light.position_m.z()));
       std::snprintf(name, sizeof name, "u_point_intensity[%d]", p);
       glUniform1f(location(name), light.intensity);
       std::snprintf(name, sizeof name, "u_point_range[%d]", p);
@@ -674,7 +689,8 @@ struct Renderer::Impl {
     read_back(k, omega, out);
   }
 
-  void read_back(const servo::CameraIntrinsics& k, const Eigen::Vector3d& omega, RenderedView& out) {
+  void read_back(const servo::CameraIntrinsics& k, const Eigen::Vector3d& omega,
+                 RenderedView& out) {
     out.image.create(k.height_px, k.width_px, CV_8UC3);
     out.object_ids.create(k.height_px, k.width_px, CV_32SC1);
     out.flow.create(k.height_px, k.width_px, CV_32FC2);
@@ -736,6 +752,8 @@ void Renderer::render(const World& world, const View& view, RenderedView& out) {
   impl_->render(world, view, out);
 }
 
-const std::string& Renderer::description() const { return impl_->description; }
+const std::string& Renderer::description() const {
+  return impl_->description;
+}
 
 }  // namespace flowsteer::sim_camera

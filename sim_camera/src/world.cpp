@@ -24,7 +24,9 @@ std::string describe(const AgentSpec& a, std::size_t i) {
 
 }  // namespace
 
-std::int32_t agent_render_id(std::size_t agent) { return static_cast<std::int32_t>(agent); }
+std::int32_t agent_render_id(std::size_t agent) {
+  return static_cast<std::int32_t>(agent);
+}
 std::int32_t obstacle_render_id(std::size_t obstacle) {
   return kObstacleIdBase + static_cast<std::int32_t>(obstacle);
 }
@@ -191,8 +193,8 @@ double World::clearance(std::size_t i) const {
   double best = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < agents_.size(); ++j) {
     if (j != i) {
-      best = std::min(best, (agents_[j].position_m - s.position_m).norm() - r -
-                                spec_.agents[j].radius_m);
+      best = std::min(best,
+                      (agents_[j].position_m - s.position_m).norm() - r - spec_.agents[j].radius_m);
     }
   }
   for (const Solid& o : spec_.obstacles) {
@@ -220,8 +222,8 @@ void World::detect_collisions() {
     };
     for (std::size_t j = 0; j < agents_.size(); ++j) {
       // Each pair once, on the lower index; the higher one's slot stays unused.
-      const bool touching = j > i && (agents_[j].position_m - p).norm() <
-                                         r + spec_.agents[j].radius_m;
+      const bool touching =
+          j > i && (agents_[j].position_m - p).norm() < r + spec_.agents[j].radius_m;
       check(touching, "agent " + std::to_string(j));
     }
     for (std::size_t k = 0; k < spec_.obstacles.size(); ++k) {

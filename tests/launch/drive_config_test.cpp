@@ -61,8 +61,8 @@ TEST(DriveSection, SerialSectionsAreRead) {
 }
 
 TEST(DriveSection, SimBaseDrivesAndStops) {
-  const DriveSection s =
-      parse_drive_section("drive: {type: sim, watchdog: {timeout_s: 0.2, ramp_s: 0.1}}\n", "r.yaml");
+  const DriveSection s = parse_drive_section(
+      "drive: {type: sim, watchdog: {timeout_s: 0.2, ramp_s: 0.1}}\n", "r.yaml");
   auto base = make_base(s);
   base->configure();
   base->activate(0.0);

@@ -18,7 +18,7 @@ struct SimChannels {
 
 // One image from a camera, with when it was taken.
 struct Frame {
-  cv::Mat image;  // CV_8UC3, BGR
+  cv::Mat image;               // CV_8UC3, BGR
   double timestamp_s = 0.0;    // monotonic clock
   std::uint64_t sequence = 0;  // increases by one per frame the source delivered
   std::optional<SimChannels> sim;

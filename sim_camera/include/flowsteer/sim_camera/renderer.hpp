@@ -7,8 +7,8 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "flowsteer/sim_camera/world.hpp"
 #include "flowsteer/servo/camera.hpp"
+#include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::sim_camera {
 
