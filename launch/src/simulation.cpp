@@ -153,6 +153,9 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
     }
     for (const sim_camera::Collision& c : world.new_collisions()) {
       ++loops[c.agent].result.collisions;
+      if (c.other_agent) {
+        ++loops[*c.other_agent].result.collisions;
+      }
       collisions.push_back(c);
     }
     progress.update(step + 1, world.time_s());

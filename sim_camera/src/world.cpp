@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace flowsteer::sim_camera {
 
@@ -212,11 +213,16 @@ void World::detect_collisions() {
     const Eigen::Vector2d p = agents_[i].position_m;
     const double r = spec_.agents[i].radius_m;
     std::size_t body = 0;
-    auto check = [&](bool touching, const std::string& with) {
+    // The name of what was hit is built only when a contact starts.
+    auto check = [&](bool touching, const char* kind, std::size_t index) {
       const bool was = in_contact_[i][body];
       in_contact_[i][body] = touching;
       if (touching && !was) {
-        new_collisions_.push_back({time_s_, i, with, p});
+        Collision c{time_s_, i, std::string(kind) + " " + std::to_string(index), p, std::nullopt};
+        if (std::string_view(kind) == "agent") {
+          c.other_agent = index;
+        }
+        new_collisions_.push_back(std::move(c));
       }
       ++body;
     };
@@ -224,13 +230,13 @@ void World::detect_collisions() {
       // Each pair once, on the lower index; the higher one's slot stays unused.
       const bool touching =
           j > i && (agents_[j].position_m - p).norm() < r + spec_.agents[j].radius_m;
-      check(touching, "agent " + std::to_string(j));
+      check(touching, "agent", j);
     }
     for (std::size_t k = 0; k < spec_.obstacles.size(); ++k) {
-      check(footprint_distance(spec_.obstacles[k], p) < r, "obstacle " + std::to_string(k));
+      check(footprint_distance(spec_.obstacles[k], p) < r, "obstacle", k);
     }
     for (std::size_t k = 0; k < moving_.size(); ++k) {
-      check(footprint_distance(moving_now(k), p) < r, "moving " + std::to_string(k));
+      check(footprint_distance(moving_now(k), p) < r, "moving", k);
     }
   }
 }

@@ -146,6 +146,7 @@ struct Collision {
   std::size_t agent;
   std::string with;  // "agent N", "obstacle N", "moving N"
   Eigen::Vector2d position_m;
+  std::optional<std::size_t> other_agent;  // when two agents collide: the other one
 };
 
 // The simulated world: agents move as unicycles driven by (a_c, ω), cars along waypoints.
