@@ -47,6 +47,10 @@ cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude) {
     auto* out = hsv.ptr<cv::Vec3b>(row);
     for (int col = 0; col < flow.width(); ++col) {
       const Eigen::Vector2f& f = flow.at(col, row);
+      if (!f.allFinite()) {
+        out[col] = cv::Vec3b(0, 0, 0);
+        continue;
+      }
       const double angle = std::atan2(f.y(), f.x());
       const double magnitude = f.norm();
       const double value =

@@ -186,9 +186,24 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
   r.only_keys(root, "",
               {"name", "description", "step_s", "duration_s", "camera", "controller", "lighting",
                "ground", "obstacles", "moving", "agents"});
+  auto require_list = [&](const YAML::Node& node, const std::string& field) {
+    if (!node.IsSequence()) {
+      r.fail(node, field, "expected a list");
+    }
+  };
+  auto text = [&](const char* key, const std::string& fallback) {
+    const YAML::Node node = root[key];
+    if (!node) {
+      return fallback;
+    }
+    if (!node.IsScalar()) {
+      r.fail(node, key, "expected a text");
+    }
+    return node.Scalar();
+  };
   sim_camera::WorldSpec w;
-  w.name = root["name"] ? root["name"].as<std::string>() : source_name;
-  w.description = root["description"] ? root["description"].as<std::string>() : "";
+  w.name = text("name", source_name);
+  w.description = text("description", "");
   w.step_s = r.positive(root, "", "step_s", w.step_s);
   w.duration_s = r.positive(root, "", "duration_s", w.duration_s);
   const sim_camera::CameraSpec camera = read_camera(r, root["camera"], "camera", {});
@@ -218,6 +233,7 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
       }
     }
     if (const YAML::Node points = lighting["points"]) {
+      require_list(points, "lighting.points");
       for (std::size_t k = 0; k < points.size(); ++k) {
         w.lighting.points.push_back(
             read_point_light(r, points[k], "lighting.points[" + std::to_string(k) + "]"));
@@ -230,12 +246,14 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     w.ground = read_material(r, ground["material"], "ground.material", w.ground);
   }
   if (const YAML::Node obstacles = root["obstacles"]) {
+    require_list(obstacles, "obstacles");
     for (std::size_t k = 0; k < obstacles.size(); ++k) {
       w.obstacles.push_back(
           read_solid(r, obstacles[k], "obstacles[" + std::to_string(k) + "]", true));
     }
   }
   if (const YAML::Node moving = root["moving"]) {
+    require_list(moving, "moving");
     for (std::size_t k = 0; k < moving.size(); ++k) {
       const std::string field = "moving[" + std::to_string(k) + "]";
       const YAML::Node node = moving[k];
@@ -249,10 +267,10 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
       if (!node["waypoints"]) {
         r.fail(node, field + ".waypoints", "missing: a moving obstacle needs waypoints");
       }
-      body["position"] = node["waypoints"][0];
       sim_camera::MovingObstacle m;
-      m.body = read_solid(r, body, field, false);
       m.waypoints = read_points(r, node["waypoints"], field + ".waypoints");
+      body["position"] = node["waypoints"][0];
+      m.body = read_solid(r, body, field, false);
       if (m.waypoints.size() < 2) {
         r.fail(node["waypoints"], field + ".waypoints", "needs at least two waypoints");
       }
@@ -303,7 +321,12 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
       a.leader = index;
       if (!node["controller"] || !node["controller"]["kind"]) {
         a.controller.kind = "following";
-        a.controller.beta = 1.0;
+        // CGF §8.2 follows with β = 1 where goal reaching uses 0.1; a β written anywhere wins.
+        const bool beta_given = (node["controller"] && node["controller"]["beta"]) ||
+                                (root["controller"] && root["controller"]["beta"]);
+        if (!beta_given) {
+          a.controller.beta = 1.0;
+        }
       }
     }
     if (a.controller.kind == "following" && !a.leader) {

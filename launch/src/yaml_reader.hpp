@@ -20,9 +20,10 @@ class YamlReader {
  public:
   explicit YamlReader(std::string source) : source_(std::move(source)) {}
 
+  // A node that is not there (a missing key) has no position: the error then points at line 1.
   [[noreturn]] void fail(const YAML::Node& node, const std::string& field,
                          const std::string& message) const {
-    const YAML::Mark mark = node.Mark();
+    const YAML::Mark mark = node.IsDefined() ? node.Mark() : YAML::Mark();
     throw ConfigError(source_, mark.line + 1, mark.column + 1, field, message);
   }
 

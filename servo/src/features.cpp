@@ -176,11 +176,10 @@ RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOp
     }
   }
 
-  const double threshold = options.inlier_threshold * std::max(sigma, exact * scale[0]);
   int inliers = 0;
   double sum_squares = 0.0;
   for (std::size_t j = 0; j < samples.size(); ++j) {
-    if (norms[j] <= threshold) {
+    if (norms[j] <= options.inlier_threshold * std::max(sigma, exact * scale[j])) {
       ++inliers;
       const double r = residual_norm(samples[j], p);
       sum_squares += r * r;
@@ -228,8 +227,9 @@ struct FeatureExtractor::Accumulator {
   double max_x = -std::numeric_limits<double>::infinity();
   double sum_u = 0.0;
   double sum_xu = 0.0;
-  int depth_count = 0;
+  int depth_count = 0;  // over all pixels: the region's depth
   double sum_depth = 0.0;
+  int valid_depth_count = 0;  // over pixels with a valid vector: the flow moments
   double sum_inv_depth = 0.0;
   double sum_x_inv_depth = 0.0;
 
@@ -304,12 +304,10 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
       a.sum_y += y;
       a.min_x = std::min(a.min_x, x);
       a.max_x = std::max(a.max_x, x);
-      if (!depth.empty() && std::isfinite(depth[i]) && depth[i] > 0.0F) {
-        const double inverse_depth = 1.0 / depth[i];
+      const bool has_depth = !depth.empty() && std::isfinite(depth[i]) && depth[i] > 0.0F;
+      if (has_depth) {
         ++a.depth_count;
         a.sum_depth += depth[i];
-        a.sum_inv_depth += inverse_depth;
-        a.sum_x_inv_depth += x * inverse_depth;
       }
       if (!flow[i].allFinite()) {
         ++a.invalid;
@@ -317,6 +315,12 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
       }
       a.sum_u += flow[i].x();
       a.sum_xu += x * flow[i].x();
+      if (has_depth) {  // the depth moments go with the flow moments: over valid vectors
+        const double inverse_depth = 1.0 / depth[i];
+        ++a.valid_depth_count;
+        a.sum_inv_depth += inverse_depth;
+        a.sum_x_inv_depth += x * inverse_depth;
+      }
       region_pixels_[static_cast<std::size_t>(label)].push_back(static_cast<std::uint32_t>(i));
     }
   }
@@ -377,9 +381,9 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     if (a.valid() > 0) {
       f.moments.mean_u = a.sum_u / a.valid();
       f.moments.mean_xu = a.sum_xu / a.valid();
-      if (a.depth_count == a.pixels) {
-        f.moments.mean_inv_depth = a.sum_inv_depth / a.pixels;
-        f.moments.mean_x_inv_depth = a.sum_x_inv_depth / a.pixels;
+      if (a.valid_depth_count == a.valid()) {
+        f.moments.mean_inv_depth = a.sum_inv_depth / a.valid();
+        f.moments.mean_x_inv_depth = a.sum_x_inv_depth / a.valid();
       }
     }
     const std::span<const FlowSample> region_samples(

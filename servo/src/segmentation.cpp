@@ -40,23 +40,28 @@ void segment_by_ids(std::span<const std::int32_t> ids, int width, int height,
   out.kinds.clear();
   out.source_ids.clear();
 
-  // Labels are given in order of first appearance; ids are small renderer ids, so a flat table
-  // indexed by id maps them.
-  const std::int32_t max_id = *std::max_element(ids.begin(), ids.end());
-  std::vector<std::int32_t> label_of_id(static_cast<std::size_t>(std::max(max_id + 1, 0)),
-                                        Segmentation::kNoRegion);
+  // Labels are given in order of first appearance. Neighbouring pixels mostly share an id, so
+  // the last id seen answers most lookups and the few ids of a frame are searched otherwise:
+  // no table sized by the largest id, whatever the ids are.
+  std::int32_t last_id = -1;
+  std::int32_t last_label = Segmentation::kNoRegion;
   for (std::size_t i = 0; i < pixels; ++i) {
     const std::int32_t id = ids[i];
     if (id < 0 || (!excluded.empty() && excluded[i] != 0)) {
       continue;
     }
-    auto& label = label_of_id[static_cast<std::size_t>(id)];
-    if (label == Segmentation::kNoRegion) {
-      label = out.region_count();
-      out.kinds.push_back(RegionKind::visible);
-      out.source_ids.push_back(id);
+    if (id != last_id) {
+      const auto known = std::find(out.source_ids.begin(), out.source_ids.end(), id);
+      if (known == out.source_ids.end()) {
+        out.kinds.push_back(RegionKind::visible);
+        out.source_ids.push_back(id);
+        last_label = out.region_count() - 1;
+      } else {
+        last_label = static_cast<std::int32_t>(known - out.source_ids.begin());
+      }
+      last_id = id;
     }
-    out.labels[i] = label;
+    out.labels[i] = last_label;
   }
 }
 

@@ -92,6 +92,17 @@ World::World(WorldSpec spec) : spec_(std::move(spec)), serial_(next_serial()) {
         throw std::invalid_argument(describe(a, i) + " starts overlapping " + describe(b, j));
       }
     }
+    // A chain of leaders must end at an agent with goals, or nobody ever moves anywhere.
+    std::size_t step_count = 0;
+    for (std::optional<int> next = a.leader; next;
+         next = spec_.agents[static_cast<std::size_t>(*next)].leader) {
+      if (++step_count > spec_.agents.size()) {
+        throw std::invalid_argument(describe(a, i) + ": its chain of leaders is a loop");
+      }
+      if (static_cast<std::size_t>(*next) >= spec_.agents.size()) {
+        break;  // reported when that agent is checked
+      }
+    }
     AgentState state;
     state.position_m = a.start_m;
     state.yaw_rad = a.heading_rad;
@@ -103,6 +114,13 @@ World::World(WorldSpec spec) : spec_(std::move(spec)), serial_(next_serial()) {
     if (m.waypoints.size() < 2 || !(m.speed_mps >= 0.0)) {
       throw std::invalid_argument("moving obstacle " + std::to_string(k) +
                                   ": needs two waypoints or more and a speed >= 0");
+    }
+    for (std::size_t w = 1; w < m.waypoints.size(); ++w) {
+      if ((m.waypoints[w] - m.waypoints[w - 1]).norm() < 1e-6) {
+        throw std::invalid_argument("moving obstacle " + std::to_string(k) + ": waypoints " +
+                                    std::to_string(w - 1) + " and " + std::to_string(w) +
+                                    " are the same point");
+      }
     }
     m.body.centre_m = m.waypoints.front();
     MovingState state;

@@ -124,10 +124,34 @@ TEST(ScenarioFile, ErrorsNameFileLineAndField) {
                      "agents:\n  - {start: [0.5, 0], goal: [5, 0]}\n")
                 .find("starts inside obstacle 0"),
             std::string::npos);
+  EXPECT_NE(error_of("obstacles: 3\nagents:\n  - {start: [0, 0], goal: [4, 0]}\n")
+                .find("scenario.yaml:1:12: obstacles: expected a list"),
+            std::string::npos);
+  EXPECT_NE(error_of("moving:\n  - {waypoints: [[0, 0], [0, 0]], loop: true}\n"
+                     "agents:\n  - {start: [5, 5], goal: [6, 6]}\n")
+                .find("waypoints 0 and 1 are the same point"),
+            std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], leader: 1}\n  - {start: [3, 0], leader: 0}\n")
+                .find("its chain of leaders is a loop"),
+            std::string::npos);
+  EXPECT_NE(error_of("name: [a]\nagents:\n  - {start: [0, 0], goal: [4, 0]}\n")
+                .find("name: expected a text"),
+            std::string::npos);
   EXPECT_NE(error_of("moving:\n  - {waypoints: [[0, 0]], speed_mps: 1}\n"
                      "agents:\n  - {start: [5, 5], goal: [6, 6]}\n")
                 .find("moving[0].waypoints: needs at least two"),
             std::string::npos);
+}
+
+TEST(ScenarioFile, FollowersFollowWithBetaOneUnlessToldOtherwise) {
+  const auto w = parse_scenario(
+      "agents:\n  - {start: [0, 0], goal: [9, 0]}\n  - {start: [-3, 0], leader: 0}\n"
+      "  - {start: [-6, 0], leader: 1, controller: {beta: 0.3}}\n",
+      "scenario.yaml");
+  EXPECT_EQ(w.agents[1].controller.kind, "following");
+  EXPECT_DOUBLE_EQ(w.agents[1].controller.beta, 1.0);
+  EXPECT_EQ(w.agents[2].controller.kind, "following");
+  EXPECT_DOUBLE_EQ(w.agents[2].controller.beta, 0.3);
 }
 
 TEST(SteerSuite, TestCaseBecomesAWorld) {

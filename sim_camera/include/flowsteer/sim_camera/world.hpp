@@ -74,7 +74,9 @@ struct ControllerSpec {
   double alpha = 1.0;
   double beta = 0.1;
   double gamma = 1.0;
-  double delta = 0.0;  // dark regions; > 0 makes the agent dark-aware (MIG 2019)
+  // Dark regions (MIG 2019). The weight is read and checked, but the simulation does not
+  // segment dark regions yet (that comes with numerical flow), so it has no effect today.
+  double delta = 0.0;
   double lambda = 1.0;
   double max_accel_mps2 = 1.0;
   double max_turn_rate = 1.0;
