@@ -103,6 +103,12 @@ void read_controller(const YamlReader& r, const YAML::Node& node, ControllerSpec
     }
   } else {
     c.kind = ControllerSpec::Kind::following;
+    for (const char* key : {"delta", "preferred_speed_mps"}) {
+      if (node[key]) {
+        r.fail(node[key], std::string("controller.") + key,
+               "only a goal_reaching controller has it");
+      }
+    }
     auto& w = c.follow_weights;
     w.alpha = r.non_negative(node, "controller", "alpha", w.alpha);
     w.beta = r.non_negative(node, "controller", "beta", w.beta);

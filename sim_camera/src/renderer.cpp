@@ -27,7 +27,6 @@ namespace {
 
 constexpr int kShadowMapSize = 1024;
 constexpr int kNoiseSize = 256;
-constexpr int kMaxPointLights = 8;
 constexpr float kNear = 0.05F;
 constexpr float kFar = 500.0F;
 
@@ -490,18 +489,30 @@ struct Renderer::Impl {
     shadow_world_serial = world.serial();
     shadow_time_s = world.time_s();
     // Fit an orthographic light frustum around everything that stands on the ground.
+    // Each solid with the reach of its shadow: height / tan(elevation) beyond its footprint.
     Eigen::AlignedBox2d bounds;
-    for (const AgentState& a : world.agents()) {
-      bounds.extend(a.position_m);
+    const double shadow_per_height = 1.0 / std::tan(sun->elevation_rad);
+    auto extend = [&](const Eigen::Vector2d& centre, double reach_m, double height_m) {
+      const double r = reach_m + height_m * shadow_per_height;
+      bounds.extend(centre + Eigen::Vector2d(r, r));
+      bounds.extend(centre - Eigen::Vector2d(r, r));
+    };
+    auto reach = [](const Solid& s) {
+      return s.shape == Solid::Shape::box ? 0.5 * s.size_m.norm() : s.radius_m;
+    };
+    for (std::size_t i = 0; i < world.agents().size(); ++i) {
+      const AgentSpec& a = world.spec().agents[i];
+      extend(world.agents()[i].position_m, a.radius_m, a.height_m);
     }
     for (const Solid& s : world.spec().obstacles) {
-      bounds.extend(s.centre_m);
+      extend(s.centre_m, reach(s), s.height_m);
     }
-    for (const MovingState& m : world.moving()) {
-      bounds.extend(m.position_m);
+    for (std::size_t k = 0; k < world.moving().size(); ++k) {
+      const Solid s = world.moving_now(k);
+      extend(s.centre_m, reach(s), s.height_m);
     }
     const Eigen::Vector2d centre2 = bounds.center();
-    const double radius = 0.5 * bounds.diagonal().norm() + 6.0;
+    const double radius = 0.5 * bounds.diagonal().norm() + 1.0;
     const Eigen::Vector3d centre(centre2.x(), centre2.y(), 0.0);
     const Eigen::Vector3d to_sun(std::cos(sun->elevation_rad) * std::cos(sun->azimuth_rad),
                                  std::cos(sun->elevation_rad) * std::sin(sun->azimuth_rad),
@@ -646,7 +657,7 @@ struct Renderer::Impl {
         points.push_back(p);
       }
     }
-    const int point_count = std::min<int>(static_cast<int>(points.size()), kMaxPointLights);
+    const int point_count = static_cast<int>(points.size());  // World checks the limit
     glUniform1i(location("u_point_count"), point_count);
     for (int p = 0; p < point_count; ++p) {
       const PointLight& light = points[static_cast<std::size_t>(p)];

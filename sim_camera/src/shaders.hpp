@@ -43,7 +43,7 @@ uniform float u_sun_intensity;
 uniform int u_sun_shadows;
 uniform sampler2DShadow u_shadow_map;
 uniform int u_point_count;
-uniform vec3 u_point_position[8];
+uniform vec3 u_point_position[8];  // kMaxPointLights
 uniform float u_point_intensity[8];
 uniform float u_point_range[8];
 layout(location = 0) out vec4 o_color;

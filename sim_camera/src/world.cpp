@@ -130,6 +130,15 @@ World::World(WorldSpec spec) : spec_(std::move(spec)), serial_(next_serial()) {
     state.yaw_rad = std::atan2(heading.y(), heading.x());
     moving_.push_back(state);
   }
+  std::size_t lights = spec_.lighting.points.size();
+  for (const AgentSpec& a : spec_.agents) {
+    lights += a.carried_light ? 1 : 0;
+  }
+  if (lights > kMaxPointLights) {
+    throw std::invalid_argument("lighting: " + std::to_string(lights) +
+                                " point lights (carried ones included), at most " +
+                                std::to_string(kMaxPointLights));
+  }
   const std::size_t bodies = agents_.size() + spec_.obstacles.size() + spec_.moving.size();
   in_contact_.assign(agents_.size(), std::vector<bool>(bodies, false));
 }

@@ -33,7 +33,9 @@ class FrameSource {
   virtual ~FrameSource() = default;
   // Intrinsics of the images this source delivers (undistorted pinhole).
   virtual const servo::CameraIntrinsics& intrinsics() const = 0;
-  // Waits up to timeout_s for the next frame.
+  // Waits up to timeout_s for the next frame. The frame's images may share memory with the
+  // source's buffers (as mapped capture buffers do) and stay valid until the next read():
+  // clone() what must outlive it, such as the previous image for numerical flow.
   virtual ReadStatus read(Frame& frame, double timeout_s) = 0;
 };
 

@@ -53,6 +53,9 @@ struct PointLight {
   double range_m = 8.0;  // the light falls to zero here
 };
 
+// The renderer draws at most this many point lights, fixed and carried together.
+inline constexpr std::size_t kMaxPointLights = 8;
+
 struct Lighting {
   float ambient = 0.3F;
   std::optional<SunLight> sun = SunLight{};
