@@ -134,6 +134,9 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
     if (!own_node) {
       r.fail(drive, field, "missing: the serial drive's settings (device, ticks_per_wheel_rev)");
     }
+    if (!own_node["ticks_per_wheel_rev"]) {
+      r.fail(own_node, field + ".ticks_per_wheel_rev", "missing: encoder ticks per wheel turn");
+    }
     if (type == "arduino_bridge") {
       r.only_keys(
           own_node, field,

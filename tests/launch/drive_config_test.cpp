@@ -101,6 +101,9 @@ TEST(DriveSection, ErrorsNameTheField) {
             std::string::npos);
   EXPECT_NE(error_of("drive: {type: roboclaw}\n").find("drive.roboclaw: missing"),
             std::string::npos);
+  EXPECT_NE(error_of("drive: {type: roboclaw, roboclaw: {device: /dev/ttyS0}}\n")
+                .find("drive.roboclaw.ticks_per_wheel_rev: missing"),
+            std::string::npos);
   EXPECT_NE(error_of("drive: {type: roboclaw, roboclaw: {ticks_per_wheel_rev: 10}}\n")
                 .find("drive.roboclaw.device: missing"),
             std::string::npos);
