@@ -99,7 +99,6 @@ class NavigationFunction {
   // Fills `out` with one entry per term (reusing its storage) and returns the weighted sum.
   TermGradient evaluate(const Percept& percept, const AgentState& agent,
                         std::vector<TermEvaluation>& out);
-  std::size_t term_count() const { return terms_.size(); }
 
  private:
   struct Weighted {
@@ -149,7 +148,6 @@ class Controller {
   void step(const Percept& percept, const AgentState& agent, ControlOutput& out);
   ControlOutput step(const Percept& percept, const AgentState& agent);
 
-  const ControlLimits& limits() const { return limits_; }
 
  private:
   NavigationFunction navigation_;

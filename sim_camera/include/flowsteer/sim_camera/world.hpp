@@ -177,8 +177,7 @@ class World {
   double clearance(std::size_t agent) const;
   bool finished() const;
 
-  // Footprint of a solid at its current pose, for distances and top views.
-  Solid obstacle_now(std::size_t obstacle) const { return spec_.obstacles[obstacle]; }
+  // A moving obstacle's solid at its current pose, for rendering, distances and top views.
   Solid moving_now(std::size_t moving) const;
 
  private:
