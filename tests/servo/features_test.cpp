@@ -190,15 +190,24 @@ TEST(FeatureExtractor, NonFiniteVectorsAreIgnoredAndCounted) {
   EXPECT_TRUE(std::isfinite(e.features.moments.mean_u));
 }
 
-TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
-  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
-  FlowField field(k);
+// An 8×6 segmentation with `regions` visible regions (source ids 10, 11, ...) and no pixel
+// assigned yet.
+Segmentation empty_segmentation(int regions) {
   Segmentation s;
   s.width = 8;
   s.height = 6;
   s.labels.assign(48, Segmentation::kNoRegion);
-  s.kinds = {RegionKind::visible, RegionKind::visible};
-  s.source_ids = {10, 11};
+  for (int r = 0; r < regions; ++r) {
+    s.kinds.push_back(RegionKind::visible);
+    s.source_ids.push_back(10 + r);
+  }
+  return s;
+}
+
+TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
+  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
+  FlowField field(k);
+  Segmentation s = empty_segmentation(2);
   s.labels[5] = 1;  // region 0 has no pixel, region 1 has one
   FeatureExtractor extractor;
   const auto objects = extractor.extract(field, s);
@@ -214,12 +223,7 @@ TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
 TEST(FeatureExtractor, RegionsReachingTheImageEdgeAreMarkedCut) {
   const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
   FlowField field(k);
-  Segmentation s;
-  s.width = 8;
-  s.height = 6;
-  s.labels.assign(48, Segmentation::kNoRegion);
-  s.kinds = {RegionKind::visible, RegionKind::visible, RegionKind::visible};
-  s.source_ids = {10, 11, 12};
+  Segmentation s = empty_segmentation(3);
   for (int col = 0; col < 8; ++col) {
     s.labels[static_cast<std::size_t>(8 + col)] = col < 3 ? 0 : (col < 6 ? 1 : 2);
     s.labels[static_cast<std::size_t>(40 + col)] = 1;  // region 1 spans the bottom row
@@ -243,12 +247,7 @@ TEST(FeatureExtractor, AFourPixelRegionIsFittedByDefault) {
   // A distant object at the edge of a coarse image covers a few pixels only.
   const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 150.0 * kDeg);
   FlowField field(k);
-  Segmentation s;
-  s.width = 8;
-  s.height = 6;
-  s.labels.assign(48, Segmentation::kNoRegion);
-  s.kinds = {RegionKind::visible, RegionKind::visible};
-  s.source_ids = {10, 11};
+  Segmentation s = empty_segmentation(2);
   const Eigen::Vector2d foe(-2.0, 0.1);
   const double ttc = 2.5;
   auto flow = field.flow();
