@@ -14,32 +14,7 @@ double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// Copies the simulator's flow and depth into the servo core's field.
-void to_flow_field(const camera_io::SimChannels& sim, servo::FlowField& field) {
-  auto flow = field.flow();
-  auto depth = field.depth();
-  for (int row = 0; row < field.height(); ++row) {
-    const auto* f = sim.flow.ptr<cv::Vec2f>(row);
-    const auto* d = sim.depth_m.ptr<float>(row);
-    for (int col = 0; col < field.width(); ++col) {
-      const std::size_t i = field.index(col, row);
-      flow[i] = Eigen::Vector2f(f[col][0], f[col][1]);
-      depth[i] = d[col];
-    }
-  }
-}
-
 }  // namespace
-
-StageTimes& StageTimes::operator+=(const StageTimes& other) {
-  render += other.render;
-  flow += other.flow;
-  segment += other.segment;
-  features += other.features;
-  control += other.control;
-  total += other.total;
-  return *this;
-}
 
 servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
   const sim_camera::ControllerSpec& c = agent.controller;
@@ -60,13 +35,23 @@ servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
   return servo::Controller(servo::goal_reaching(weights, avoidance), c.lambda, limits);
 }
 
+PerceptionOptions perception_options(const sim_camera::AgentSpec& agent) {
+  PerceptionOptions options;
+  options.flow = agent.perception.flow;
+  options.segmentation = agent.perception.segmentation;
+  options.dark_regions = agent.controller.delta > 0.0;
+  options.use_depth = agent.controller.use_depth;
+  options.mount = {agent.camera.height_m, agent.camera.pitch_rad};
+  return options;
+}
+
 AgentPipeline::AgentPipeline(const sim_camera::World& world, sim_camera::Renderer& renderer,
                              std::size_t agent)
     : world_(world),
       agent_(agent),
       camera_(world, renderer, agent),
       controller_(make_controller(world.spec().agents.at(agent))),
-      field_(camera_.intrinsics(), true) {}
+      perception_(camera_.intrinsics(), perception_options(world.spec().agents.at(agent))) {}
 
 const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
   const sim_camera::AgentSpec& agent = world_.spec().agents[agent_];
@@ -75,23 +60,10 @@ const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
   camera_.read(frame_, 0.0);
   times.render = ms_since(start);
 
+  perception_.process(frame_, state.speed_mps, state.turn_rate, times);
+
   auto stage = Clock::now();
-  to_flow_field(*frame_.sim, field_);
-  servo::derotate(field_, servo::camera_angular_velocity(state.turn_rate, agent.camera.pitch_rad));
-  times.flow = ms_since(stage);
-
-  stage = Clock::now();
-  const cv::Mat& ids = frame_.sim->object_ids;
-  servo::segment_by_ids({ids.ptr<std::int32_t>(), ids.total()}, ids.cols, ids.rows, {},
-                        segmentation_);
-  times.segment = ms_since(stage);
-
-  stage = Clock::now();
-  objects_ = extractor_.extract(field_, segmentation_);
-  times.features = ms_since(stage);
-
-  stage = Clock::now();
-  percept_ = servo::Percept{objects_, {}, {}, {}};
+  percept_ = servo::Percept{perception_.objects(), {}, {}, {}};
   if (agent.leader) {
     percept_.leader_id = sim_camera::agent_render_id(static_cast<std::size_t>(*agent.leader));
   } else if (state.next_goal < agent.goals.size()) {

@@ -11,6 +11,7 @@
 #include "flowsteer/launch/config_error.hpp"
 #include "flowsteer/launch/demo.hpp"
 #include "flowsteer/launch/demo_scene.hpp"
+#include "flowsteer/launch/flow_evaluation.hpp"
 #include "flowsteer/launch/scenario_file.hpp"
 #include "flowsteer/launch/simulation.hpp"
 
@@ -94,8 +95,37 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(8, 4096));
   sim->add_option("--steps", steps, "stop after N control steps")->check(CLI::PositiveNumber);
   sim->add_flag("--video", video, "an MP4 per agent: its view, the flow and the features");
+  std::string flow_method;
+  std::string segmentation_method;
+  sim->add_option("--flow", flow_method,
+                  "every agent's flow: " + flowsteer::servo::flow_method_names());
+  sim->add_option("--segmentation", segmentation_method,
+                  "every agent's segmentation: " + flowsteer::servo::segmentation_method_names());
 
   app.add_subcommand("scenarios", "List the built-in scenarios");
+
+  CLI::App* eval = app.add_subcommand("eval", "Measure parts of the pipeline against the truth");
+  eval->require_subcommand(1);
+  CLI::App* eval_flow = eval->add_subcommand(
+      "flow", "Each optical-flow estimator against the renderer's flow and the exact features");
+  std::string eval_scenario = "room";
+  std::vector<int> eval_resolutions{256};
+  int eval_frames = 40;
+  std::vector<std::string> eval_methods;
+  std::string eval_out = "flowsteer_eval";
+  eval_flow->add_option("--scenario", eval_scenario, "a built-in scenario or a scenario file")
+      ->capture_default_str();
+  eval_flow->add_option("--resolution", eval_resolutions, "N x N pixels; repeat for several")
+      ->check(CLI::Range(16, 2048))
+      ->capture_default_str();
+  eval_flow->add_option("--frames", eval_frames, "frames rendered per resolution")
+      ->check(CLI::Range(2, 10000))
+      ->capture_default_str();
+  eval_flow->add_option(
+      "--method", eval_methods,
+      "an estimator (default: all); repeat for several: " + flowsteer::servo::flow_method_names());
+  eval_flow->add_option("--out", eval_out, "folder for flow_eval.csv and flow_eval.txt")
+      ->capture_default_str();
 
   try {
     app.parse(argc, argv);
@@ -129,6 +159,21 @@ int main(int argc, char** argv) {
       if (steps > 0) {
         options.steps = steps;
       }
+      if (!flow_method.empty()) {
+        options.flow = flowsteer::servo::parse_flow_method(flow_method);
+        if (!options.flow) {
+          throw CLI::ValidationError("--flow", "unknown method '" + flow_method + "' (known: " +
+                                                   flowsteer::servo::flow_method_names() + ")");
+        }
+      }
+      if (!segmentation_method.empty()) {
+        options.segmentation = flowsteer::servo::parse_segmentation_method(segmentation_method);
+        if (!options.segmentation) {
+          throw CLI::ValidationError("--segmentation",
+                                     "unknown method '" + segmentation_method + "' (known: " +
+                                         flowsteer::servo::segmentation_method_names() + ")");
+        }
+      }
       options.video = video;
       options.progress_bar = isatty(STDERR_FILENO) != 0;
       std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size() << " agents) -> "
@@ -157,6 +202,27 @@ int main(int argc, char** argv) {
       std::cout << "per agent step: " << t.total << " ms (render " << t.render << ", flow "
                 << t.flow << ", segment " << t.segment << ", features " << t.features
                 << ", control " << t.control << ")\n";
+    }
+    if (*eval_flow) {
+      flowsteer::launch::FlowEvalOptions options;
+      options.resolutions = eval_resolutions;
+      options.frames = eval_frames;
+      for (const std::string& name : eval_methods) {
+        const auto method = flowsteer::servo::parse_flow_method(name);
+        if (!method || *method == flowsteer::servo::FlowMethod::synthetic) {
+          throw CLI::ValidationError("--method", "unknown estimator '" + name + "' (known: " +
+                                                     flowsteer::servo::flow_method_names() +
+                                                     "; synthetic is the truth)");
+        }
+        options.methods.push_back(*method);
+      }
+      const flowsteer::sim_camera::WorldSpec world =
+          eval_scenario.find('.') != std::string::npos
+              ? flowsteer::launch::load_scenario(eval_scenario)
+              : flowsteer::launch::builtin_scenario(eval_scenario);
+      const auto rows = flowsteer::launch::evaluate_flow(world, options, std::cerr);
+      flowsteer::launch::print_flow_table(rows, std::cout);
+      flowsteer::launch::write_flow_evaluation(rows, eval_out);
     }
     if (*demo) {
       DemoScene scene = scene_file.empty() ? flowsteer::launch::default_demo_scene()

@@ -148,6 +148,32 @@ sim_camera::ControllerSpec read_controller(const YamlReader& r, const YAML::Node
   return c;
 }
 
+sim_camera::PerceptionSpec read_perception(const YamlReader& r, const YAML::Node& node,
+                                           const std::string& field,
+                                           sim_camera::PerceptionSpec perception) {
+  if (!node) {
+    return perception;
+  }
+  r.only_keys(node, field, {"flow", "segmentation"});
+  if (const YAML::Node flow = node["flow"]) {
+    const auto method = servo::parse_flow_method(flow.IsScalar() ? flow.Scalar() : "");
+    if (!method) {
+      r.fail(flow, field + ".flow", "expected one of " + servo::flow_method_names());
+    }
+    perception.flow = *method;
+  }
+  if (const YAML::Node segmentation = node["segmentation"]) {
+    const auto method =
+        servo::parse_segmentation_method(segmentation.IsScalar() ? segmentation.Scalar() : "");
+    if (!method) {
+      r.fail(segmentation, field + ".segmentation",
+             "expected one of " + servo::segmentation_method_names());
+    }
+    perception.segmentation = *method;
+  }
+  return perception;
+}
+
 std::vector<Eigen::Vector2d> read_points(const YamlReader& r, const YAML::Node& node,
                                          const std::string& field) {
   if (!node.IsSequence() || node.size() == 0) {
@@ -184,8 +210,8 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     throw ConfigError(source_name, 1, 1, "", "expected a mapping with at least agents:");
   }
   r.only_keys(root, "",
-              {"name", "description", "step_s", "duration_s", "camera", "controller", "lighting",
-               "ground", "obstacles", "moving", "agents"});
+              {"name", "description", "step_s", "duration_s", "camera", "controller", "perception",
+               "lighting", "ground", "obstacles", "moving", "agents"});
   auto require_list = [&](const YAML::Node& node, const std::string& field) {
     if (!node.IsSequence()) {
       r.fail(node, field, "expected a list");
@@ -209,6 +235,8 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
   const sim_camera::CameraSpec camera = read_camera(r, root["camera"], "camera", {});
   const sim_camera::ControllerSpec controller =
       read_controller(r, root["controller"], "controller", {});
+  const sim_camera::PerceptionSpec perception =
+      read_perception(r, root["perception"], "perception", {});
 
   if (const YAML::Node lighting = root["lighting"]) {
     r.only_keys(lighting, "lighting", {"ambient", "sun", "points"});
@@ -289,7 +317,7 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     r.only_keys(node, field,
                 {"name", "start", "heading_deg", "speed_mps", "preferred_speed_mps",
                  "max_speed_mps", "radius_m", "height_m", "goal", "goals", "goal_radius_m",
-                 "leader", "controller", "camera", "material", "carried_light"});
+                 "leader", "controller", "perception", "camera", "material", "carried_light"});
     AgentSpec a;
     a.name = node["name"] ? node["name"].as<std::string>() : "agent" + std::to_string(i);
     if (!node["start"]) {
@@ -336,6 +364,7 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
       r.fail(node, field + ".goal", "missing: the agent needs a goal or a leader");
     }
     a.camera = read_camera(r, node["camera"], field + ".camera", camera);
+    a.perception = read_perception(r, node["perception"], field + ".perception", perception);
     a.material = read_material(r, node["material"], field + ".material", a.material);
     if (const YAML::Node light = node["carried_light"]) {
       r.only_keys(light, field + ".carried_light", {"intensity", "range_m", "height_m", "ahead_m"});

@@ -63,10 +63,13 @@ class Progress {
 SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptions& options,
                          std::ostream& log) {
   sim_camera::WorldSpec spec = world_spec;
-  if (options.resolution) {
-    for (auto& a : spec.agents) {
+  for (auto& a : spec.agents) {
+    if (options.resolution)
       a.camera.width_px = a.camera.height_px = *options.resolution;
-    }
+    if (options.flow)
+      a.perception.flow = *options.flow;
+    if (options.segmentation)
+      a.perception.segmentation = *options.segmentation;
   }
   sim_camera::World world(spec);
   std::unique_ptr<sim_camera::Renderer> renderer = sim_camera::Renderer::create();

@@ -252,6 +252,10 @@ FeatureExtractor::~FeatureExtractor() = default;
 FeatureExtractor::FeatureExtractor(FeatureExtractor&&) noexcept = default;
 FeatureExtractor& FeatureExtractor::operator=(FeatureExtractor&&) noexcept = default;
 
+namespace {
+constexpr double kMinTtc_s = 1e-3;
+}  // namespace
+
 std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field,
                                                           const Segmentation& segmentation) {
   if (segmentation.width != field.width() || segmentation.height != field.height() ||
@@ -395,10 +399,17 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     const RadialFit fit = fit_radial_flow(region_samples, options_.fit);
     f.status = fit.status;
     f.foe = fit.foe;
-    f.ttc_s = fit.ttc_s;
+    // Displacement flow over an interval Δ fits τ + Δ (flow_field.hpp); the FOE is unchanged.
+    f.ttc_s = fit.ttc_s - field.interval_s();
+    if (fit.status == MotionStatus::approaching) {
+      // A τ within the interval means contact is imminent; it stays positive, as approaching.
+      f.ttc_s = std::max(f.ttc_s, kMinTtc_s);
+    }
     f.fit = fit.quality;
     if (fit.status == MotionStatus::approaching || fit.status == MotionStatus::receding) {
-      f.ttc_eq5_s = ttc_from_foe(region_samples, fit.foe, fit.ttc_s);
+      f.ttc_eq5_s = ttc_from_foe(region_samples, fit.foe, fit.ttc_s) - field.interval_s();
+      if (fit.status == MotionStatus::approaching)
+        f.ttc_eq5_s = std::max(f.ttc_eq5_s, kMinTtc_s);
     }
   }
   return features_;

@@ -5,6 +5,7 @@
 #include <span>
 
 #include "flowsteer/camera_io/frame_source.hpp"
+#include "flowsteer/launch/perception.hpp"
 #include "flowsteer/servo/servo.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/sim_camera.hpp"
@@ -12,21 +13,10 @@
 
 namespace flowsteer::launch {
 
-// Time of each stage of one agent step, in milliseconds.
-struct StageTimes {
-  double render = 0.0;
-  double flow = 0.0;
-  double segment = 0.0;
-  double features = 0.0;
-  double control = 0.0;
-  double total = 0.0;
-
-  StageTimes& operator+=(const StageTimes& other);
-};
-
-// One simulated agent's perception-action loop: its head camera renders the world, the servo
-// core turns the synthetic flow into features (derotated with the agent's turn rate, segmented
-// by object id) and its controller into a command.
+// One simulated agent's perception-action loop: its head camera renders the world, Perception
+// turns the frame into features the way the agent's PerceptionSpec asks (synthetic or numerical
+// flow derotated with the agent's turn rate, segmented by object id or by flow, dark regions
+// when its controller weighs them), and its controller turns them into a command.
 class AgentPipeline {
  public:
   // The world and the renderer must outlive the pipeline.
@@ -36,8 +26,9 @@ class AgentPipeline {
   const servo::ControlOutput& step(StageTimes& times);
 
   const camera_io::Frame& frame() const { return frame_; }
-  const servo::FlowField& flow() const { return field_; }
-  std::span<const servo::ObjectFeatures> objects() const { return objects_; }
+  const Perception& perception() const { return perception_; }
+  const servo::FlowField& flow() const { return perception_.flow(); }
+  std::span<const servo::ObjectFeatures> objects() const { return perception_.objects(); }
   const servo::Percept& percept() const { return percept_; }
   const servo::CameraIntrinsics& intrinsics() const { return camera_.intrinsics(); }
 
@@ -46,16 +37,16 @@ class AgentPipeline {
   std::size_t agent_;
   sim_camera::SimCamera camera_;
   servo::Controller controller_;
-  servo::FlowField field_;
-  servo::FeatureExtractor extractor_;
-  servo::Segmentation segmentation_;
+  Perception perception_;
   camera_io::Frame frame_;
-  std::span<const servo::ObjectFeatures> objects_;
   servo::Percept percept_;
   servo::ControlOutput output_;
 };
 
 // The servo controller a scenario's agent asks for.
 servo::Controller make_controller(const sim_camera::AgentSpec& agent);
+
+// The perception a scenario's agent asks for.
+PerceptionOptions perception_options(const sim_camera::AgentSpec& agent);
 
 }  // namespace flowsteer::launch

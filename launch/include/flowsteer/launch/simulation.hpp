@@ -15,9 +15,12 @@ struct SimOptions {
   std::filesystem::path out_dir = "flowsteer_out";
   std::optional<int> resolution;  // overrides every agent's camera: N×N pixels
   std::optional<int> steps;       // stop after this many steps
-  bool video = false;             // an MP4 per agent of its view with the features drawn on it
-  bool progress_bar = false;      // a bar that redraws itself, for terminals
-  bool write_outputs = true;      // false: only the returned result (tests, benchmarks)
+  // Override every agent's perception (scenario key perception:).
+  std::optional<servo::FlowMethod> flow;
+  std::optional<servo::SegmentationMethod> segmentation;
+  bool video = false;         // an MP4 per agent of its view with the features drawn on it
+  bool progress_bar = false;  // a bar that redraws itself, for terminals
+  bool write_outputs = true;  // false: only the returned result (tests, benchmarks)
 };
 
 struct AgentResult {

@@ -35,6 +35,12 @@ class FlowField {
   std::span<float> depth() { return depth_; }
   std::span<const float> depth() const { return depth_; }
 
+  // 0 for instantaneous flow (the renderer's). Flow computed from two images Δ apart is their
+  // displacement over Δ: for a surface at constant velocity it is (x − f) / (τ + Δ) at the newer
+  // image, the instantaneous flow's FOE with τ late by Δ, which FeatureExtractor takes back.
+  double interval_s() const { return interval_s_; }
+  void set_interval_s(double interval_s) { interval_s_ = interval_s; }
+
   std::size_t index(int col, int row) const {
     return static_cast<std::size_t>(row) * static_cast<std::size_t>(width()) +
            static_cast<std::size_t>(col);
@@ -46,6 +52,7 @@ class FlowField {
   std::vector<double> y_of_row_;
   std::vector<Eigen::Vector2f> flow_;
   std::vector<float> depth_;
+  double interval_s_ = 0.0;
 };
 
 // Angular velocity of the camera, in the camera frame, for an agent turning at turn_rate_cy

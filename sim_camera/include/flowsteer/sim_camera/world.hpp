@@ -7,6 +7,9 @@
 
 #include <Eigen/Core>
 
+#include "flowsteer/servo/flow_segmentation.hpp"
+#include "flowsteer/servo/optical_flow.hpp"
+
 namespace flowsteer::sim_camera {
 
 // World frame (REP-103): x, y on the ground, z up, metres; yaw counter-clockwise from x.
@@ -77,8 +80,8 @@ struct ControllerSpec {
   double alpha = 1.0;
   double beta = 0.1;
   double gamma = 1.0;
-  // Dark regions (MIG 2019). The weight is read and checked, but the simulation does not
-  // segment dark regions yet (that comes with numerical flow), so it has no effect today.
+  // Dark regions (MIG 2019): an agent with delta > 0 looks for them and avoids them; with 0 it
+  // ignores them, as MIG's agents without dark-region awareness do.
   double delta = 0.0;
   double lambda = 1.0;
   double max_accel_mps2 = 1.0;
@@ -87,6 +90,13 @@ struct ControllerSpec {
   // Added to the agent's diameter as the width it keeps clear (CGF §6.2's agent width): room
   // for the path's curvature and the step, like a person's personal space.
   double clearance_margin_m = 0.5;
+};
+
+// How the agent sees: the renderer's exact flow and object ids, or flow computed from its images
+// and objects found in that flow, as a robot's camera would give.
+struct PerceptionSpec {
+  servo::FlowMethod flow = servo::FlowMethod::synthetic;
+  servo::SegmentationMethod segmentation = servo::SegmentationMethod::semantic;
 };
 
 struct AgentSpec {
@@ -103,6 +113,7 @@ struct AgentSpec {
   std::optional<int> leader;  // index of the agent to follow
   ControllerSpec controller;
   CameraSpec camera;
+  PerceptionSpec perception;
   Material material{{0.2F, 0.35F, 0.8F}, Material::Pattern::stripes, 0.15F, 0.4F};
   std::optional<PointLight> carried_light;  // position_m is the offset in the agent's frame
 };

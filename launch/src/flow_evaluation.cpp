@@ -1,0 +1,195 @@
+#include "flowsteer/launch/flow_evaluation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "flowsteer/launch/agent_pipeline.hpp"
+#include "flowsteer/launch/perception.hpp"
+#include "output_files.hpp"
+
+namespace flowsteer::launch {
+
+namespace {
+
+double median(std::vector<double> values) {
+  if (values.empty())
+    return std::numeric_limits<double>::quiet_NaN();
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+struct MethodRun {
+  std::unique_ptr<Perception> perception;
+  FlowEvalRow row;
+  double epe_sum = 0.0;
+  double valid_count = 0.0;
+  double total_count = 0.0;
+  double ms_sum = 0.0;
+  std::vector<double> foe_errors;
+  std::vector<double> ttc_errors;
+};
+
+}  // namespace
+
+std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
+                                       const FlowEvalOptions& options, std::ostream& log) {
+  if (world_spec.agents.empty()) {
+    throw std::invalid_argument("flow evaluation: the scenario has no agent to carry the camera");
+  }
+  const std::span<const servo::FlowMethod> all = servo::numerical_flow_methods();
+  // The synthetic row fits the exact flow without depth: the error the fit itself makes, which
+  // every estimator's row includes.
+  std::vector<servo::FlowMethod> methods{servo::FlowMethod::synthetic};
+  if (options.methods.empty()) {
+    methods.insert(methods.end(), all.begin(), all.end());
+  } else {
+    methods.insert(methods.end(), options.methods.begin(), options.methods.end());
+  }
+  std::unique_ptr<sim_camera::Renderer> renderer = sim_camera::Renderer::create();
+  std::vector<FlowEvalRow> rows;
+  for (const int resolution : options.resolutions) {
+    sim_camera::WorldSpec spec = world_spec;
+    for (auto& a : spec.agents) {
+      a.camera.width_px = a.camera.height_px = resolution;
+      a.perception = {};
+    }
+    sim_camera::World world(spec);
+    std::vector<std::unique_ptr<AgentPipeline>> agents;
+    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+      agents.push_back(std::make_unique<AgentPipeline>(world, *renderer, i));
+    }
+    const sim_camera::AgentSpec& walker = spec.agents[0];
+    PerceptionOptions truth_options = perception_options(walker);
+    truth_options.dark_regions = false;
+    truth_options.use_depth = true;
+    Perception truth(agents[0]->intrinsics(), truth_options);
+    std::vector<MethodRun> runs;
+    for (servo::FlowMethod method : methods) {
+      PerceptionOptions o = truth_options;
+      o.flow = method;
+      o.use_depth = false;
+      MethodRun run;
+      run.perception = std::make_unique<Perception>(agents[0]->intrinsics(), o);
+      run.row.method = method;
+      run.row.resolution = resolution;
+      runs.push_back(std::move(run));
+    }
+    const servo::CameraIntrinsics& k = agents[0]->intrinsics();
+    const double to_px = k.fx_px * spec.step_s;
+    // The estimators compare images a baseline apart: until they have one, they are not measured.
+    const int warmup_frames =
+        static_cast<int>(std::ceil(truth_options.optical_flow.baseline_s / spec.step_s));
+
+    log << "flow evaluation: " << spec.name << " at " << resolution << "x" << resolution << ", "
+        << options.frames << " frames\n";
+    std::vector<std::pair<double, double>> commands(spec.agents.size());
+    for (int frame = 0; frame < options.frames && !world.finished(); ++frame) {
+      for (std::size_t i = 0; i < agents.size(); ++i) {
+        StageTimes times;
+        const servo::ControlOutput& out = agents[i]->step(times);
+        commands[i] = {out.command.accel_mps2, out.command.turn_rate};
+      }
+      const camera_io::Frame& view = agents[0]->frame();
+      const sim_camera::AgentState& state = world.agents()[0];
+      StageTimes times;
+      truth.process(view, state.speed_mps, state.turn_rate, times);
+      std::map<std::int32_t, const servo::ObjectFeatures*> truth_objects;
+      for (const servo::ObjectFeatures& o : truth.objects()) {
+        if (o.status == servo::MotionStatus::approaching)
+          truth_objects[o.source_id] = &o;
+      }
+      for (MethodRun& run : runs) {
+        StageTimes method_times;
+        if (run.perception->process(view, state.speed_mps, state.turn_rate, method_times) !=
+                servo::FlowStatus::ok ||
+            frame < warmup_frames) {
+          continue;
+        }
+        ++run.row.frames;
+        run.ms_sum += method_times.flow;
+        const auto estimated = run.perception->flow().flow();
+        const auto exact = truth.flow().flow();
+        for (std::size_t p = 0; p < estimated.size(); ++p) {
+          run.total_count += 1.0;
+          if (!estimated[p].allFinite() || !exact[p].allFinite())
+            continue;
+          run.valid_count += 1.0;
+          run.epe_sum += (estimated[p] - exact[p]).cast<double>().norm() * to_px;
+        }
+        for (const servo::ObjectFeatures& o : run.perception->objects()) {
+          const auto t = truth_objects.find(o.source_id);
+          if (t == truth_objects.end())
+            continue;
+          if (t->second->pixel_count < options.min_object_px) {
+            ++run.row.small_objects;
+            continue;
+          }
+          if (o.status != servo::MotionStatus::approaching) {
+            ++run.row.missed_objects;
+            continue;
+          }
+          ++run.row.approaching_objects;
+          run.foe_errors.push_back(std::abs(o.foe.x() - t->second->foe.x()));
+          run.ttc_errors.push_back(std::abs(o.ttc_s - t->second->ttc_s) / t->second->ttc_s);
+        }
+      }
+      world.step(commands);
+    }
+    for (MethodRun& run : runs) {
+      FlowEvalRow& row = run.row;
+      row.endpoint_error_px = run.valid_count > 0 ? run.epe_sum / run.valid_count : 0.0;
+      row.valid_fraction = run.total_count > 0 ? run.valid_count / run.total_count : 0.0;
+      row.foe_error_median = median(run.foe_errors);
+      row.ttc_relative_error_median = median(run.ttc_errors);
+      row.ms_per_frame = row.frames > 0 ? run.ms_sum / row.frames : 0.0;
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
+void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
+  out << std::left << std::setw(15) << "method" << std::right << std::setw(6) << "res"
+      << std::setw(8) << "frames" << std::setw(10) << "EPE px" << std::setw(8) << "valid"
+      << std::setw(9) << "objects" << std::setw(8) << "missed" << std::setw(7) << "small"
+      << std::setw(10) << "FOE err" << std::setw(10) << "TTC err" << std::setw(12) << "ms/frame"
+      << "\n";
+  for (const FlowEvalRow& r : rows) {
+    out << std::left << std::setw(15) << servo::to_string(r.method) << std::right << std::fixed
+        << std::setw(6) << r.resolution << std::setw(8) << r.frames << std::setw(10)
+        << std::setprecision(3) << r.endpoint_error_px << std::setw(8) << std::setprecision(2)
+        << r.valid_fraction << std::setw(9) << r.approaching_objects << std::setw(8)
+        << r.missed_objects << std::setw(7) << r.small_objects << std::setw(10)
+        << std::setprecision(4) << r.foe_error_median << std::setw(9) << std::setprecision(1)
+        << 100.0 * r.ttc_relative_error_median << "%" << std::setw(12) << std::setprecision(2)
+        << r.ms_per_frame << "\n";
+  }
+}
+
+void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
+                           const std::filesystem::path& out_dir) {
+  OutputDir out(out_dir);
+  std::string text =
+      "method,resolution,frames,endpoint_error_px,valid_fraction,approaching_objects,"
+      "missed_objects,small_objects,foe_error_median,ttc_relative_error_median,ms_per_frame\n";
+  for (const FlowEvalRow& r : rows) {
+    std::ostringstream line;
+    line << servo::to_string(r.method) << "," << r.resolution << "," << r.frames << ","
+         << r.endpoint_error_px << "," << r.valid_fraction << "," << r.approaching_objects << ","
+         << r.missed_objects << "," << r.small_objects << "," << r.foe_error_median << ","
+         << r.ttc_relative_error_median << "," << r.ms_per_frame << "\n";
+    text += line.str();
+  }
+  write_text(out.staging_path("flow_eval.csv"), text);
+  std::ostringstream table;
+  print_flow_table(rows, table);
+  write_text(out.staging_path("flow_eval.txt"), table.str());
+  out.commit();
+}
+
+}  // namespace flowsteer::launch

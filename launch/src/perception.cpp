@@ -1,0 +1,131 @@
+#include "flowsteer/launch/perception.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+namespace flowsteer::launch {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+bool synthetic(const PerceptionOptions& options) {
+  return options.flow == servo::FlowMethod::synthetic;
+}
+
+servo::FeatureOptions feature_options(const PerceptionOptions& options) {
+  servo::FeatureOptions features;
+  features.use_depth = synthetic(options) && options.use_depth;
+  return features;
+}
+
+// Copies the simulator's flow and depth into the servo core's field.
+void copy_sim_channels(const camera_io::SimChannels& sim, servo::FlowField& field) {
+  auto flow = field.flow();
+  auto depth = field.depth();
+  for (int row = 0; row < field.height(); ++row) {
+    const auto* f = sim.flow.ptr<cv::Vec2f>(row);
+    const auto* d = sim.depth_m.ptr<float>(row);
+    for (int col = 0; col < field.width(); ++col) {
+      const std::size_t i = field.index(col, row);
+      flow[i] = Eigen::Vector2f(f[col][0], f[col][1]);
+      if (!depth.empty())
+        depth[i] = d[col];
+    }
+  }
+}
+
+}  // namespace
+
+StageTimes& StageTimes::operator+=(const StageTimes& other) {
+  render += other.render;
+  flow += other.flow;
+  segment += other.segment;
+  features += other.features;
+  control += other.control;
+  total += other.total;
+  return *this;
+}
+
+Perception::Perception(const servo::CameraIntrinsics& intrinsics, const PerceptionOptions& options)
+    : options_(options),
+      field_(intrinsics, synthetic(options) && options.use_depth),
+      dark_finder_(options.dark),
+      extractor_(feature_options(options)) {
+  if (!synthetic(options))
+    optical_flow_.emplace(options.flow, options.optical_flow);
+  if (options.segmentation != servo::SegmentationMethod::semantic) {
+    segmenter_.emplace(options.segmentation, options.flow_segmentation);
+  }
+}
+
+servo::FlowStatus Perception::process(const camera_io::Frame& frame, double speed_mps,
+                                      double turn_rate_cy, StageTimes& times) {
+  objects_ = {};
+  const bool needs_sim =
+      synthetic(options_) || options_.segmentation == servo::SegmentationMethod::semantic;
+  if (needs_sim && !frame.sim) {
+    throw std::invalid_argument(
+        std::string("Perception: ") +
+        (synthetic(options_) ? "synthetic flow" : "semantic segmentation") +
+        " needs a simulator's frames; a camera or a recording needs numerical flow and flow "
+        "segmentation");
+  }
+
+  auto stage = Clock::now();
+  const cv::Mat& image = frame.image;
+  const bool frame_fits =
+      !image.empty() && image.cols == field_.width() && image.rows == field_.height();
+  if (!image.empty() && (options_.dark_regions || optical_flow_)) {
+    if (image.channels() == 3) {
+      cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);
+    } else {
+      image.copyTo(grey_);
+    }
+  }
+  if (optical_flow_) {
+    status_ = image.empty() ? servo::FlowStatus::empty_frame
+                            : optical_flow_->update(grey_, frame.timestamp_s, field_);
+  } else if (!frame_fits) {
+    status_ = image.empty() ? servo::FlowStatus::empty_frame : servo::FlowStatus::size_changed;
+  } else {
+    copy_sim_channels(*frame.sim, field_);
+    status_ = servo::FlowStatus::ok;
+  }
+  if (status_ != servo::FlowStatus::ok) {
+    times.flow = ms_since(stage);
+    return status_;
+  }
+  servo::derotate(field_, servo::camera_angular_velocity(turn_rate_cy, options_.mount.pitch_rad));
+  times.flow = ms_since(stage);
+
+  stage = Clock::now();
+  if (segmenter_) {
+    ground_mask_.assign(field_.size(), 0);
+    servo::mark_ground(field_, options_.mount, speed_mps, options_.ground, ground_mask_);
+    segmenter_->segment(field_, ground_mask_, segmentation_);
+  } else {
+    // The renderer's ground id already marks the ground.
+    const cv::Mat& ids = frame.sim->object_ids;
+    servo::segment_by_ids({ids.ptr<std::int32_t>(), ids.total()}, ids.cols, ids.rows, {},
+                          segmentation_);
+  }
+  if (options_.dark_regions)
+    dark_finder_.add_dark_regions(grey_, segmentation_);
+  times.segment = ms_since(stage);
+
+  stage = Clock::now();
+  objects_ = extractor_.extract(field_, segmentation_);
+  times.features = ms_since(stage);
+  return status_;
+}
+
+}  // namespace flowsteer::launch

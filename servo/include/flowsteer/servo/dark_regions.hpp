@@ -1,0 +1,37 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "flowsteer/servo/segmentation.hpp"
+
+namespace flowsteer::servo {
+
+struct DarkRegionOptions {
+  // A pixel is dark below this grey level (0–255): too dark for its flow to be trusted.
+  double luminance_threshold = 30.0;
+  // Dark regions smaller than this fraction of the image are dropped (MIG §5: noise, small
+  // shadows).
+  double min_area_fraction = 0.003;
+};
+
+// Dark regions (MIG 2019 §5): each connected set of dark pixels whose centroid lies in the lower
+// half of the image (the upper half is sky and far walls, not the way ahead) and that is large
+// enough becomes a region of kind dark, appended to `out`. Its pixels leave whatever region they
+// were in, since their flow is not to be trusted. `grey` is 8-bit with out's size.
+class DarkRegionFinder {
+ public:
+  explicit DarkRegionFinder(const DarkRegionOptions& options = {});
+
+  // Returns how many dark regions were added.
+  int add_dark_regions(const cv::Mat& grey, Segmentation& out);
+
+ private:
+  DarkRegionOptions options_;
+  cv::Mat dark_mask_;
+  cv::Mat component_labels_;
+  cv::Mat stats_;
+  cv::Mat centroids_;
+  std::vector<std::int32_t> region_of_component_;
+};
+
+}  // namespace flowsteer::servo

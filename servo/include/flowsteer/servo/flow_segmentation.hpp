@@ -1,0 +1,66 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include <opencv2/core.hpp>
+
+#include "flowsteer/servo/flow_field.hpp"
+#include "flowsteer/servo/segmentation.hpp"
+
+namespace flowsteer::servo {
+
+// How an agent splits its view into objects: by the renderer's object ids (semantic, MIG 2019),
+// or from the flow alone with Felzenszwalb–Huttenlocher graph segmentation (CGF §4), at full
+// resolution or, faster, on a copy of the flow reduced to at most fast_max_side_px per side.
+enum class SegmentationMethod { semantic, flow_graph, flow_graph_fast };
+
+std::string_view to_string(SegmentationMethod method);
+std::optional<SegmentationMethod> parse_segmentation_method(std::string_view name);
+// Every name parse_segmentation_method accepts, for messages.
+std::string segmentation_method_names();
+
+struct FlowSegmentationOptions {
+  // Flow is compared in pixels per reference_interval_s (one frame at 20 Hz): the units the
+  // graph's threshold k is set in, whatever the image size.
+  double reference_interval_s = 0.05;
+  // Felzenszwalb–Huttenlocher scale: larger k, larger regions.
+  double k = 4.0;
+  // Regions with fewer valid pixels than this fraction of the image are merged into a
+  // neighbour by the graph, or dropped.
+  double min_region_fraction = 0.002;
+  int fast_max_side_px = 96;
+};
+
+// Segmentation from the flow alone, which is what a real camera has. Regions are connected sets
+// of pixels whose derotated flow varies smoothly; pixels set in `excluded` (the ground) and
+// pixels without flow (NaN) belong to no region.
+class FlowSegmenter {
+ public:
+  // Throws std::invalid_argument for SegmentationMethod::semantic, which needs object ids.
+  explicit FlowSegmenter(SegmentationMethod method, const FlowSegmentationOptions& options = {});
+  ~FlowSegmenter();
+  FlowSegmenter(FlowSegmenter&&) noexcept;
+  FlowSegmenter& operator=(FlowSegmenter&&) noexcept;
+
+  // `excluded` is empty or has one entry per pixel. Reuses out's storage.
+  void segment(const FlowField& derotated, std::span<const std::uint8_t> excluded,
+               Segmentation& out);
+
+ private:
+  struct Graph;
+  SegmentationMethod method_;
+  FlowSegmentationOptions options_;
+  std::unique_ptr<Graph> graph_;
+  cv::Mat features_;
+  cv::Mat reduced_;
+  cv::Mat graph_labels_;
+  std::vector<std::int32_t> valid_counts_;
+  std::vector<std::int32_t> region_of_segment_;
+};
+
+}  // namespace flowsteer::servo

@@ -1,0 +1,58 @@
+#include "flowsteer/servo/dark_regions.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+namespace flowsteer::servo {
+
+DarkRegionFinder::DarkRegionFinder(const DarkRegionOptions& options) : options_(options) {
+  if (!(options.luminance_threshold > 0.0 && options.luminance_threshold <= 255.0) ||
+      !(options.min_area_fraction >= 0.0 && options.min_area_fraction < 1.0)) {
+    throw std::invalid_argument(
+        "DarkRegionFinder: luminance_threshold must be in (0, 255], min_area_fraction in [0, 1)");
+  }
+}
+
+int DarkRegionFinder::add_dark_regions(const cv::Mat& grey, Segmentation& out) {
+  if (grey.type() != CV_8UC1 || grey.cols != out.width || grey.rows != out.height) {
+    throw std::invalid_argument("DarkRegionFinder: expected an 8-bit grey image of " +
+                                std::to_string(out.width) + "x" + std::to_string(out.height) +
+                                ", got " + cv::typeToString(grey.type()) + " " +
+                                std::to_string(grey.cols) + "x" + std::to_string(grey.rows));
+  }
+  cv::threshold(grey, dark_mask_, options_.luminance_threshold - 1.0, 255.0, cv::THRESH_BINARY_INV);
+  const int components =
+      cv::connectedComponentsWithStats(dark_mask_, component_labels_, stats_, centroids_, 8);
+
+  const auto min_area_px = static_cast<int>(options_.min_area_fraction * grey.total());
+  const double middle_row = 0.5 * (grey.rows - 1);
+  region_of_component_.assign(static_cast<std::size_t>(components), Segmentation::kNoRegion);
+  int added = 0;
+  // Component 0 is the background (the pixels that are not dark).
+  for (int c = 1; c < components; ++c) {
+    if (stats_.at<int>(c, cv::CC_STAT_AREA) < min_area_px)
+      continue;
+    if (centroids_.at<double>(c, 1) < middle_row)
+      continue;
+    region_of_component_[static_cast<std::size_t>(c)] = out.region_count();
+    out.kinds.push_back(RegionKind::dark);
+    out.source_ids.push_back(-1);
+    ++added;
+  }
+  if (added == 0)
+    return 0;
+  for (int row = 0; row < grey.rows; ++row) {
+    const auto* component = component_labels_.ptr<std::int32_t>(row);
+    std::int32_t* labels = out.labels.data() + static_cast<std::size_t>(row) * grey.cols;
+    for (int col = 0; col < grey.cols; ++col) {
+      const std::int32_t region = region_of_component_[static_cast<std::size_t>(component[col])];
+      if (region != Segmentation::kNoRegion)
+        labels[col] = region;
+    }
+  }
+  return added;
+}
+
+}  // namespace flowsteer::servo
