@@ -217,18 +217,19 @@ std::string CalibrationReport::text() const {
 }
 
 std::vector<std::filesystem::path> expand_glob(const std::string& pattern) {
+  // Folders that do not exist or cannot be read match nothing, as in a shell.
   glob_t matches{};
-  const int status = ::glob(pattern.c_str(), GLOB_ERR, nullptr, &matches);
+  const int status = ::glob(pattern.c_str(), 0, nullptr, &matches);
   std::vector<std::filesystem::path> paths;
   for (std::size_t i = 0; status == 0 && i < matches.gl_pathc; ++i) {
     paths.emplace_back(matches.gl_pathv[i]);
   }
   ::globfree(&matches);
-  if (status == GLOB_NOMATCH || (status == 0 && paths.empty())) {
-    throw CalibrationError("no file matches '" + pattern + "'");
+  if (status != 0 && status != GLOB_NOMATCH) {
+    throw CalibrationError("cannot expand '" + pattern + "' (out of memory)");
   }
-  if (status != 0) {
-    throw CalibrationError("cannot list the files of '" + pattern + "' (a folder is unreadable)");
+  if (paths.empty()) {
+    throw CalibrationError("no file matches '" + pattern + "'");
   }
   std::sort(paths.begin(), paths.end());
   return paths;
