@@ -23,10 +23,11 @@ struct CaptureOptions {
   double min_pose_distance = 0.2;
 };
 
-// What the board's outline says about the view, each in about [-1, 1] or [0, 1]: where its
-// centre is in the image, how big it is and how it is tilted (how much longer one side is than
-// the opposite one, left/right and top/bottom). Views far apart in these numbers constrain
-// the calibration differently (the criterion of ROS's camera_calibration).
+// What the board's outline says about the view: where its centre is in the image (fractions of
+// the width and height), how big it is (square root of its share of the image) and how it is
+// tilted (twice how much longer one side is than the opposite one, left/right, top/bottom). Views
+// far apart in these numbers constrain the calibration differently (the criterion of ROS's
+// camera_calibration).
 using BoardPose = std::array<double, 5>;
 BoardPose pose_of(const BoardView& view, const BoardSpec& spec, cv::Size image_size);
 
