@@ -8,6 +8,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "flowsteer/launch/calibrate.hpp"
+#include "flowsteer/launch/camera_source.hpp"
 #include "flowsteer/launch/config_error.hpp"
 #include "flowsteer/launch/demo.hpp"
 #include "flowsteer/launch/demo_scene.hpp"
@@ -127,6 +129,67 @@ int main(int argc, char** argv) {
   eval_flow->add_option("--out", eval_out, "folder for flow_eval.csv and flow_eval.txt")
       ->capture_default_str();
 
+  CLI::App* calibrate =
+      app.add_subcommand("calibrate", "Measure a camera's intrinsics and its mount on the robot");
+  calibrate->require_subcommand(1);
+  const std::string board_help =
+      "calibration target: chessboard:COLSxROWS:SQUARE_M (inner corners) or "
+      "charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT (squares, e.g. DICT_4X4_50)";
+  const std::string model_help = "lens model: pinhole (plumb_bob), rational or fisheye";
+  flowsteer::launch::IntrinsicsCommand intrinsics_command;
+  CLI::App* intrinsics = calibrate->add_subcommand(
+      "intrinsics", "Calibrate from images of a board; write a ROS camera_info YAML");
+  intrinsics->add_option("--images", intrinsics_command.images, "images, a quoted glob")
+      ->required();
+  intrinsics->add_option("--board", intrinsics_command.board, board_help)->required();
+  intrinsics->add_option("--model", intrinsics_command.model, model_help)->capture_default_str();
+  intrinsics->add_option("--out", intrinsics_command.out, "camera_info file to write")
+      ->capture_default_str();
+  intrinsics->add_option("--camera-name", intrinsics_command.camera_name, "camera_name field")
+      ->capture_default_str();
+  intrinsics->add_option("--min-views", intrinsics_command.min_views, "fewest usable views")
+      ->check(CLI::Range(3, 1000))
+      ->capture_default_str();
+
+  flowsteer::launch::CaptureCommand capture_command;
+  std::string device;
+  CLI::App* capture = calibrate->add_subcommand(
+      "capture",
+      "Grab views of a board from a camera, keep the ones that add coverage or a new pose, "
+      "calibrate and write the views, camera_info.yaml and report.txt into a folder");
+  capture->add_option("--device", device, "camera device, e.g. /dev/video0")->required();
+  capture->add_option("--board", capture_command.board, board_help)->required();
+  capture->add_option("--out", capture_command.out_dir, "folder for the outputs")
+      ->capture_default_str();
+  capture->add_option("--model", capture_command.model, model_help)->capture_default_str();
+  capture->add_option("--views", capture_command.capture.views, "views to collect")
+      ->check(CLI::Range(3, 200))
+      ->capture_default_str();
+  capture
+      ->add_option("--max-frames", capture_command.capture.max_frames,
+                   "give up after this many frames")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  capture->add_option("--camera-name", capture_command.camera_name, "camera_name field")
+      ->capture_default_str();
+
+  flowsteer::launch::MountCommand mount_command;
+  CLI::App* mount = calibrate->add_subcommand(
+      "mount",
+      "Camera height, pitch and roll from one image of a board lying flat on the floor; write "
+      "the camera mount file");
+  mount->add_option("--intrinsics", mount_command.intrinsics, "the camera's camera_info YAML")
+      ->required();
+  mount->add_option("--image", mount_command.image, "image of the board on the floor")->required();
+  mount->add_option("--board", mount_command.board, board_help)->required();
+  mount->add_option("--out", mount_command.out, "camera mount file to write")
+      ->capture_default_str();
+  mount
+      ->add_option("--board-thickness", mount_command.board_thickness_m,
+                   "metres from the floor to the board's printed surface")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -139,6 +202,18 @@ int main(int argc, char** argv) {
         std::cout << s.name << std::string(s.name.size() < 18 ? 18 - s.name.size() : 1, ' ')
                   << s.description << "\n";
       }
+    }
+    if (*intrinsics) {
+      flowsteer::launch::run_calibrate_intrinsics(intrinsics_command, std::cout, std::cerr);
+    }
+    if (*capture) {
+      capture_command.min_views =
+          std::min(capture_command.min_views, capture_command.capture.views);
+      const auto source = flowsteer::launch::open_camera(device);
+      flowsteer::launch::run_calibrate_capture(capture_command, *source, std::cout, std::cerr);
+    }
+    if (*mount) {
+      flowsteer::launch::run_calibrate_mount(mount_command, std::cout, std::cerr);
     }
     if (*sim) {
       const int sources =
