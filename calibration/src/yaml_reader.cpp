@@ -1,8 +1,8 @@
-#include "yaml_reader.hpp"
+#include "flowsteer/calibration/yaml_reader.hpp"
 
 #include <fstream>
 
-namespace flowsteer::launch {
+namespace flowsteer::calibration {
 
 YAML::Node load_yaml(const std::string& text, const std::string& source_name) {
   try {
@@ -25,4 +25,4 @@ std::string read_text_file(const std::string& path, const char* what) {
   return text.str();
 }
 
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::calibration

@@ -1,0 +1,167 @@
+#pragma once
+
+#include <cmath>
+#include <initializer_list>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+#include <Eigen/Core>
+
+#include "flowsteer/calibration/config_error.hpp"
+
+namespace flowsteer::calibration {
+
+// Reads typed fields out of YAML nodes and reports problems at the node's position, under a
+// dotted field path such as "objects[2].radius_m".
+class YamlReader {
+ public:
+  explicit YamlReader(std::string source) : source_(std::move(source)) {}
+
+  // A node that is not there (a missing key) or the null document of an empty file has no
+  // position: the error then points at line 1.
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& field,
+                         const std::string& message) const {
+    const YAML::Mark mark = node.IsDefined() && node.Mark().line >= 0 ? node.Mark() : YAML::Mark();
+    throw ConfigError(source_, mark.line + 1, mark.column + 1, field, message);
+  }
+
+  // Fails on any key of `map` that is not in `allowed`, so that typos do not pass silently.
+  void only_keys(const YAML::Node& map, const std::string& field,
+                 std::initializer_list<const char*> allowed) const {
+    if (!map.IsMap()) {
+      fail(map, field, "expected a mapping");
+    }
+    const std::set<std::string> names(allowed.begin(), allowed.end());
+    for (const auto& entry : map) {
+      const auto key = entry.first.as<std::string>();
+      if (!names.contains(key)) {
+        std::string list;
+        for (const char* name : allowed) {
+          list += list.empty() ? name : std::string(", ") + name;
+        }
+        fail(entry.first, join(field, key), "unknown key (expected one of: " + list + ")");
+      }
+    }
+  }
+
+  double number(const YAML::Node& map, const std::string& field, const char* key,
+                double fallback) const {
+    const YAML::Node node = map[key];
+    if (!node) {
+      return fallback;
+    }
+    return number(node, join(field, key));
+  }
+
+  double number(const YAML::Node& node, const std::string& field) const {
+    double value = 0.0;
+    if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value)) {
+      fail(node, field, "expected a finite number, got '" + text(node) + "'");
+    }
+    return value;
+  }
+
+  double positive(const YAML::Node& map, const std::string& field, const char* key,
+                  double fallback) const {
+    const double value = number(map, field, key, fallback);
+    if (!(value > 0.0)) {
+      fail(map[key] ? map[key] : map, join(field, key), "must be positive, got " + format(value));
+    }
+    return value;
+  }
+
+  double non_negative(const YAML::Node& map, const std::string& field, const char* key,
+                      double fallback) const {
+    const double value = number(map, field, key, fallback);
+    if (value < 0.0) {
+      fail(map[key], join(field, key), "must be >= 0, got " + format(value));
+    }
+    return value;
+  }
+
+  int integer(const YAML::Node& node, const std::string& field, int min_value) const {
+    int value = 0;
+    if (!node.IsScalar() || !YAML::convert<int>::decode(node, value)) {
+      fail(node, field, "expected an integer, got '" + text(node) + "'");
+    }
+    if (value < min_value) {
+      fail(node, field,
+           "must be at least " + std::to_string(min_value) + ", got " + std::to_string(value));
+    }
+    return value;
+  }
+
+  Eigen::Vector2d pair(const YAML::Node& map, const std::string& field, const char* key,
+                       const Eigen::Vector2d& fallback) const {
+    const YAML::Node node = map[key];
+    if (!node) {
+      return fallback;
+    }
+    if (!node.IsSequence() || node.size() != 2) {
+      fail(node, join(field, key), "expected a pair [x, y]");
+    }
+    return {number(node[0], join(field, key) + "[0]"), number(node[1], join(field, key) + "[1]")};
+  }
+
+  std::string word(const YAML::Node& map, const std::string& field, const char* key,
+                   std::initializer_list<const char*> allowed, const char* fallback) const {
+    const YAML::Node node = map[key];
+    if (!node) {
+      return fallback;
+    }
+    const std::string value = node.IsScalar() ? node.as<std::string>() : "";
+    for (const char* a : allowed) {
+      if (value == a) {
+        return value;
+      }
+    }
+    std::string list;
+    for (const char* a : allowed) {
+      list += list.empty() ? a : std::string(", ") + a;
+    }
+    fail(node, join(field, key), "expected one of: " + list + "; got '" + text(node) + "'");
+  }
+
+  bool boolean(const YAML::Node& map, const std::string& field, const char* key,
+               bool fallback) const {
+    const YAML::Node node = map[key];
+    if (!node) {
+      return fallback;
+    }
+    bool value = false;
+    if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value)) {
+      fail(node, join(field, key), "expected true or false, got '" + text(node) + "'");
+    }
+    return value;
+  }
+
+  static std::string join(const std::string& field, const std::string& key) {
+    return field.empty() ? key : field + "." + key;
+  }
+
+ private:
+  static std::string text(const YAML::Node& node) {
+    if (node.IsScalar()) {
+      return node.Scalar();
+    }
+    return node.IsSequence() ? "a sequence" : node.IsMap() ? "a mapping" : "nothing";
+  }
+  static std::string format(double value) {
+    std::ostringstream s;
+    s << value;
+    return s.str();
+  }
+
+  std::string source_;
+};
+
+// Parses YAML text, turning a syntax error into a ConfigError at its line and column.
+YAML::Node load_yaml(const std::string& text, const std::string& source_name);
+
+// Reads a whole file; ConfigError when it cannot be opened or read.
+std::string read_text_file(const std::string& path, const char* what);
+
+}  // namespace flowsteer::calibration

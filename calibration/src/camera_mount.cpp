@@ -1,0 +1,79 @@
+#include "flowsteer/calibration/camera_mount.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "flowsteer/calibration/atomic_file.hpp"
+#include "flowsteer/calibration/yaml_reader.hpp"
+
+namespace flowsteer::calibration {
+
+namespace {
+
+std::string number_text(double value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+double degrees(double rad) {
+  return rad * 180.0 / std::numbers::pi;
+}
+
+}  // namespace
+
+MountCalibration read_camera_mount(const std::filesystem::path& path) {
+  const std::string source = path.string();
+  const YAML::Node root = load_yaml(read_text_file(source, "camera mount file"), source);
+  const YamlReader reader(source);
+  if (!root.IsMap()) {
+    reader.fail(root, "", "expected a camera mount mapping (height_m, pitch_rad, roll_rad)");
+  }
+  reader.only_keys(root, "", {"height_m", "pitch_rad", "roll_rad"});
+  for (const char* key : {"height_m", "pitch_rad"}) {
+    if (!root[key]) {
+      reader.fail(root, key, "missing (a camera mount file needs height_m and pitch_rad)");
+    }
+  }
+  MountCalibration m;
+  m.mount.height_m = reader.positive(root, "", "height_m", 0.0);
+  m.mount.pitch_rad = reader.number(root, "", "pitch_rad", 0.0);
+  m.roll_rad = reader.number(root, "", "roll_rad", 0.0);
+  const double limit = 0.5 * std::numbers::pi;
+  if (!(std::abs(m.mount.pitch_rad) < limit)) {
+    reader.fail(root["pitch_rad"], "pitch_rad",
+                "must be within (-pi/2, pi/2), got " + number_text(m.mount.pitch_rad));
+  }
+  if (!(std::abs(m.roll_rad) < limit)) {
+    reader.fail(root["roll_rad"], "roll_rad",
+                "must be within (-pi/2, pi/2), got " + number_text(m.roll_rad));
+  }
+  return m;
+}
+
+std::string camera_mount_yaml(const MountCalibration& m) {
+  m.mount.validate();
+  if (!std::isfinite(m.roll_rad)) {
+    throw std::invalid_argument("camera mount: roll_rad is not finite");
+  }
+  std::ostringstream out;
+  out << "# Camera mount above a flat floor (flowsteer calibrate mount).\n"
+      << "# height_m: optical centre above the floor; pitch_rad: optical axis below the horizon,\n"
+      << "# positive looks down; roll_rad: about the optical axis, positive turns the image's\n"
+      << "# right side down.\n"
+      << "height_m: " << number_text(m.mount.height_m) << "\n"
+      << "pitch_rad: " << number_text(m.mount.pitch_rad) << "  # "
+      << number_text(std::round(degrees(m.mount.pitch_rad) * 100.0) / 100.0) << " deg\n"
+      << "roll_rad: " << number_text(m.roll_rad) << "  # "
+      << number_text(std::round(degrees(m.roll_rad) * 100.0) / 100.0) << " deg\n";
+  return out.str();
+}
+
+void write_camera_mount(const std::filesystem::path& path, const MountCalibration& mount) {
+  write_file_atomically(path, camera_mount_yaml(mount));
+}
+
+}  // namespace flowsteer::calibration
