@@ -184,8 +184,8 @@ V4l2Camera::V4l2Camera(const V4l2Options& options)
   open_device();
   negotiate(options);
   set_frame_rate(options.frame_rate_hz);
-  intrinsics_ = servo::CameraIntrinsics::from_horizontal_fov(width_px_, height_px_,
-                                                             options.horizontal_fov_rad);
+  lens_.emplace(options.lens, width_px_, height_px_, "camera " + device_);
+  intrinsics_ = lens_->intrinsics();
   map_buffers(options.buffer_count);
   int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   checked_ioctl(fd_.get(), VIDIOC_STREAMON, &type, "VIDIOC_STREAMON", device_);
@@ -453,13 +453,13 @@ ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
                              1e-6 * static_cast<double>(buffer.timestamp.tv_usec);
     if (!corrupt) {
       try {
-        convert(buffers_[buffer.index].bytes(buffer.bytesused), frame.image);
+        convert(buffers_[buffer.index].bytes(buffer.bytesused), converted_);
       } catch (...) {
         try_ioctl(fd_.get(), VIDIOC_QBUF, &buffer);
         throw;
       }
     }
-    // The frame is converted into the caller's image, so the buffer goes back at once.
+    // The frame is converted into the camera's own image, so the buffer goes back at once.
     checked_ioctl(fd_.get(), VIDIOC_QBUF, &buffer, "VIDIOC_QBUF", device_);
     if (corrupt) {
       ++dropped_frames_;
@@ -467,6 +467,7 @@ ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
     }
     driver_timestamps_ = monotonic;
     frame.timestamp_s = monotonic ? stamped_s : dequeued_s;
+    frame.image = lens_->apply(converted_);
     frame.sequence = sequence_++;
     frame.sim.reset();
     return ReadStatus::ok;

@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "flowsteer/camera_io/frame_source.hpp"
+#include "flowsteer/camera_io/lens.hpp"
 
 struct v4lconvert_data;
 
@@ -38,8 +39,8 @@ struct V4l2Options {
   // Buffers the driver fills while the loop works on one: at least 2. More rides out longer
   // stalls of the loop before the driver has to drop frames.
   int buffer_count = 4;
-  // Horizontal field of view for the intrinsics when no calibration is given.
-  double horizontal_fov_rad = 1.0472;
+  // The calibration for this size, or the field of view to assume without one.
+  LensOptions lens;
 };
 
 // A V4L2 video capture device (a USB webcam, a CSI bridge with a V4L2 driver, vivid) streaming
@@ -57,11 +58,11 @@ class V4l2Camera final : public FrameSource {
   V4l2Camera& operator=(const V4l2Camera&) = delete;
 
   const servo::CameraIntrinsics& intrinsics() const override { return intrinsics_; }
-  // Waits up to timeout_s for the next filled buffer and converts it to BGR into frame.image
-  // (reusing its memory when the size matches). Timestamps are the driver's when it stamps
-  // buffers with the monotonic clock (driver_timestamps()), else the time of dequeue.
-  // Buffers the driver flags as corrupt are returned to it, counted as dropped, and the wait
-  // goes on. Throws std::runtime_error once stop() has been called.
+  // Waits up to timeout_s for the next filled buffer, converts it to BGR and undistorts it;
+  // frame.image shares the camera's buffer for that, valid until the next read(). Timestamps are
+  // the driver's when it stamps buffers with the monotonic clock (driver_timestamps()), else the
+  // time of dequeue. Buffers the driver flags as corrupt are returned to it, counted as dropped,
+  // and the wait goes on. Throws std::runtime_error once stop() has been called.
   ReadStatus read(Frame& frame, double timeout_s) override;
 
   // STREAMOFF, unmap, release the buffers and close the device. Throws if STREAMOFF or the
@@ -139,7 +140,9 @@ class V4l2Camera final : public FrameSource {
   // Only for MJPEG, whose decoding (including the Huffman tables many webcams leave out) is
   // libv4lconvert's.
   std::unique_ptr<v4lconvert_data, void (*)(v4lconvert_data*)> converter_;
+  std::optional<Lens> lens_;
   servo::CameraIntrinsics intrinsics_;
+  cv::Mat converted_;  // BGR, before undistortion
   bool driver_timestamps_ = false;
   bool have_sequence_ = false;
   std::uint32_t last_driver_sequence_ = 0;
