@@ -22,6 +22,9 @@ struct LibcameraOptions {
   LensOptions lens;
 };
 
+// The header is there with or without libcamera; the class is defined only where
+// FLOWSTEER_HAVE_LIBCAMERA is.
+//
 // A camera through libcamera (Raspberry Pi cameras, UVC webcams and the other pipelines
 // libcamera handles), built only when pkg-config finds libcamera. The stream is asked for in
 // RGB888 (BGR in memory, OpenCV's order), else XRGB8888 or YUYV, and converted to BGR.
