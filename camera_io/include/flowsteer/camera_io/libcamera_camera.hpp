@@ -44,7 +44,8 @@ class LibcameraCamera final : public FrameSource {
   std::uint64_t dropped_frames() const;
   const std::string& camera_id() const;
 
-  // The ids of the cameras libcamera finds.
+  // The ids of the cameras libcamera finds. libcamera allows one camera manager per process:
+  // not while a LibcameraCamera exists.
   static std::vector<std::string> list_cameras();
 
  private:
