@@ -1,14 +1,15 @@
 #include "flowsteer/launch/camera_source.hpp"
 
-#include <stdexcept>
+#include "flowsteer/camera_io/v4l2_camera.hpp"
 
 namespace flowsteer::launch {
 
 std::unique_ptr<camera_io::FrameSource> open_camera(const std::string& device) {
-  // camera_io has no V4L2 source yet (issue "camera_io and the robot loop"); it plugs in here.
-  throw std::runtime_error("cannot open " + device +
-                           ": V4L2 capture not built (camera_io has no V4L2 source yet); "
-                           "record images and use flowsteer calibrate intrinsics --images");
+  // No calibration given: the lens is an ideal pinhole and the images stay as the camera took
+  // them, which is what calibration needs.
+  camera_io::V4l2Options options;
+  options.device = device;
+  return std::make_unique<camera_io::V4l2Camera>(options);
 }
 
 }  // namespace flowsteer::launch

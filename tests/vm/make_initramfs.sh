@@ -16,6 +16,8 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 
+# modprobe prints absolute paths; a relative KERNEL_ROOT would not be stripped from them.
+kroot=$(cd "$kroot" && pwd)
 release=$(ls "$kroot/lib/modules")
 busybox=/bin/busybox
 # ldd fails on a static binary; a dynamic busybox would need its libraries in the image too.

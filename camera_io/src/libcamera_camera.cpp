@@ -1,0 +1,308 @@
+#include "flowsteer/camera_io/libcamera_camera.hpp"
+
+#include <sys/mman.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstring>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+
+#include <libcamera/libcamera.h>
+#include <opencv2/imgproc.hpp>
+
+namespace flowsteer::camera_io {
+namespace {
+
+// One buffer's plane mapped into memory; mmap wants a page-aligned offset, so the mapping may
+// start before the plane.
+struct PlaneMapping {
+  void* base = MAP_FAILED;
+  std::size_t mapped_length = 0;
+  const std::uint8_t* data = nullptr;
+  std::size_t length = 0;
+};
+
+double monotonic_now_s() {
+  timespec now{};
+  ::clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
+}
+
+}  // namespace
+
+struct LibcameraCamera::Impl {
+  std::string name;  // "libcamera camera <id>", for messages
+  libcamera::CameraManager manager;
+  std::shared_ptr<libcamera::Camera> camera;
+  bool acquired = false;
+  bool started = false;
+  std::unique_ptr<libcamera::CameraConfiguration> config;
+  libcamera::Stream* stream = nullptr;
+  libcamera::PixelFormat format;
+  unsigned int stride = 0;
+  int width_px = 0;
+  int height_px = 0;
+  std::unique_ptr<libcamera::FrameBufferAllocator> allocator;
+  std::vector<std::unique_ptr<libcamera::Request>> requests;
+  std::vector<PlaneMapping> mappings;  // by the buffer's cookie
+
+  // Completed requests, handed from libcamera's thread to read(); capacity reserved up front.
+  std::mutex mutex;
+  std::condition_variable completed_cv;
+  std::vector<libcamera::Request*> completed;
+
+  std::optional<Lens> lens;
+  cv::Mat converted;
+  std::optional<std::uint32_t> last_sequence;
+  std::uint64_t dropped = 0;
+  std::uint64_t sequence = 0;
+
+  void on_complete(libcamera::Request* request) {
+    if (request->status() == libcamera::Request::RequestCancelled) {
+      return;  // stop() cancels what is queued
+    }
+    {
+      std::lock_guard lock(mutex);
+      completed.push_back(request);
+    }
+    completed_cv.notify_one();
+  }
+
+  ~Impl() {
+    if (started) {
+      camera->stop();
+    }
+    if (camera) {
+      camera->requestCompleted.disconnect(this, &Impl::on_complete);
+    }
+    for (const PlaneMapping& m : mappings) {
+      if (m.base != MAP_FAILED) {
+        ::munmap(m.base, m.mapped_length);
+      }
+    }
+    requests.clear();
+    allocator.reset();
+    if (acquired) {
+      camera->release();
+    }
+    camera.reset();
+    manager.stop();
+  }
+};
+
+LibcameraCamera::LibcameraCamera(const LibcameraOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& c = *impl_;
+  if (options.buffer_count < 2 || options.width_px <= 0 || options.height_px <= 0 ||
+      !(options.frame_rate_hz >= 0.0)) {
+    throw std::invalid_argument(
+        "libcamera: need a positive size, a frame rate >= 0 and at least 2 buffers");
+  }
+  if (const int error = c.manager.start(); error != 0) {
+    throw std::runtime_error("libcamera: the camera manager did not start: " +
+                             std::string(std::strerror(-error)));
+  }
+  const auto cameras = c.manager.cameras();
+  if (cameras.empty()) {
+    throw std::runtime_error(
+        "libcamera: no camera found (libcamera lists the cameras its pipeline handlers support; "
+        "a plain V4L2 device is better opened with the v4l2 camera type)");
+  }
+  if (options.camera_id.empty()) {
+    c.camera = cameras.front();
+  } else {
+    c.camera = c.manager.get(options.camera_id);
+    if (!c.camera) {
+      std::string ids;
+      for (const auto& camera : cameras) {
+        ids += (ids.empty() ? "" : ", ") + camera->id();
+      }
+      throw std::runtime_error("libcamera: no camera with id '" + options.camera_id +
+                               "' (found: " + ids + ")");
+    }
+  }
+  c.name = "libcamera camera " + c.camera->id();
+  if (const int error = c.camera->acquire(); error != 0) {
+    throw std::runtime_error(
+        c.name + ": cannot acquire it (in use by another program?): " + std::strerror(-error));
+  }
+  c.acquired = true;
+
+  c.config = c.camera->generateConfiguration({libcamera::StreamRole::VideoRecording});
+  if (!c.config || c.config->size() != 1) {
+    throw std::runtime_error(c.name + ": offers no video stream");
+  }
+  libcamera::StreamConfiguration& stream_config = c.config->at(0);
+  stream_config.size = {static_cast<unsigned int>(options.width_px),
+                        static_cast<unsigned int>(options.height_px)};
+  stream_config.bufferCount = static_cast<unsigned int>(options.buffer_count);
+  const std::array<libcamera::PixelFormat, 3> wanted = {
+      libcamera::formats::RGB888, libcamera::formats::XRGB8888, libcamera::formats::YUYV};
+  bool format_ok = false;
+  for (const libcamera::PixelFormat& format : wanted) {
+    stream_config.pixelFormat = format;
+    if (c.config->validate() != libcamera::CameraConfiguration::Invalid &&
+        stream_config.pixelFormat == format) {
+      format_ok = true;
+      break;
+    }
+  }
+  if (!format_ok) {
+    throw std::runtime_error(c.name + ": offers none of RGB888, XRGB8888, YUYV (it offers " +
+                             stream_config.toString() + ")");
+  }
+  if (stream_config.size.width != static_cast<unsigned int>(options.width_px) ||
+      stream_config.size.height != static_cast<unsigned int>(options.height_px)) {
+    throw std::runtime_error(c.name + ": does not offer " + std::to_string(options.width_px) + "x" +
+                             std::to_string(options.height_px) + ": it chose " +
+                             stream_config.size.toString());
+  }
+  if (const int error = c.camera->configure(c.config.get()); error != 0) {
+    throw std::runtime_error(c.name + ": configure failed: " + std::strerror(-error));
+  }
+  c.stream = stream_config.stream();
+  c.format = stream_config.pixelFormat;
+  c.stride = stream_config.stride;
+  c.width_px = static_cast<int>(stream_config.size.width);
+  c.height_px = static_cast<int>(stream_config.size.height);
+  c.lens.emplace(options.lens, c.width_px, c.height_px, c.name);
+
+  c.allocator = std::make_unique<libcamera::FrameBufferAllocator>(c.camera);
+  if (c.allocator->allocate(c.stream) < 0) {
+    throw std::runtime_error(c.name + ": cannot allocate frame buffers");
+  }
+  const long page = ::sysconf(_SC_PAGESIZE);
+  const auto& buffers = c.allocator->buffers(c.stream);
+  for (std::size_t i = 0; i < buffers.size(); ++i) {
+    libcamera::FrameBuffer* buffer = buffers[i].get();
+    buffer->setCookie(i);
+    const libcamera::FrameBuffer::Plane& plane = buffer->planes().front();
+    PlaneMapping m;
+    const std::size_t aligned = plane.offset - plane.offset % static_cast<std::size_t>(page);
+    m.mapped_length = plane.offset - aligned + plane.length;
+    m.base = ::mmap(nullptr, m.mapped_length, PROT_READ, MAP_SHARED, plane.fd.get(),
+                    static_cast<off_t>(aligned));
+    if (m.base == MAP_FAILED) {
+      throw std::runtime_error(c.name + ": mmap of a frame buffer failed: " + std::strerror(errno));
+    }
+    m.data = static_cast<const std::uint8_t*>(m.base) + (plane.offset - aligned);
+    m.length = plane.length;
+    c.mappings.push_back(m);
+    std::unique_ptr<libcamera::Request> request = c.camera->createRequest(i);
+    if (!request || request->addBuffer(c.stream, buffer) != 0) {
+      throw std::runtime_error(c.name + ": cannot create a capture request");
+    }
+    c.requests.push_back(std::move(request));
+  }
+  c.completed.reserve(c.requests.size());
+  c.camera->requestCompleted.connect(&c, &Impl::on_complete);
+
+  libcamera::ControlList controls(c.camera->controls());
+  if (options.frame_rate_hz > 0.0 &&
+      c.camera->controls().count(&libcamera::controls::FrameDurationLimits) != 0) {
+    const auto period_us = static_cast<std::int64_t>(std::lround(1e6 / options.frame_rate_hz));
+    const std::array<std::int64_t, 2> limits = {period_us, period_us};
+    controls.set(libcamera::controls::FrameDurationLimits,
+                 libcamera::Span<const std::int64_t, 2>(limits));
+  }
+  if (const int error = c.camera->start(&controls); error != 0) {
+    throw std::runtime_error(c.name + ": start failed: " + std::strerror(-error));
+  }
+  c.started = true;
+  for (const auto& request : c.requests) {
+    if (const int error = c.camera->queueRequest(request.get()); error != 0) {
+      throw std::runtime_error(c.name + ": queueing a request failed: " + std::strerror(-error));
+    }
+  }
+}
+
+LibcameraCamera::~LibcameraCamera() = default;
+
+const servo::CameraIntrinsics& LibcameraCamera::intrinsics() const {
+  return impl_->lens->intrinsics();
+}
+
+std::uint64_t LibcameraCamera::dropped_frames() const {
+  return impl_->dropped;
+}
+
+const std::string& LibcameraCamera::camera_id() const {
+  return impl_->camera->id();
+}
+
+std::vector<std::string> LibcameraCamera::list_cameras() {
+  libcamera::CameraManager manager;
+  if (const int error = manager.start(); error != 0) {
+    throw std::runtime_error("libcamera: the camera manager did not start: " +
+                             std::string(std::strerror(-error)));
+  }
+  std::vector<std::string> ids;
+  for (const auto& camera : manager.cameras()) {
+    ids.push_back(camera->id());
+  }
+  manager.stop();
+  return ids;
+}
+
+ReadStatus LibcameraCamera::read(Frame& frame, double timeout_s) {
+  Impl& c = *impl_;
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(std::max(0.0, timeout_s));
+  for (;;) {
+    libcamera::Request* request = nullptr;
+    {
+      std::unique_lock lock(c.mutex);
+      if (!c.completed_cv.wait_until(lock, deadline, [&] { return !c.completed.empty(); })) {
+        return ReadStatus::timeout;
+      }
+      request = c.completed.front();
+      c.completed.erase(c.completed.begin());
+    }
+    const libcamera::FrameBuffer* buffer = request->findBuffer(c.stream);
+    const libcamera::FrameMetadata& metadata = buffer->metadata();
+    if (c.last_sequence && metadata.sequence > *c.last_sequence + 1) {
+      c.dropped += metadata.sequence - *c.last_sequence - 1;
+    }
+    c.last_sequence = metadata.sequence;
+    const bool good = request->status() == libcamera::Request::RequestComplete &&
+                      metadata.status == libcamera::FrameMetadata::FrameSuccess;
+    if (good) {
+      const PlaneMapping& m = c.mappings.at(buffer->cookie());
+      auto* data = const_cast<std::uint8_t*>(m.data);  // cv::Mat wants a mutable pointer
+      if (c.format == libcamera::formats::RGB888) {
+        cv::Mat(c.height_px, c.width_px, CV_8UC3, data, c.stride).copyTo(c.converted);
+      } else if (c.format == libcamera::formats::XRGB8888) {
+        cv::cvtColor(cv::Mat(c.height_px, c.width_px, CV_8UC4, data, c.stride), c.converted,
+                     cv::COLOR_BGRA2BGR);
+      } else {
+        cv::cvtColor(cv::Mat(c.height_px, c.width_px, CV_8UC2, data, c.stride), c.converted,
+                     cv::COLOR_YUV2BGR_YUYV);
+      }
+    } else {
+      ++c.dropped;
+    }
+    const std::uint64_t timestamp_ns = metadata.timestamp;
+    request->reuse(libcamera::Request::ReuseBuffers);
+    if (const int error = c.camera->queueRequest(request); error != 0) {
+      throw std::runtime_error(c.name + ": queueing a request failed: " + std::strerror(-error));
+    }
+    if (!good) {
+      continue;
+    }
+    // libcamera stamps frames with the sensor's (monotonic) start-of-exposure time.
+    frame.timestamp_s =
+        timestamp_ns != 0 ? 1e-9 * static_cast<double>(timestamp_ns) : monotonic_now_s();
+    frame.image = c.lens->apply(c.converted);
+    frame.sequence = c.sequence++;
+    frame.sim.reset();
+    return ReadStatus::ok;
+  }
+}
+
+}  // namespace flowsteer::camera_io

@@ -1,0 +1,503 @@
+#include "flowsteer/camera_io/v4l2_camera.hpp"
+
+#include <fcntl.h>
+#include <linux/videodev2.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <libv4lconvert.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+namespace flowsteer::camera_io {
+namespace {
+
+std::uint32_t to_fourcc(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::yuyv:
+      return V4L2_PIX_FMT_YUYV;
+    case PixelFormat::mjpeg:
+      return V4L2_PIX_FMT_MJPEG;
+    case PixelFormat::grey:
+      return V4L2_PIX_FMT_GREY;
+  }
+  throw std::invalid_argument("unknown pixel format");
+}
+
+std::string fourcc_text(std::uint32_t fourcc) {
+  // Bit 31 marks the big-endian variant of a format (as v4l2-ctl prints it, "-BE").
+  const bool big_endian = (fourcc & (1u << 31)) != 0;
+  std::string text;
+  for (int i = 0; i < 4; ++i) {
+    const char c = static_cast<char>((fourcc >> (8 * i)) & (i == 3 ? 0x7f : 0xff));
+    if (c != ' ') {
+      text += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+    }
+  }
+  return big_endian ? text + "-BE" : text;
+}
+
+// The driver fills these fixed-size char arrays with a NUL-terminated string, but a full one
+// has no terminator.
+template <std::size_t N>
+std::string fixed_text(const std::uint8_t (&chars)[N]) {
+  const auto* begin = reinterpret_cast<const char*>(chars);
+  return std::string(begin, strnlen(begin, N));
+}
+
+double monotonic_now_s() {
+  timespec now{};
+  ::clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
+}
+
+[[noreturn]] void throw_errno(const std::string& device, const char* what, int error) {
+  throw std::runtime_error(std::string(what) + " on " + device +
+                           " failed: " + std::strerror(error));
+}
+
+// ioctl, retried when a signal interrupts it. Returns false with errno set on failure.
+bool try_ioctl(int fd, unsigned long request, void* arg) {
+  int result;
+  do {
+    result = ::ioctl(fd, request, arg);
+  } while (result == -1 && errno == EINTR);
+  return result != -1;
+}
+
+void checked_ioctl(int fd, unsigned long request, void* arg, const char* name,
+                   const std::string& device) {
+  if (!try_ioctl(fd, request, arg)) {
+    throw_errno(device, name, errno);
+  }
+}
+
+std::string capability_names(std::uint32_t caps) {
+  static constexpr std::pair<std::uint32_t, const char*> kNames[] = {
+      {V4L2_CAP_VIDEO_CAPTURE, "video capture"},
+      {V4L2_CAP_VIDEO_CAPTURE_MPLANE, "multi-planar video capture"},
+      {V4L2_CAP_VIDEO_OUTPUT, "video output"},
+      {V4L2_CAP_VIDEO_OUTPUT_MPLANE, "multi-planar video output"},
+      {V4L2_CAP_VIDEO_M2M, "memory-to-memory"},
+      {V4L2_CAP_VIDEO_M2M_MPLANE, "multi-planar memory-to-memory"},
+      {V4L2_CAP_VBI_CAPTURE, "VBI capture"},
+      {V4L2_CAP_VBI_OUTPUT, "VBI output"},
+      {V4L2_CAP_SLICED_VBI_CAPTURE, "sliced VBI capture"},
+      {V4L2_CAP_SLICED_VBI_OUTPUT, "sliced VBI output"},
+      {V4L2_CAP_RADIO, "radio"},
+      {V4L2_CAP_MODULATOR, "modulator"},
+      {V4L2_CAP_SDR_CAPTURE, "SDR capture"},
+      {V4L2_CAP_SDR_OUTPUT, "SDR output"},
+      {V4L2_CAP_META_CAPTURE, "metadata capture"},
+      {V4L2_CAP_META_OUTPUT, "metadata output"},
+      {V4L2_CAP_TOUCH, "touch"},
+  };
+  std::string names;
+  for (const auto& [bit, name] : kNames) {
+    if ((caps & bit) != 0) {
+      names += names.empty() ? name : std::string(", ") + name;
+    }
+  }
+  return names.empty() ? "nothing V4L2 streams" : names;
+}
+
+}  // namespace
+
+std::string_view fourcc_name(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::yuyv:
+      return "YUYV";
+    case PixelFormat::mjpeg:
+      return "MJPG";
+    case PixelFormat::grey:
+      return "GREY";
+  }
+  return "?";
+}
+
+std::optional<PixelFormat> pixel_format_from_name(std::string_view name) {
+  if (name == "YUYV") {
+    return PixelFormat::yuyv;
+  }
+  if (name == "MJPG" || name == "MJPEG") {
+    return PixelFormat::mjpeg;
+  }
+  if (name == "GREY") {
+    return PixelFormat::grey;
+  }
+  return std::nullopt;
+}
+
+V4l2Camera::DeviceFd::~DeviceFd() {
+  if (fd_ >= 0) {
+    // The descriptor is gone even when close() reports an error; retrying could close another.
+    ::close(fd_);
+  }
+}
+
+V4l2Camera::DeviceFd& V4l2Camera::DeviceFd::operator=(DeviceFd&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) {
+      ::close(fd_);
+    }
+    fd_ = std::exchange(other.fd_, -1);
+  }
+  return *this;
+}
+
+V4l2Camera::Mapping::~Mapping() {
+  if (data_ != nullptr) {
+    ::munmap(data_, length_);
+  }
+}
+
+std::span<const std::uint8_t> V4l2Camera::Mapping::bytes(std::size_t bytes_used) const {
+  return {static_cast<const std::uint8_t*>(data_), std::min(bytes_used, length_)};
+}
+
+V4l2Camera::V4l2Camera(const V4l2Options& options)
+    : device_(options.device), converter_(nullptr, v4lconvert_destroy) {
+  if (options.buffer_count < 2) {
+    throw std::invalid_argument(device_ + ": buffer_count must be at least 2, got " +
+                                std::to_string(options.buffer_count));
+  }
+  if ((options.width_px == 0) != (options.height_px == 0) || options.width_px < 0 ||
+      options.height_px < 0) {
+    throw std::invalid_argument(
+        device_ + ": width and height must both be positive or both 0, got " +
+        std::to_string(options.width_px) + "x" + std::to_string(options.height_px));
+  }
+  if (!(options.frame_rate_hz >= 0.0) || !std::isfinite(options.frame_rate_hz)) {
+    throw std::invalid_argument(device_ + ": frame rate must be >= 0 Hz");
+  }
+  open_device();
+  negotiate(options);
+  set_frame_rate(options.frame_rate_hz);
+  lens_.emplace(options.lens, width_px_, height_px_, "camera " + device_);
+  intrinsics_ = lens_->intrinsics();
+  map_buffers(options.buffer_count);
+  int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  checked_ioctl(fd_.get(), VIDIOC_STREAMON, &type, "VIDIOC_STREAMON", device_);
+  streaming_ = true;
+}
+
+V4l2Camera::~V4l2Camera() {
+  if (streaming_) {
+    int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    try_ioctl(fd_.get(), VIDIOC_STREAMOFF, &type);
+  }
+  // The members unmap the buffers and then close the device, which frees them in the driver.
+}
+
+void V4l2Camera::open_device() {
+  // Non-blocking: read() waits in poll() with its own timeout, never in VIDIOC_DQBUF.
+  const int fd = ::open(device_.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const int error = errno;
+    throw std::runtime_error("cannot open camera " + device_ + ": " + std::strerror(error));
+  }
+  fd_ = DeviceFd(fd);
+  v4l2_capability cap{};
+  if (!try_ioctl(fd, VIDIOC_QUERYCAP, &cap)) {
+    const int error = errno;
+    if (error == ENOTTY || error == EINVAL) {
+      throw std::runtime_error(
+          device_ + " is not a V4L2 device (VIDIOC_QUERYCAP failed: " + std::strerror(error) + ")");
+    }
+    throw_errno(device_, "VIDIOC_QUERYCAP", error);
+  }
+  driver_ = fixed_text(cap.driver);
+  card_ = fixed_text(cap.card);
+  // capabilities covers every node of the physical device; device_caps is this node's.
+  const std::uint32_t caps =
+      (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
+  if ((caps & V4L2_CAP_VIDEO_CAPTURE) == 0) {
+    throw std::runtime_error(
+        device_ + " (" + driver_ + ", " + card_ + ") is not a video capture device: it offers " +
+        capability_names(caps) +
+        ((caps & V4L2_CAP_VIDEO_CAPTURE_MPLANE) != 0 ? " (the multi-planar API is not supported)"
+                                                     : ""));
+  }
+  if ((caps & V4L2_CAP_STREAMING) == 0) {
+    throw std::runtime_error(device_ + " (" + driver_ + ", " + card_ +
+                             ") cannot stream through buffers (no V4L2_CAP_STREAMING)");
+  }
+}
+
+std::vector<std::string> V4l2Camera::list_formats(const std::string& device) {
+  // A camera that streams nothing: open and check as the constructor does, then enumerate.
+  V4l2Camera probe(device, OpenOnly{});
+  std::vector<std::string> names;
+  v4l2_fmtdesc desc{};
+  desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  while (try_ioctl(probe.fd_.get(), VIDIOC_ENUM_FMT, &desc)) {
+    names.push_back(fourcc_text(desc.pixelformat));
+    ++desc.index;
+  }
+  if (errno != EINVAL) {  // EINVAL ends the list
+    throw_errno(device, "VIDIOC_ENUM_FMT", errno);
+  }
+  return names;
+}
+
+V4l2Camera::V4l2Camera(const std::string& device, OpenOnly)
+    : device_(device), converter_(nullptr, v4lconvert_destroy) {
+  open_device();
+}
+
+void V4l2Camera::negotiate(const V4l2Options& options) {
+  const std::uint32_t wanted = to_fourcc(options.format);
+  v4l2_format format{};
+  format.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  checked_ioctl(fd_.get(), VIDIOC_G_FMT, &format, "VIDIOC_G_FMT", device_);
+  format.fmt.pix.pixelformat = wanted;
+  if (options.width_px > 0) {
+    format.fmt.pix.width = static_cast<std::uint32_t>(options.width_px);
+    format.fmt.pix.height = static_cast<std::uint32_t>(options.height_px);
+  }
+  format.fmt.pix.field = V4L2_FIELD_NONE;
+  format.fmt.pix.bytesperline = 0;  // the driver's choice
+  checked_ioctl(fd_.get(), VIDIOC_S_FMT, &format, "VIDIOC_S_FMT", device_);
+  // S_FMT does not fail on a format or size the driver lacks: it answers with the nearest it
+  // has, which is checked here.
+  const v4l2_pix_format& got = format.fmt.pix;
+  if (got.pixelformat != wanted) {
+    std::string offered;
+    v4l2_fmtdesc desc{};
+    desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    while (try_ioctl(fd_.get(), VIDIOC_ENUM_FMT, &desc)) {
+      offered += (offered.empty() ? "" : ", ") + fourcc_text(desc.pixelformat);
+      ++desc.index;
+    }
+    throw std::runtime_error(device_ + " (" + card_ + ") does not offer pixel format " +
+                             std::string(fourcc_name(options.format)) + " (it offers " + offered +
+                             ")");
+  }
+  if (options.width_px > 0 && (static_cast<int>(got.width) != options.width_px ||
+                               static_cast<int>(got.height) != options.height_px)) {
+    throw std::runtime_error(
+        device_ + " (" + card_ + ") does not offer " + std::to_string(options.width_px) + "x" +
+        std::to_string(options.height_px) + " in " + std::string(fourcc_name(options.format)) +
+        ": the driver chose " + std::to_string(got.width) + "x" + std::to_string(got.height));
+  }
+  if (got.field != V4L2_FIELD_NONE) {
+    throw std::runtime_error(device_ + " (" + card_ +
+                             ") delivers interlaced fields; only progressive frames are supported");
+  }
+  fourcc_ = got.pixelformat;
+  width_px_ = static_cast<int>(got.width);
+  height_px_ = static_cast<int>(got.height);
+  bytes_per_line_ = got.bytesperline;
+  const std::uint32_t bytes_per_pixel = options.format == PixelFormat::yuyv ? 2u : 1u;
+  if (options.format != PixelFormat::mjpeg && bytes_per_line_ < got.width * bytes_per_pixel) {
+    bytes_per_line_ = got.width * bytes_per_pixel;
+  }
+  if (options.format == PixelFormat::mjpeg) {
+    converter_.reset(v4lconvert_create(fd_.get()));
+    if (!converter_) {
+      throw std::runtime_error(device_ + ": libv4lconvert could not set up MJPEG decoding");
+    }
+  }
+}
+
+void V4l2Camera::set_frame_rate(double frame_rate_hz) {
+  v4l2_streamparm parm{};
+  parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  checked_ioctl(fd_.get(), VIDIOC_G_PARM, &parm, "VIDIOC_G_PARM", device_);
+  const bool settable = (parm.parm.capture.capability & V4L2_CAP_TIMEPERFRAME) != 0;
+  if (frame_rate_hz > 0.0 && settable) {
+    // A frame period as a fraction with a denominator of 1000 is exact for the usual rates
+    // (30, 25, 15, 7.5 Hz) and close enough for others; the driver rounds to what it has.
+    std::uint32_t numerator = 1000;
+    auto denominator = static_cast<std::uint32_t>(std::lround(frame_rate_hz * 1000.0));
+    const std::uint32_t divisor = std::gcd(numerator, denominator);
+    parm.parm.capture.timeperframe = {numerator / divisor, denominator / divisor};
+    checked_ioctl(fd_.get(), VIDIOC_S_PARM, &parm, "VIDIOC_S_PARM", device_);
+  }
+  const v4l2_fract period = parm.parm.capture.timeperframe;
+  frame_rate_hz_ = settable && period.numerator > 0
+                       ? static_cast<double>(period.denominator) / period.numerator
+                       : 0.0;
+}
+
+void V4l2Camera::map_buffers(int buffer_count) {
+  v4l2_requestbuffers request{};
+  request.count = static_cast<std::uint32_t>(buffer_count);
+  request.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  request.memory = V4L2_MEMORY_MMAP;
+  checked_ioctl(fd_.get(), VIDIOC_REQBUFS, &request, "VIDIOC_REQBUFS", device_);
+  if (request.count < 2) {
+    throw std::runtime_error(device_ + ": the driver granted " + std::to_string(request.count) +
+                             " buffers, at least 2 are needed to stream");
+  }
+  buffers_.reserve(request.count);
+  for (std::uint32_t index = 0; index < request.count; ++index) {
+    v4l2_buffer buffer{};
+    buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    buffer.memory = V4L2_MEMORY_MMAP;
+    buffer.index = index;
+    checked_ioctl(fd_.get(), VIDIOC_QUERYBUF, &buffer, "VIDIOC_QUERYBUF", device_);
+    void* data = ::mmap(nullptr, buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(),
+                        buffer.m.offset);
+    if (data == MAP_FAILED) {
+      throw_errno(device_, "mmap of a capture buffer", errno);
+    }
+    buffers_.emplace_back(data, buffer.length);
+    checked_ioctl(fd_.get(), VIDIOC_QBUF, &buffer, "VIDIOC_QBUF", device_);
+  }
+}
+
+void V4l2Camera::convert(std::span<const std::uint8_t> data, cv::Mat& bgr) {
+  bgr.create(height_px_, width_px_, CV_8UC3);
+  auto* bytes = const_cast<std::uint8_t*>(data.data());  // cv::Mat wants a mutable pointer
+  switch (fourcc_) {
+    case V4L2_PIX_FMT_YUYV: {
+      if (data.size() < std::size_t{bytes_per_line_} * height_px_) {
+        throw std::runtime_error(device_ + ": short YUYV frame (" + std::to_string(data.size()) +
+                                 " bytes)");
+      }
+      const cv::Mat yuyv(height_px_, width_px_, CV_8UC2, bytes, bytes_per_line_);
+      cv::cvtColor(yuyv, bgr, cv::COLOR_YUV2BGR_YUYV);
+      return;
+    }
+    case V4L2_PIX_FMT_GREY: {
+      if (data.size() < std::size_t{bytes_per_line_} * height_px_) {
+        throw std::runtime_error(device_ + ": short GREY frame (" + std::to_string(data.size()) +
+                                 " bytes)");
+      }
+      const cv::Mat grey(height_px_, width_px_, CV_8UC1, bytes, bytes_per_line_);
+      cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+      return;
+    }
+    case V4L2_PIX_FMT_MJPEG: {
+      v4l2_format src{};
+      src.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+      src.fmt.pix.pixelformat = V4L2_PIX_FMT_MJPEG;
+      src.fmt.pix.width = static_cast<std::uint32_t>(width_px_);
+      src.fmt.pix.height = static_cast<std::uint32_t>(height_px_);
+      src.fmt.pix.field = V4L2_FIELD_NONE;
+      v4l2_format dst = src;
+      dst.fmt.pix.pixelformat = V4L2_PIX_FMT_BGR24;
+      dst.fmt.pix.bytesperline = static_cast<std::uint32_t>(bgr.step[0]);
+      dst.fmt.pix.sizeimage = static_cast<std::uint32_t>(bgr.step[0] * bgr.rows);
+      const int written =
+          v4lconvert_convert(converter_.get(), &src, &dst, bytes, static_cast<int>(data.size()),
+                             bgr.data, dst.fmt.pix.sizeimage);
+      if (written < 0) {
+        throw std::runtime_error(device_ + ": cannot decode an MJPEG frame: " +
+                                 v4lconvert_get_error_message(converter_.get()));
+      }
+      return;
+    }
+    default:
+      throw std::logic_error(device_ + ": no conversion for " + fourcc_text(fourcc_));
+  }
+}
+
+ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
+  if (!streaming_) {
+    throw std::runtime_error(device_ + ": read() after stop()");
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    const auto left =
+        std::chrono::ceil<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    pollfd pfd{fd_.get(), POLLIN, 0};
+    const int ready = ::poll(&pfd, 1, static_cast<int>(std::max<std::int64_t>(0, left.count())));
+    if (ready < 0) {
+      if (errno == EINTR) {
+        continue;
+      }
+      throw_errno(device_, "poll", errno);
+    }
+    if (ready == 0) {
+      return ReadStatus::timeout;
+    }
+    v4l2_buffer buffer{};
+    buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    buffer.memory = V4L2_MEMORY_MMAP;
+    if (!try_ioctl(fd_.get(), VIDIOC_DQBUF, &buffer)) {
+      if (errno == EAGAIN) {  // woken without a filled buffer
+        continue;
+      }
+      // POLLERR with ENODEV or EIO: the camera was unplugged or the driver gave up.
+      throw_errno(device_, "VIDIOC_DQBUF", errno);
+    }
+    const double dequeued_s = monotonic_now_s();
+    if (buffer.index >= buffers_.size()) {
+      throw std::runtime_error(device_ + ": VIDIOC_DQBUF returned buffer " +
+                               std::to_string(buffer.index) + " of " +
+                               std::to_string(buffers_.size()));
+    }
+    if (have_sequence_ && buffer.sequence > last_driver_sequence_ + 1) {
+      dropped_frames_ += buffer.sequence - last_driver_sequence_ - 1;
+    }
+    have_sequence_ = true;
+    last_driver_sequence_ = buffer.sequence;
+    const bool corrupt = (buffer.flags & V4L2_BUF_FLAG_ERROR) != 0;
+    // Read before VIDIOC_QBUF, which writes the buffer's new state into the same struct.
+    const bool monotonic =
+        (buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+    const double stamped_s = static_cast<double>(buffer.timestamp.tv_sec) +
+                             1e-6 * static_cast<double>(buffer.timestamp.tv_usec);
+    if (!corrupt) {
+      try {
+        convert(buffers_[buffer.index].bytes(buffer.bytesused), converted_);
+      } catch (...) {
+        try_ioctl(fd_.get(), VIDIOC_QBUF, &buffer);
+        throw;
+      }
+    }
+    // The frame is converted into the camera's own image, so the buffer goes back at once.
+    checked_ioctl(fd_.get(), VIDIOC_QBUF, &buffer, "VIDIOC_QBUF", device_);
+    if (corrupt) {
+      ++dropped_frames_;
+      continue;
+    }
+    driver_timestamps_ = monotonic;
+    frame.timestamp_s = monotonic ? stamped_s : dequeued_s;
+    frame.image = lens_->apply(converted_);
+    frame.sequence = sequence_++;
+    frame.sim.reset();
+    return ReadStatus::ok;
+  }
+}
+
+void V4l2Camera::stop() {
+  if (fd_.get() < 0) {
+    return;
+  }
+  std::string failure;
+  if (streaming_) {
+    streaming_ = false;
+    int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    if (!try_ioctl(fd_.get(), VIDIOC_STREAMOFF, &type)) {
+      failure = std::string("VIDIOC_STREAMOFF on ") + device_ + " failed: " + std::strerror(errno);
+    }
+  }
+  buffers_.clear();
+  v4l2_requestbuffers release{};
+  release.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  release.memory = V4L2_MEMORY_MMAP;
+  if (!try_ioctl(fd_.get(), VIDIOC_REQBUFS, &release) && failure.empty()) {
+    failure = std::string("VIDIOC_REQBUFS(0) on ") + device_ + " failed: " + std::strerror(errno);
+  }
+  converter_.reset();
+  fd_ = DeviceFd();
+  if (!failure.empty()) {
+    throw std::runtime_error(failure);
+  }
+}
+
+}  // namespace flowsteer::camera_io

@@ -1,0 +1,56 @@
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "flowsteer/camera_io/frame_source.hpp"
+#include "flowsteer/camera_io/libcamera_camera.hpp"
+#include "flowsteer/camera_io/replay_source.hpp"
+#include "flowsteer/camera_io/v4l2_camera.hpp"
+#include "flowsteer/launch/drive_config.hpp"
+
+namespace flowsteer::launch {
+
+// The `camera:` section of a robot launch file (fields in launch/launch_files/README.md).
+struct CameraSection {
+  std::variant<camera_io::V4l2Options, camera_io::LibcameraOptions, camera_io::ReplayOptions>
+      source;
+  // No frame for this long stops the base.
+  double timeout_s = 0.5;
+  // The camera_info file the lens options were read from (resolved against the launch file's
+  // folder); empty without one.
+  std::string calibration_file;
+};
+
+// A goal given as where it lies from the robot's start: bearing from the heading, positive to
+// the right (as servo::Percept), and distance.
+struct GoalSection {
+  double bearing_rad = 0.0;
+  double distance_m = 0.0;
+};
+
+struct RobotLaunch {
+  CameraSection camera;
+  std::optional<DriveSection> drive;  // none: perception and commands without a drive
+  std::optional<GoalSection> goal;
+  std::vector<std::string> warnings;  // from the camera_info reader
+};
+
+// Reads a robot launch file. Throws ConfigError naming the file, line, column and field of the
+// first problem: an unknown key or type, a value out of range, a calibration file that cannot
+// be read (its own file:line:col) or is for another image size.
+RobotLaunch read_robot_launch(const std::string& path);
+// The same for launch-file text; relative paths resolve against base_dir.
+RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& source_name,
+                               const std::string& base_dir);
+
+// Opens the camera the section describes. Throws std::runtime_error naming the device or file
+// (a missing device, no camera found, an unreadable recording).
+std::unique_ptr<camera_io::FrameSource> make_camera(const CameraSection& section);
+// "v4l2 /dev/video0", "replay run.mp4", for logs.
+std::string describe_camera(const CameraSection& section);
+
+}  // namespace flowsteer::launch

@@ -1,0 +1,164 @@
+#include "flowsteer/launch/robot_loop.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <numbers>
+#include <sstream>
+
+namespace flowsteer::launch {
+namespace {
+
+double monotonic_now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// Leaves the base stopped and deactivated however the loop ends.
+class BaseStopper {
+ public:
+  BaseStopper(drivers::Base* base, std::ostream& log) : base_(base), log_(log) {}
+  ~BaseStopper() {
+    if (base_ == nullptr || base_->lifecycle() != drivers::Lifecycle::active) {
+      return;
+    }
+    try {
+      base_->emergency_stop();
+      base_->deactivate();
+    } catch (const std::exception& e) {
+      log_ << "flowsteer run: stopping " << base_->drive().name() << " failed: " << e.what()
+           << "\n";
+    }
+  }
+  BaseStopper(const BaseStopper&) = delete;
+  BaseStopper& operator=(const BaseStopper&) = delete;
+
+ private:
+  drivers::Base* base_;
+  std::ostream& log_;
+};
+
+}  // namespace
+
+GoalTracker::GoalTracker(const GoalSection& goal)
+    : goal_x_m_(goal.distance_m * std::cos(goal.bearing_rad)),
+      goal_y_m_(-goal.distance_m * std::sin(goal.bearing_rad)) {}
+
+void GoalTracker::advance(const drivers::BodyVelocity& measured, double dt_s) {
+  // The turn rate is about the camera's y axis (down): the yaw rate is its negative.
+  const double yaw_rate = -measured.turn_rate;
+  const double mid_yaw = yaw_rad_ + 0.5 * yaw_rate * dt_s;
+  x_m_ += measured.speed_mps * std::cos(mid_yaw) * dt_s;
+  y_m_ += measured.speed_mps * std::sin(mid_yaw) * dt_s;
+  yaw_rad_ += yaw_rate * dt_s;
+}
+
+double GoalTracker::bearing_rad() const {
+  const double left = std::atan2(goal_y_m_ - y_m_, goal_x_m_ - x_m_) - yaw_rad_;
+  return -std::remainder(left, 2.0 * std::numbers::pi);
+}
+
+double GoalTracker::distance_m() const {
+  return std::hypot(goal_x_m_ - x_m_, goal_y_m_ - y_m_);
+}
+
+const char* stop_reason_name(StopReason reason) {
+  switch (reason) {
+    case StopReason::end_of_stream:
+      return "end of stream";
+    case StopReason::camera_timeout:
+      return "camera timeout";
+    case StopReason::stop_requested:
+      return "stop requested";
+    case StopReason::frame_limit:
+      return "frame limit";
+  }
+  return "?";
+}
+
+RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* base, Brain& brain,
+                               const RobotLoopOptions& options,
+                               const std::atomic<bool>& stop_requested, std::ostream& log) {
+  RobotLoopResult result;
+  const double start_s = monotonic_now_s();
+  std::optional<GoalTracker> goal;
+  if (options.goal) {
+    goal.emplace(*options.goal);
+  }
+  BaseStopper stopper(base, log);
+  if (base != nullptr) {
+    base->configure();
+    base->activate(monotonic_now_s());
+  }
+  drivers::BodyVelocity measured;
+  double last_frame_s = monotonic_now_s();
+  double last_update_s = last_frame_s;
+  camera_io::Frame frame;
+  const auto stop = [&](StopReason reason, const std::string& why) {
+    result.reason = reason;
+    log << "flowsteer run: " << why;
+    if (base != nullptr) {
+      // The stopper deactivates; latching the stop first makes the zero immediate.
+      base->emergency_stop();
+      log << ": base " << base->drive().name() << " stopped";
+    }
+    log << "\n";
+  };
+  for (;;) {
+    if (stop_requested.load()) {
+      stop(StopReason::stop_requested, "stop requested");
+      break;
+    }
+    const double now_s = monotonic_now_s();
+    const double left_s = options.camera_timeout_s - (now_s - last_frame_s);
+    // Without a base nothing needs a steady rate: wait for the frame up to the timeout.
+    const double wait_s =
+        std::max(0.0, base != nullptr ? std::min(options.drive_period_s, left_s) : left_s);
+    const camera_io::ReadStatus status = camera.read(frame, wait_s);
+    const double after_s = monotonic_now_s();
+    if (status == camera_io::ReadStatus::end_of_stream) {
+      stop(StopReason::end_of_stream, options.camera_name + " ended");
+      break;
+    }
+    if (status == camera_io::ReadStatus::ok) {
+      last_frame_s = after_s;
+      ++result.frames;
+      LoopInput input{frame, measured, std::nullopt, std::nullopt};
+      if (goal) {
+        input.goal_bearing_rad = goal->bearing_rad();
+        input.goal_distance_m = goal->distance_m();
+      }
+      const servo::Command command = brain.step(input);
+      if (base != nullptr) {
+        if (const auto rejected = base->command(command, monotonic_now_s())) {
+          log << "flowsteer run: frame " << frame.sequence << ": command rejected: " << *rejected
+              << "\n";
+        }
+      }
+    } else if (after_s - last_frame_s >= options.camera_timeout_s) {
+      std::ostringstream why;
+      why << options.camera_name << " delivered no frame for " << std::fixed << std::setprecision(2)
+          << after_s - last_frame_s << " s (timeout " << options.camera_timeout_s << " s)";
+      stop(StopReason::camera_timeout, why.str());
+      break;
+    }
+    if (base != nullptr) {
+      const double update_s = monotonic_now_s();
+      const drivers::BaseState state = base->update(update_s);
+      measured = state.measured;
+      result.max_measured_speed_mps = std::max(result.max_measured_speed_mps, measured.speed_mps);
+      if (goal) {
+        goal->advance(measured, update_s - last_update_s);
+      }
+      last_update_s = update_s;
+    }
+    if (options.max_frames > 0 && result.frames >= options.max_frames) {
+      stop(StopReason::frame_limit, "frame limit reached");
+      break;
+    }
+  }
+  result.duration_s = monotonic_now_s() - start_s;
+  return result;
+}
+
+}  // namespace flowsteer::launch
