@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <string>
 
 namespace flowsteer::launch {
 
@@ -66,7 +67,14 @@ AgentPipeline::AgentPipeline(const sim_camera::World& world, sim_camera::Rendere
       agent_(agent),
       camera_(world, renderer, agent),
       controller_(make_controller(world.spec().agents.at(agent))),
-      field_(camera_.intrinsics(), true) {}
+      field_(camera_.intrinsics(), true) {
+  const std::string& type = world.spec().agents.at(agent).controller.type;
+  if (type == "geometric") {
+    geometric_.emplace(world, agent);
+  } else if (type == "motion_energy") {
+    motion_energy_.emplace(world.spec().agents.at(agent), camera_.intrinsics());
+  }
+}
 
 const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
   const sim_camera::AgentSpec& agent = world_.spec().agents[agent_];
@@ -87,7 +95,7 @@ const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
   times.segment = ms_since(stage);
 
   stage = Clock::now();
-  objects_ = extractor_.extract(field_, segmentation_);
+  objects_ = geometric_ ? geometric_->perceive() : extractor_.extract(field_, segmentation_);
   times.features = ms_since(stage);
 
   stage = Clock::now();
@@ -101,7 +109,11 @@ const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
     percept_.goal_bearing_rad = -std::remainder(bearing_left, 2.0 * std::numbers::pi);
     percept_.goal_distance_m = to_goal.norm();
   }
-  controller_.step(percept_, {state.speed_mps}, output_);
+  if (motion_energy_) {
+    motion_energy_->step(frame_, field_, percept_, {state.speed_mps}, output_);
+  } else {
+    controller_.step(percept_, {state.speed_mps}, output_);
+  }
   times.control = ms_since(stage);
   times.total = ms_since(start);
   return output_;

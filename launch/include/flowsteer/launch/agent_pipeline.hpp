@@ -2,9 +2,11 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <span>
 
 #include "flowsteer/camera_io/frame_source.hpp"
+#include "flowsteer/launch/steering_models.hpp"
 #include "flowsteer/servo/servo.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/sim_camera.hpp"
@@ -26,7 +28,9 @@ struct StageTimes {
 
 // One simulated agent's perception-action loop: its head camera renders the world, the servo
 // core turns the synthetic flow into features (derotated with the agent's turn rate, segmented
-// by object id) and its controller into a command.
+// by object id) and its controller into a command. The agent's controller type swaps the last
+// stages: geometric takes the features from exact geometry, motion_energy steers by Blumberg's
+// motion energy instead of by the navigation function.
 class AgentPipeline {
  public:
   // The world and the renderer must outlive the pipeline.
@@ -53,6 +57,8 @@ class AgentPipeline {
   std::span<const servo::ObjectFeatures> objects_;
   servo::Percept percept_;
   servo::ControlOutput output_;
+  std::optional<GeometricPerception> geometric_;       // type geometric
+  std::optional<MotionEnergySteering> motion_energy_;  // type motion_energy
 };
 
 // The servo controller a scenario's agent asks for.

@@ -7,6 +7,8 @@
 
 #include <Eigen/Core>
 
+#include "flowsteer/servo/motion_energy.hpp"
+
 namespace flowsteer::sim_camera {
 
 // World frame (REP-103): x, y on the ground, z up, metres; yaw counter-clockwise from x.
@@ -73,6 +75,10 @@ struct CameraSpec {
 
 // Controller settings as the scenario gives them; launch turns them into a servo controller.
 struct ControllerSpec {
+  // The steering model: vision (the navigation function on features from the flow), geometric
+  // (the same function on features from exact geometry, perfect perception) or motion_energy
+  // (Blumberg 1997, goal reaching only).
+  std::string type = "vision";
   std::string kind = "goal_reaching";  // goal_reaching, following
   double alpha = 1.0;
   double beta = 0.1;
@@ -87,6 +93,10 @@ struct ControllerSpec {
   // Added to the agent's diameter as the width it keeps clear (CGF §6.2's agent width): room
   // for the path's curvature and the step, like a person's personal space.
   double clearance_margin_m = 0.5;
+  // type motion_energy: its settings, and where "mass" and "floor" come from: the renderer's
+  // object ids ("ids"), or the flat-ground test on the flow as a real camera would ("ground").
+  servo::MotionEnergyOptions motion_energy;
+  std::string mass_from = "ids";
 };
 
 struct AgentSpec {
