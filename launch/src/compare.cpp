@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iomanip>
 #include <limits>
+#include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -249,14 +250,25 @@ void print_compare_table(const std::vector<CompareRow>& rows, std::ostream& out)
       << "path_length" << std::setw(15) << "min_clearance" << std::setw(16) << "path_vs_geom"
       << std::setw(18) << "clearance_vs_geom"
       << "\n";
-  out << std::fixed << std::setprecision(2);
+  // A number with its unit in `width` characters; "-" where there is none.
+  auto cell = [&](double value, const char* unit, int width) {
+    std::ostringstream text;
+    if (std::isfinite(value)) {
+      text << std::fixed << std::setprecision(2) << value << unit;
+    } else {
+      text << "-";
+    }
+    out << std::setw(width) << text.str();
+  };
   for (const CompareRow& r : rows) {
     out << std::left << std::setw(15) << r.controller << std::right << std::setw(11) << r.collisions
-        << std::setw(8) << (std::to_string(r.goals_reached) + "/" + std::to_string(r.agents))
-        << std::setw(12) << r.mean_time_to_goal_s << " s" << std::setw(11) << r.mean_path_length_m
-        << " m" << std::setw(13) << r.min_clearance_m << " m" << std::setw(15)
-        << 100.0 * r.path_length_vs_reference << "%" << std::setw(16)
-        << r.min_clearance_vs_reference_m << " m\n";
+        << std::setw(8) << (std::to_string(r.goals_reached) + "/" + std::to_string(r.agents));
+    cell(r.mean_time_to_goal_s, " s", 14);
+    cell(r.mean_path_length_m, " m", 13);
+    cell(r.min_clearance_m, " m", 15);
+    cell(100.0 * r.path_length_vs_reference, "%", 16);
+    cell(r.min_clearance_vs_reference_m, " m", 18);
+    out << "\n";
   }
   out.flags(flags);
 }
