@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <string>
 
 namespace flowsteer::launch {
 
@@ -51,7 +52,14 @@ AgentPipeline::AgentPipeline(const sim_camera::World& world, sim_camera::Rendere
       agent_(agent),
       camera_(world, renderer, agent),
       controller_(make_controller(world.spec().agents.at(agent))),
-      perception_(camera_.intrinsics(), perception_options(world.spec().agents.at(agent))) {}
+      perception_(camera_.intrinsics(), perception_options(world.spec().agents.at(agent))) {
+  const std::string& type = world.spec().agents.at(agent).controller.type;
+  if (type == "geometric") {
+    geometric_.emplace(world, agent);
+  } else if (type == "motion_energy") {
+    motion_energy_.emplace(world.spec().agents.at(agent), camera_.intrinsics());
+  }
+}
 
 const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
   const sim_camera::AgentSpec& agent = world_.spec().agents[agent_];
@@ -63,7 +71,8 @@ const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
   perception_.process(frame_, state.speed_mps, state.turn_rate, times);
 
   auto stage = Clock::now();
-  percept_ = servo::Percept{perception_.objects(), {}, {}, {}};
+  objects_ = geometric_ ? geometric_->perceive() : perception_.objects();
+  percept_ = servo::Percept{objects_, {}, {}, {}};
   if (agent.leader) {
     percept_.leader_id = sim_camera::agent_render_id(static_cast<std::size_t>(*agent.leader));
   } else if (state.next_goal < agent.goals.size()) {
@@ -73,7 +82,11 @@ const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
     percept_.goal_bearing_rad = -std::remainder(bearing_left, 2.0 * std::numbers::pi);
     percept_.goal_distance_m = to_goal.norm();
   }
-  controller_.step(percept_, {state.speed_mps}, output_);
+  if (motion_energy_) {
+    motion_energy_->step(frame_, perception_.flow(), percept_, {state.speed_mps}, output_);
+  } else {
+    controller_.step(percept_, {state.speed_mps}, output_);
+  }
   times.control = ms_since(stage);
   times.total = ms_since(start);
   return output_;

@@ -10,6 +10,7 @@
 
 #include "flowsteer/launch/calibrate.hpp"
 #include "flowsteer/launch/camera_source.hpp"
+#include "flowsteer/launch/compare.hpp"
 #include "flowsteer/launch/config_error.hpp"
 #include "flowsteer/launch/demo.hpp"
 #include "flowsteer/launch/demo_scene.hpp"
@@ -103,6 +104,29 @@ int main(int argc, char** argv) {
                   "every agent's flow: " + flowsteer::servo::flow_method_names());
   sim->add_option("--segmentation", segmentation_method,
                   "every agent's segmentation: " + flowsteer::servo::segmentation_method_names());
+
+  CLI::App* compare = app.add_subcommand(
+      "compare",
+      "Run one scenario once per steering model and write the runs side by side: top views, a "
+      "table of collisions, goals, path lengths and clearances, turn-rate histograms");
+  std::string compare_file;
+  std::string compare_name;
+  std::string compare_out = "flowsteer_compare";
+  std::vector<std::string> controllers;
+  int compare_resolution = 0;
+  int compare_steps = 0;
+  compare->add_option("scenario_file", compare_file, "scenario YAML");
+  compare->add_option("--scenario", compare_name, "a built-in scenario (flowsteer scenarios)");
+  compare
+      ->add_option("--controllers", controllers,
+                   "comma-separated steering models: vision, geometric, motion_energy")
+      ->delimiter(',')
+      ->required();
+  compare->add_option("--out", compare_out, "folder for the outputs")->capture_default_str();
+  compare->add_option("--resolution", compare_resolution, "every agent's camera: N x N pixels")
+      ->check(CLI::Range(8, 4096));
+  compare->add_option("--steps", compare_steps, "stop each run after N control steps")
+      ->check(CLI::PositiveNumber);
 
   app.add_subcommand("scenarios", "List the built-in scenarios");
 
@@ -298,6 +322,26 @@ int main(int argc, char** argv) {
       const auto rows = flowsteer::launch::evaluate_flow(world, options, std::cerr);
       flowsteer::launch::print_flow_table(rows, std::cout);
       flowsteer::launch::write_flow_evaluation(rows, eval_out);
+    if (*compare) {
+      if (!compare_file.empty() && !compare_name.empty()) {
+        throw CLI::ValidationError("compare", "give one of SCENARIO_FILE, --scenario");
+      }
+      const flowsteer::sim_camera::WorldSpec world =
+          !compare_file.empty()
+              ? flowsteer::launch::load_scenario(compare_file)
+              : flowsteer::launch::builtin_scenario(compare_name.empty() ? "room" : compare_name);
+      flowsteer::launch::CompareOptions options;
+      options.controllers = controllers;
+      options.out_dir = compare_out;
+      if (compare_resolution > 0) {
+        options.resolution = compare_resolution;
+      }
+      if (compare_steps > 0) {
+        options.steps = compare_steps;
+      }
+      const auto result = flowsteer::launch::run_compare(world, options, std::cerr);
+      std::cout << "scenario " << result.scenario << " -> " << compare_out << "\n";
+      flowsteer::launch::print_compare_table(flowsteer::launch::compare_table(result), std::cout);
     }
     if (*demo) {
       DemoScene scene = scene_file.empty() ? flowsteer::launch::default_demo_scene()

@@ -79,7 +79,13 @@ std::filesystem::path OutputDir::staging_path(const std::string& file_name) cons
 void OutputDir::commit() {
   for (const auto& entry : std::filesystem::directory_iterator(staging_)) {
     std::error_code error;
-    std::filesystem::rename(entry.path(), dir_ / entry.path().filename(), error);
+    const std::filesystem::path target = dir_ / entry.path().filename();
+    if (entry.is_directory() && std::filesystem::is_directory(target)) {
+      std::filesystem::remove_all(target, error);
+    }
+    if (!error) {
+      std::filesystem::rename(entry.path(), target, error);
+    }
     if (error) {
       throw std::runtime_error("cannot move " + entry.path().filename().string() + " into " +
                                dir_.string() + ": " + error.message());
@@ -102,13 +108,16 @@ void CsvTable::write(const std::filesystem::path& path) const {
     out << (k > 0 ? "," : "") << header_[k];
   }
   out << "\n" << std::setprecision(7);
-  for (const auto& row : rows_) {
-    for (std::size_t k = 0; k < row.size(); ++k) {
-      if (k > 0) {
+  for (const Row& row : rows_) {
+    for (std::size_t k = 0; k < row.labels.size(); ++k) {
+      out << (k > 0 ? "," : "") << row.labels[k];
+    }
+    for (std::size_t k = 0; k < row.values.size(); ++k) {
+      if (k > 0 || !row.labels.empty()) {
         out << ",";
       }
-      if (std::isfinite(row[k])) {
-        out << row[k];
+      if (std::isfinite(row.values[k])) {
+        out << row.values[k];
       }
     }
     out << "\n";

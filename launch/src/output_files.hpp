@@ -20,6 +20,8 @@ class OutputDir {
   OutputDir& operator=(const OutputDir&) = delete;
 
   std::filesystem::path staging_path(const std::string& file_name) const;
+  // Moves every file and folder of the staging folder into place; a folder replaces the one of
+  // the same name.
   void commit();
 
  private:
@@ -27,17 +29,25 @@ class OutputDir {
   std::filesystem::path staging_;
 };
 
-// A table of numbers written as CSV (NaN as an empty cell).
+// A table of numbers written as CSV (NaN as an empty cell); a row may start with text cells
+// (names without commas or quotes).
 class CsvTable {
  public:
   explicit CsvTable(std::vector<std::string> header) : header_(std::move(header)) {}
-  void add(std::vector<double> row) { rows_.push_back(std::move(row)); }
+  void add(std::vector<double> row) { rows_.push_back({{}, std::move(row)}); }
+  void add(std::vector<std::string> labels, std::vector<double> values) {
+    rows_.push_back({std::move(labels), std::move(values)});
+  }
   // Throws std::runtime_error naming the file when it cannot be written.
   void write(const std::filesystem::path& path) const;
 
  private:
   std::vector<std::string> header_;
-  std::vector<std::vector<double>> rows_;
+  struct Row {
+    std::vector<std::string> labels;
+    std::vector<double> values;
+  };
+  std::vector<Row> rows_;
 };
 
 void write_summary_json(const std::filesystem::path& path, const SimResult& result);

@@ -119,6 +119,7 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
       StageTimes times;
       const servo::ControlOutput& output = loop.pipeline->step(times);
       commands[i] = {output.command.accel_mps2, output.command.turn_rate};
+      loop.result.turn_rates.push_back(output.command.turn_rate);
       sum += times;
       ++agent_steps;
 
@@ -186,6 +187,7 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
     result.per_agent_step_ms = {sum.render / n,   sum.flow / n,    sum.segment / n,
                                 sum.features / n, sum.control / n, sum.total / n};
   }
+  result.topview = draw_topview(world, paths, result.collisions);
   if (out) {
     trajectories.write(out->staging_path("trajectories.csv"));
     CsvTable costs([&] {
@@ -209,8 +211,7 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
         loop.video->release();
       }
     }
-    cv::imwrite(out->staging_path("topview.png").string(),
-                draw_topview(world, paths, result.collisions));
+    cv::imwrite(out->staging_path("topview.png").string(), result.topview);
     write_summary_json(out->staging_path("summary.json"), result);
     out->commit();
   }

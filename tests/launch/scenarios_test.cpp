@@ -86,7 +86,7 @@ INSTANTIATE_TEST_SUITE_P(Papers, FollowScenario, ::testing::Values("follow", "fo
 
 TEST(Scenarios, EveryBuiltinOneLoadsAndRuns) {
   const auto all = builtin_scenarios();
-  EXPECT_EQ(all.size(), 10U);
+  EXPECT_EQ(all.size(), 12U);
   for (const auto& s : all) {
     SimOptions options;
     options.resolution = 32;

@@ -2,10 +2,12 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <span>
 
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/launch/perception.hpp"
+#include "flowsteer/launch/steering_models.hpp"
 #include "flowsteer/servo/servo.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/sim_camera.hpp"
@@ -16,7 +18,9 @@ namespace flowsteer::launch {
 // One simulated agent's perception-action loop: its head camera renders the world, Perception
 // turns the frame into features the way the agent's PerceptionSpec asks (synthetic or numerical
 // flow derotated with the agent's turn rate, segmented by object id or by flow, dark regions
-// when its controller weighs them), and its controller turns them into a command.
+// when its controller weighs them), and its controller turns them into a command. The agent's
+// controller type swaps the last stages: geometric takes the features from exact geometry,
+// motion_energy steers by Blumberg's motion energy instead of by the navigation function.
 class AgentPipeline {
  public:
   // The world and the renderer must outlive the pipeline.
@@ -28,7 +32,8 @@ class AgentPipeline {
   const camera_io::Frame& frame() const { return frame_; }
   const Perception& perception() const { return perception_; }
   const servo::FlowField& flow() const { return perception_.flow(); }
-  std::span<const servo::ObjectFeatures> objects() const { return perception_.objects(); }
+  // The features the controller saw: from the flow, or from exact geometry (type geometric).
+  std::span<const servo::ObjectFeatures> objects() const { return objects_; }
   const servo::Percept& percept() const { return percept_; }
   const servo::CameraIntrinsics& intrinsics() const { return camera_.intrinsics(); }
 
@@ -39,8 +44,11 @@ class AgentPipeline {
   servo::Controller controller_;
   Perception perception_;
   camera_io::Frame frame_;
+  std::span<const servo::ObjectFeatures> objects_;
   servo::Percept percept_;
   servo::ControlOutput output_;
+  std::optional<GeometricPerception> geometric_;       // type geometric
+  std::optional<MotionEnergySteering> motion_energy_;  // type motion_energy
 };
 
 // The servo controller a scenario's agent asks for.

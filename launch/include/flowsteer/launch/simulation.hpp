@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "flowsteer/launch/agent_pipeline.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
@@ -31,6 +33,8 @@ struct AgentResult {
   double min_clearance_m = 0.0;
   int collisions = 0;
   double final_distance_to_leader_m = -1.0;  // followers only
+  // The commanded turn rate ω (rad/s, positive right) at every step the agent was steering.
+  std::vector<double> turn_rates;
 };
 
 struct SimResult {
@@ -40,6 +44,7 @@ struct SimResult {
   std::vector<AgentResult> agents;
   std::vector<sim_camera::Collision> collisions;
   StageTimes per_agent_step_ms;  // mean over agents and steps
+  cv::Mat topview;               // the run from above, as topview.png (draw_topview)
 };
 
 // Runs the world to its end: each agent renders its view, the servo core turns it into a

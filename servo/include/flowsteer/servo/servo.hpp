@@ -9,6 +9,9 @@
 //   auto objects = extractor.extract(flow, segmentation);      // features.hpp: g, w, f, τ
 //   Controller controller(goal_reaching({}), 1.0, limits);     // control.hpp
 //   ControlOutput out = controller.step({objects, goal_bearing}, {speed});
+//
+// The same controller on features from exact geometry: geometric_features.hpp. Blumberg's
+// motion-energy steering, from the image alone: motion_energy.hpp.
 
 #include "flowsteer/servo/analytic_scene.hpp"
 #include "flowsteer/servo/camera.hpp"
@@ -16,5 +19,7 @@
 #include "flowsteer/servo/dynamics.hpp"
 #include "flowsteer/servo/features.hpp"
 #include "flowsteer/servo/flow_field.hpp"
+#include "flowsteer/servo/geometric_features.hpp"
 #include "flowsteer/servo/ground.hpp"
+#include "flowsteer/servo/motion_energy.hpp"
 #include "flowsteer/servo/segmentation.hpp"

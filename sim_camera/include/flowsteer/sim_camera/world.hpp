@@ -9,6 +9,7 @@
 
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
+#include "flowsteer/servo/motion_energy.hpp"
 
 namespace flowsteer::sim_camera {
 
@@ -76,6 +77,10 @@ struct CameraSpec {
 
 // Controller settings as the scenario gives them; launch turns them into a servo controller.
 struct ControllerSpec {
+  // The steering model: vision (the navigation function on features from the flow), geometric
+  // (the same function on features from exact geometry, perfect perception) or motion_energy
+  // (Blumberg 1997, goal reaching only).
+  std::string type = "vision";
   std::string kind = "goal_reaching";  // goal_reaching, following
   double alpha = 1.0;
   double beta = 0.1;
@@ -90,6 +95,10 @@ struct ControllerSpec {
   // Added to the agent's diameter as the width it keeps clear (CGF §6.2's agent width): room
   // for the path's curvature and the step, like a person's personal space.
   double clearance_margin_m = 0.5;
+  // type motion_energy: its settings, and where "mass" and "floor" come from: the renderer's
+  // object ids ("ids"), or the flat-ground test on the flow as a real camera would ("ground").
+  servo::MotionEnergyOptions motion_energy;
+  std::string mass_from = "ids";
 };
 
 // How the agent sees: the renderer's exact flow and object ids, or flow computed from its images
