@@ -322,6 +322,7 @@ int main(int argc, char** argv) {
       const auto rows = flowsteer::launch::evaluate_flow(world, options, std::cerr);
       flowsteer::launch::print_flow_table(rows, std::cout);
       flowsteer::launch::write_flow_evaluation(rows, eval_out);
+    }
     if (*compare) {
       if (!compare_file.empty() && !compare_name.empty()) {
         throw CLI::ValidationError("compare", "give one of SCENARIO_FILE, --scenario");
