@@ -59,7 +59,8 @@ Perception::Perception(const servo::CameraIntrinsics& intrinsics, const Percepti
     : options_(options),
       field_(intrinsics, synthetic(options) && options.use_depth),
       dark_finder_(options.dark),
-      extractor_(feature_options(options)) {
+      extractor_(feature_options(options)),
+      turns_(static_cast<std::size_t>(options.optical_flow.max_kept_images) + 2) {
   if (!synthetic(options))
     optical_flow_.emplace(options.flow, options.optical_flow);
   if (options.segmentation != servo::SegmentationMethod::semantic) {
@@ -81,6 +82,7 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   }
 
   auto stage = Clock::now();
+  remember_turn(frame.timestamp_s, turn_rate_cy);
   const cv::Mat& image = frame.image;
   const bool frame_fits =
       !image.empty() && image.cols == field_.width() && image.rows == field_.height();
@@ -104,13 +106,24 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     times.flow = ms_since(stage);
     return status_;
   }
-  servo::derotate(field_, servo::camera_angular_velocity(turn_rate_cy, options_.mount.pitch_rad));
+  const double turn_rate =
+      field_.interval_s() > 0.0
+          ? mean_turn_rate(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, turn_rate_cy)
+          : turn_rate_cy;
+  servo::derotate(field_, servo::camera_angular_velocity(turn_rate, options_.mount.pitch_rad));
   times.flow = ms_since(stage);
 
   stage = Clock::now();
   if (segmenter_) {
     ground_mask_.assign(field_.size(), 0);
-    servo::mark_ground(field_, options_.mount, speed_mps, options_.ground, ground_mask_);
+    servo::GroundRemovalOptions ground = options_.ground;
+    if (optical_flow_) {
+      ground.flow_tolerance = std::max(ground.flow_tolerance, options_.numerical_ground_tolerance);
+      ground.flow_floor =
+          std::max(ground.flow_floor, options_.numerical_flow_noise_px /
+                                          (field_.intrinsics().fx_px * field_.interval_s()));
+    }
+    servo::mark_ground(field_, options_.mount, speed_mps, ground, ground_mask_);
     segmenter_->segment(field_, ground_mask_, segmentation_);
   } else {
     // The renderer's ground id already marks the ground.
@@ -126,6 +139,33 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   objects_ = extractor_.extract(field_, segmentation_);
   times.features = ms_since(stage);
   return status_;
+}
+
+void Perception::remember_turn(double timestamp_s, double turn_rate_cy) {
+  if (turns_count_ == turns_.size()) {
+    turns_begin_ = (turns_begin_ + 1) % turns_.size();
+    --turns_count_;
+  }
+  turns_[(turns_begin_ + turns_count_) % turns_.size()] = {timestamp_s, turn_rate_cy};
+  ++turns_count_;
+}
+
+// The turn rate each frame reports held since the frame before: their time-weighted mean over
+// (from_s, to_s] is the rotation between two images divided by the time between them.
+double Perception::mean_turn_rate(double from_s, double to_s, double fallback) const {
+  double angle = 0.0;
+  double covered_s = 0.0;
+  for (std::size_t k = 1; k < turns_count_; ++k) {
+    const TurnSample& before = turns_[(turns_begin_ + k - 1) % turns_.size()];
+    const TurnSample& sample = turns_[(turns_begin_ + k) % turns_.size()];
+    const double start = std::max(before.timestamp_s, from_s);
+    const double end = std::min(sample.timestamp_s, to_s);
+    if (end > start) {
+      angle += sample.turn_rate_cy * (end - start);
+      covered_s += end - start;
+    }
+  }
+  return covered_s > 0.0 ? angle / covered_s : fallback;
 }
 
 }  // namespace flowsteer::launch

@@ -49,6 +49,8 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& m
   result.test = use_depth ? GroundTest::depth : GroundTest::flow;
   const auto flow = derotated.flow();
   const auto depth = derotated.depth();
+  const double interval_s = derotated.interval_s();
+  const double approach_mps = speed_mps * std::cos(mount.pitch_rad);
   for (int row = 0; row < derotated.height(); ++row) {
     const double y = derotated.y(row);
     for (int col = 0; col < derotated.width(); ++col) {
@@ -60,7 +62,13 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& m
         is_ground = expected && std::isfinite(depth[i]) &&
                     std::abs(depth[i] - *expected) <= options.depth_tolerance * *expected;
       } else {
-        const auto expected = ground.flow_at(x, y, speed_mps);
+        auto expected = ground.flow_at(x, y, speed_mps);
+        if (expected && interval_s > 0.0) {
+          // Displacement flow over Δ is the instantaneous flow scaled by τ / (τ + Δ), τ = Z / v_z
+          // (flow_field.hpp): on near ground, far below the instantaneous flow.
+          const double depth_m = *ground.depth_at(x, y);
+          *expected *= depth_m / (depth_m + approach_mps * interval_s);
+        }
         if (expected && flow[i].allFinite()) {
           const double error = (flow[i].cast<double>() - *expected).norm();
           is_ground = error <= options.flow_tolerance * expected->norm() + options.flow_floor;

@@ -39,6 +39,11 @@ struct PerceptionOptions {
   servo::FlowSegmentationOptions flow_segmentation;
   servo::DarkRegionOptions dark;
   servo::GroundRemovalOptions ground;
+  // Numerical flow's error, in pixels over its interval, and relative to the motion (estimators
+  // fall short on large displacements): the ground test allows both, since the ground left over
+  // joins every object standing on it.
+  double numerical_flow_noise_px = 0.3;
+  double numerical_ground_tolerance = 0.25;
 };
 
 // One frame through the servo core's perception: flow (from the simulator or computed from this
@@ -48,7 +53,9 @@ class Perception {
  public:
   Perception(const servo::CameraIntrinsics& intrinsics, const PerceptionOptions& options);
 
-  // speed_mps and turn_rate_cy are what the base measured (turn rate positive to the right).
+  // speed_mps and turn_rate_cy are what the base measured (turn rate positive to the right) over
+  // the interval that ends with this frame; numerical flow spans several frames and is derotated
+  // with the mean of these over its span.
   // Anything but FlowStatus::ok leaves no objects: the first frame, a frame of another size, a
   // single-colour frame. Throws std::invalid_argument when the options need simulator channels
   // the frame does not carry.
@@ -71,6 +78,15 @@ class Perception {
   servo::FeatureExtractor extractor_;
   servo::Segmentation segmentation_;
   std::vector<std::uint8_t> ground_mask_;
+  struct TurnSample {
+    double timestamp_s;
+    double turn_rate_cy;
+  };
+  std::vector<TurnSample> turns_;  // ring of the newest, oldest at turns_begin_
+  std::size_t turns_begin_ = 0;
+  std::size_t turns_count_ = 0;
+  void remember_turn(double timestamp_s, double turn_rate_cy);
+  double mean_turn_rate(double from_s, double to_s, double fallback) const;
   cv::Mat grey_;
   std::span<const servo::ObjectFeatures> objects_;
   servo::FlowStatus status_ = servo::FlowStatus::no_previous_frame;

@@ -63,7 +63,8 @@ Eigen::Vector3d camera_angular_velocity(double turn_rate_cy, double pitch_rad);
 Eigen::Vector2d rotational_flow(double x, double y, const Eigen::Vector3d& camera_omega);
 
 // Removes the rotational part of every vector (CGF Eq. 1 -> Eq. 2). Non-finite vectors stay
-// non-finite so that later stages can count them.
+// non-finite so that later stages can count them. For displacement flow (interval_s() > 0),
+// camera_omega is the mean over the interval and the whole rotation's displacement is removed.
 void derotate(FlowField& field, const Eigen::Vector3d& camera_omega);
 
 }  // namespace flowsteer::servo
