@@ -38,9 +38,9 @@ struct ReplayCommand {
   std::string camera_info;
   servo::FlowMethod flow = servo::FlowMethod::dis_medium;
   std::optional<double> goal_bearing_deg;  // positive to the right; none: no goal term
-  // The speed assumed for derotation's partner, the flat-ground test, and the controller, since
-  // a recording has no odometry. 0 (the default) skips the ground test: the floor then shows as
-  // objects when the camera moved.
+  // The speed assumed for the flat-ground test and the controller, since a recording has no
+  // odometry (the turn rate is taken as 0). 0 (the default) skips the ground test: the floor
+  // then shows as objects when the camera moved.
   double speed_mps = 0.0;
 };
 
