@@ -1,9 +1,13 @@
 // Capture-side latency on replay at 640x480: decoding a recorded frame (MJPG in AVI, as a robot
 // records), undistorting it with a calibration, and the DIS optical flow the numerical-flow
-// pipeline runs on consecutive frames. The recording is written at start-up: a textured scene
-// sliding sideways, so that the flow has something to find.
+// pipeline runs on consecutive frames; then the whole capture-to-command step of `flowsteer
+// run`: decode, undistort, Perception (DIS flow, derotation, ground test, flow_graph_fast
+// segmentation, features) and the controller's command. The recording is written at start-up:
+// a textured scene sliding sideways, so that the flow has something to find.
 
 #include <filesystem>
+#include <memory>
+#include <sstream>
 #include <string>
 
 #include <benchmark/benchmark.h>
@@ -12,6 +16,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "flowsteer/camera_io/replay_source.hpp"
+#include "flowsteer/launch/robot_brain.hpp"
 
 namespace {
 
@@ -103,12 +108,58 @@ void BM_ReplayReadDisFlow640x480(benchmark::State& state) {
   }
 }
 
+// One frame from capture to command, as the robot loop runs it (the calibrated recording is
+// undistorted). Counters: each stage's mean milliseconds.
+void BM_CaptureToCommand640x480(benchmark::State& state) {
+  flowsteer::launch::PerceptionSection perception;
+  perception.flow = static_cast<flowsteer::servo::FlowMethod>(state.range(0));
+  perception.segmentation = flowsteer::servo::SegmentationMethod::flow_graph_fast;
+  perception.mount = {0.3, 0.1};
+  flowsteer::launch::ControllerSection controller;
+  controller.spec.use_depth = false;
+  std::ostringstream log;
+  std::unique_ptr<ReplaySource> source;
+  std::unique_ptr<flowsteer::launch::PerceptionBrain> brain;
+  Frame frame;
+  // A fresh recording needs a first frame before there is flow; that frame is not timed.
+  const auto restart = [&] {
+    source = std::make_unique<ReplaySource>(options(true));
+    brain = std::make_unique<flowsteer::launch::PerceptionBrain>(source->intrinsics(), perception,
+                                                                 controller, log);
+    source->read(frame, 0.1);
+    brain->step({frame, {0.3, 0.0}, 0.1, 5.0});
+  };
+  restart();
+  flowsteer::launch::StageTimes sum;
+  for (auto _ : state) {
+    if (source->read(frame, 0.1) != ReadStatus::ok) {
+      state.PauseTiming();
+      restart();
+      source->read(frame, 0.1);
+      state.ResumeTiming();
+    }
+    const flowsteer::servo::Command command = brain->step({frame, {0.3, 0.0}, 0.1, 5.0});
+    benchmark::DoNotOptimize(command);
+    sum += brain->times();
+  }
+  const double n = static_cast<double>(state.iterations());
+  state.counters["flow_ms"] = sum.flow / n;
+  state.counters["segment_ms"] = sum.segment / n;
+  state.counters["features_ms"] = sum.features / n;
+  state.counters["control_ms"] = sum.control / n;
+}
+
 BENCHMARK(BM_ReplayRead640x480)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ReplayReadUndistort640x480)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ReplayReadDisFlow640x480)
     ->Arg(cv::DISOpticalFlow::PRESET_ULTRAFAST)
     ->Arg(cv::DISOpticalFlow::PRESET_FAST)
     ->Arg(cv::DISOpticalFlow::PRESET_MEDIUM)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CaptureToCommand640x480)
+    ->ArgName("flow")
+    ->Arg(static_cast<int>(flowsteer::servo::FlowMethod::dis_fast))
+    ->Arg(static_cast<int>(flowsteer::servo::FlowMethod::dis_medium))
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -17,10 +17,10 @@ double ms_since(Clock::time_point start) {
 
 }  // namespace
 
-servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
-  const sim_camera::ControllerSpec& c = agent.controller;
+servo::Controller make_controller(const sim_camera::ControllerSpec& c, double agent_width_m,
+                                  double preferred_speed_mps) {
   servo::AvoidanceOptions avoidance;
-  avoidance.agent_width_m = 2.0 * agent.radius_m + c.clearance_margin_m;
+  avoidance.agent_width_m = agent_width_m + c.clearance_margin_m;
   avoidance.use_depth = c.use_depth;
   const servo::ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
   if (c.kind == "following") {
@@ -32,8 +32,12 @@ servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
   weights.beta = c.beta;
   weights.gamma = c.gamma;
   weights.delta = c.delta;
-  weights.preferred_speed_mps = agent.preferred_speed_mps;
+  weights.preferred_speed_mps = preferred_speed_mps;
   return servo::Controller(servo::goal_reaching(weights, avoidance), c.lambda, limits);
+}
+
+servo::Controller make_controller(const sim_camera::AgentSpec& agent) {
+  return make_controller(agent.controller, 2.0 * agent.radius_m, agent.preferred_speed_mps);
 }
 
 PerceptionOptions perception_options(const sim_camera::AgentSpec& agent) {

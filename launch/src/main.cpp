@@ -1,5 +1,7 @@
 // The `flowsteer` command.
 #include <unistd.h>
+#include <atomic>
+#include <csignal>
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
@@ -15,12 +17,30 @@
 #include "flowsteer/launch/demo.hpp"
 #include "flowsteer/launch/demo_scene.hpp"
 #include "flowsteer/launch/flow_evaluation.hpp"
+#include "flowsteer/launch/robot_commands.hpp"
+#include "flowsteer/launch/robot_launch.hpp"
 #include "flowsteer/launch/scenario_file.hpp"
 #include "flowsteer/launch/simulation.hpp"
 
 namespace {
 
 using flowsteer::launch::DemoScene;
+
+// Set by SIGINT / SIGTERM: the robot loop sees it, stops the base and returns.
+std::atomic<bool> g_stop_requested{false};
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+void request_stop(int) {
+  g_stop_requested.store(true);
+}
+
+void install_stop_handlers() {
+  struct sigaction action {};
+  action.sa_handler = request_stop;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
 
 // "x,y,width[,vx,vy]": a box obstacle in the agent's body frame.
 flowsteer::servo::SceneObject parse_obstacle(const std::string& text, std::int32_t id) {
@@ -214,6 +234,48 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
 
+  flowsteer::launch::RunCommand run_command;
+  double run_goal_bearing_deg = 0.0;
+  double run_goal_distance_m = 0.0;
+  CLI::App* run = app.add_subcommand(
+      "run",
+      "The robot's loop from a launch file: camera -> flow -> features -> controller -> drive "
+      "(launch/launch_files/README.md); Ctrl-C stops the base and ends the run");
+  run->add_option("LAUNCH", run_command.launch_file, "robot launch file (YAML)")->required();
+  CLI::Option* run_bearing = run->add_option(
+      "--goal-bearing", run_goal_bearing_deg,
+      "goal bearing from the start heading, degrees, positive to the right (overrides goal:)");
+  CLI::Option* run_distance =
+      run->add_option("--goal-distance", run_goal_distance_m, "goal distance, metres");
+  run->add_option("--log", run_command.log_file,
+                  "also write the events and one line per frame (status, objects, command) here");
+
+  flowsteer::launch::ReplayCommand replay_command;
+  double replay_hfov_deg = 0.0;
+  double replay_goal_bearing_deg = 0.0;
+  std::string replay_flow = "dis_medium";
+  CLI::App* replay = app.add_subcommand(
+      "replay",
+      "The pipeline on a recorded video without a drive: features.csv, commands.csv and "
+      "overlay.mp4 in a folder");
+  replay->add_option("VIDEO", replay_command.video, "video file or image pattern")->required();
+  replay->add_option("--out", replay_command.out_dir, "folder for the outputs")
+      ->capture_default_str();
+  CLI::Option* replay_hfov =
+      replay->add_option("--hfov-deg", replay_hfov_deg, "horizontal field of view (default 60)");
+  CLI::Option* replay_info =
+      replay->add_option("--camera-info", replay_command.camera_info, "ROS camera_info YAML");
+  replay_hfov->excludes(replay_info);
+  replay->add_option("--flow", replay_flow, "numerical flow method")->capture_default_str();
+  CLI::Option* replay_bearing = replay->add_option("--goal-bearing", replay_goal_bearing_deg,
+                                                   "goal bearing, degrees, positive to the right");
+  replay
+      ->add_option("--speed", replay_command.speed_mps,
+                   "assumed camera speed, m/s (no odometry in a recording); 0 skips the "
+                   "flat-ground test")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -226,6 +288,41 @@ int main(int argc, char** argv) {
         std::cout << s.name << std::string(s.name.size() < 18 ? 18 - s.name.size() : 1, ' ')
                   << s.description << "\n";
       }
+    }
+    if (*run) {
+      if (*run_bearing) {
+        run_command.goal_bearing_deg = run_goal_bearing_deg;
+      }
+      if (*run_distance) {
+        run_command.goal_distance_m = run_goal_distance_m;
+      }
+      install_stop_handlers();
+      const auto result =
+          flowsteer::launch::run_robot_command(run_command, g_stop_requested, std::cerr);
+      if (result.reason == flowsteer::launch::StopReason::camera_timeout) {
+        // The base was stopped; the run still failed at what it was asked to do.
+        return 3;
+      }
+    }
+    if (*replay) {
+      const auto method = flowsteer::servo::parse_flow_method(replay_flow);
+      if (!method || *method == flowsteer::servo::FlowMethod::synthetic) {
+        throw CLI::ValidationError(
+            "--flow", "unknown method '" + replay_flow +
+                          "' (known: " + flowsteer::launch::numerical_flow_method_names() + ")");
+      }
+      replay_command.flow = *method;
+      if (*replay_hfov) {
+        replay_command.hfov_deg = replay_hfov_deg;
+      }
+      if (*replay_bearing) {
+        replay_command.goal_bearing_deg = replay_goal_bearing_deg;
+      }
+      const auto summary = flowsteer::launch::run_replay_command(replay_command, std::cerr);
+      std::cout << "replay " << replay_command.video << " -> " << replay_command.out_dir << ": "
+                << summary.frames << " frames (" << summary.blind_frames << " without flow), "
+                << summary.object_rows << " object rows, " << summary.mean_step_ms
+                << " ms per frame (perception and controller)\n";
     }
     if (*intrinsics) {
       flowsteer::launch::run_calibrate_intrinsics(intrinsics_command, std::cout, std::cerr);

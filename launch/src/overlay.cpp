@@ -65,20 +65,24 @@ cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude) {
 }
 
 cv::Mat draw_overlay(const AgentPipeline& pipeline) {
-  const servo::CameraIntrinsics& k = pipeline.intrinsics();
-  const servo::Percept& percept = pipeline.percept();
-  const cv::Size size = pipeline.frame().image.size();
+  return draw_overlay(pipeline.frame().image, pipeline.flow(), pipeline.objects(),
+                      pipeline.intrinsics(), pipeline.percept().goal_bearing_rad);
+}
+
+cv::Mat draw_overlay(const cv::Mat& image, const servo::FlowField& flow,
+                     std::span<const servo::ObjectFeatures> objects,
+                     const servo::CameraIntrinsics& k, std::optional<double> goal_bearing_rad) {
+  const cv::Size size = image.size();
   cv::Mat canvas(overlay_size(size), CV_8UC3, cv::Scalar::all(0));
   cv::Mat view = canvas(cv::Rect(0, 0, size.width, size.height));
-  pipeline.frame().image.copyTo(view);
-  flow_to_color(pipeline.flow(), 0.5)
-      .copyTo(canvas(cv::Rect(size.width, 0, size.width, size.height)));
+  image.copyTo(view);
+  flow_to_color(flow, 0.5).copyTo(canvas(cv::Rect(size.width, 0, size.width, size.height)));
   auto to_pixel = [&](const Eigen::Vector2d& p) {
     return cv::Point(static_cast<int>(std::lround(k.fx_px * p.x() + k.cx_px)),
                      static_cast<int>(std::lround(k.fy_px * p.y() + k.cy_px)));
   };
   const double font = std::max(0.3, size.width / 400.0);
-  for (const servo::ObjectFeatures& o : pipeline.objects()) {
+  for (const servo::ObjectFeatures& o : objects) {
     const cv::Point centre = to_pixel(o.centre);
     cv::circle(view, centre, 3, kCentreColor, cv::FILLED);
     if (o.has_foe()) {
@@ -91,8 +95,8 @@ cv::Mat draw_overlay(const AgentPipeline& pipeline) {
                   kCentreColor, 1);
     }
   }
-  if (percept.goal_bearing_rad) {
-    const double bearing = std::clamp(*percept.goal_bearing_rad, -1.5, 1.5);
+  if (goal_bearing_rad) {
+    const double bearing = std::clamp(*goal_bearing_rad, -1.5, 1.5);
     const int col = static_cast<int>(std::lround(k.fx_px * std::tan(bearing) + k.cx_px));
     if (col >= 0 && col < size.width) {
       cv::line(view, {col, 0}, {col, size.height / 6}, kGoalColor, 2);

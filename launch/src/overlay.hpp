@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -16,6 +17,11 @@ namespace flowsteer::launch {
 // An agent's view beside its colour-coded derotated flow, with the features drawn on the view:
 // FOE (blue), centre (orange) and TTC of each object, the goal's bearing (pink) (CGF Fig. 3).
 cv::Mat draw_overlay(const AgentPipeline& pipeline);
+// The same for any image with its flow and features (a robot's camera, a recording).
+cv::Mat draw_overlay(const cv::Mat& image, const servo::FlowField& flow,
+                     std::span<const servo::ObjectFeatures> objects,
+                     const servo::CameraIntrinsics& intrinsics,
+                     std::optional<double> goal_bearing_rad);
 cv::Size overlay_size(cv::Size image);
 
 // Flow as colour: hue for the direction, brightness for the magnitude (up to max_magnitude).

@@ -4,7 +4,9 @@
 #include <filesystem>
 #include <numbers>
 
+#include "controller_reader.hpp"
 #include "flowsteer/calibration/camera_info.hpp"
+#include "flowsteer/calibration/camera_mount.hpp"
 #include "yaml_reader.hpp"
 
 namespace flowsteer::launch {
@@ -129,6 +131,70 @@ CameraSection read_camera(const YamlReader& r, const YAML::Node& camera,
   return s;
 }
 
+PerceptionSection read_robot_perception(const YamlReader& r, const YAML::Node& node,
+                                        const std::string& base_dir) {
+  PerceptionSection p;
+  if (!node) {
+    return p;
+  }
+  r.only_keys(node, "perception",
+              {"flow", "segmentation", "dark_regions", "mount", "height_m", "pitch_deg"});
+  sim_camera::PerceptionSpec methods{p.flow, p.segmentation};
+  methods = read_perception(r, node, "perception", methods);
+  if (methods.flow == servo::FlowMethod::synthetic) {
+    r.fail(
+        node["flow"], "perception.flow",
+        "synthetic flow needs a simulator; a camera needs one of " + numerical_flow_method_names());
+  }
+  if (methods.segmentation == servo::SegmentationMethod::semantic) {
+    r.fail(node["segmentation"], "perception.segmentation",
+           "semantic segmentation needs a simulator's object ids; a camera needs flow_graph or "
+           "flow_graph_fast");
+  }
+  p.flow = methods.flow;
+  p.segmentation = methods.segmentation;
+  p.dark_regions = r.boolean(node, "perception", "dark_regions", p.dark_regions);
+  if (node["mount"] && (node["height_m"] || node["pitch_deg"])) {
+    r.fail(node["mount"], "perception.mount",
+           "give a camera mount file or height_m and pitch_deg, not both");
+  }
+  if (node["mount"]) {
+    p.mount_file = resolve(text(r, node, "perception", "mount", ""), base_dir);
+    // The reader's ConfigError names the mount file's own line and field.
+    p.mount = calibration::read_camera_mount(p.mount_file).mount;
+  } else if (node["height_m"] || node["pitch_deg"]) {
+    if (!node["height_m"]) {
+      r.fail(node, "perception.height_m", "missing: the camera's height above the floor");
+    }
+    p.mount.height_m = r.positive(node, "perception", "height_m", 0.0);
+    const double pitch_deg = r.number(node, "perception", "pitch_deg", 0.0);
+    if (std::abs(pitch_deg) >= 89.0) {
+      r.fail(node["pitch_deg"], "perception.pitch_deg", "must be within (-89, 89)");
+    }
+    p.mount.pitch_rad = pitch_deg * std::numbers::pi / 180.0;
+  }
+  return p;
+}
+
+ControllerSection read_robot_controller(const YamlReader& r, const YAML::Node& node) {
+  ControllerSection c;
+  // No depth from a camera: the features' tau v_c / Z is MIG's 1/2, not the renderer's depth.
+  c.spec.use_depth = false;
+  if (!node) {
+    return c;
+  }
+  // Goal reaching on the flow's features only: following needs a leader's id and the other
+  // steering models need a simulator.
+  r.only_keys(node, "controller",
+              {"alpha", "beta", "gamma", "delta", "lambda", "max_accel_mps2", "max_turn_rate",
+               "clearance_margin_m", "preferred_speed_mps", "robot_width_m"});
+  c.spec = read_controller(r, node, "controller", c.spec);
+  c.preferred_speed_mps =
+      r.non_negative(node, "controller", "preferred_speed_mps", c.preferred_speed_mps);
+  c.robot_width_m = r.positive(node, "controller", "robot_width_m", c.robot_width_m);
+  return c;
+}
+
 }  // namespace
 
 RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& source_name,
@@ -138,7 +204,7 @@ RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& 
   if (!root.IsMap()) {
     throw ConfigError(source_name, 1, 1, "", "expected a mapping with camera, drive and goal");
   }
-  r.only_keys(root, "", {"camera", "drive", "goal"});
+  r.only_keys(root, "", {"camera", "drive", "goal", "perception", "controller"});
   RobotLaunch launch;
   if (!root["camera"]) {
     throw ConfigError(source_name, 1, 1, "camera", "missing: the launch file has no camera");
@@ -164,12 +230,40 @@ RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& 
     g.distance_m = r.positive(goal, "goal", "distance_m", 0.0);
     launch.goal = g;
   }
+  launch.perception = read_robot_perception(r, root["perception"], base_dir);
+  launch.controller = read_robot_controller(r, root["controller"]);
+  const bool mount_given =
+      root["perception"] && (root["perception"]["mount"] || root["perception"]["height_m"]);
+  if (launch.drive && !mount_given) {
+    r.fail(root["perception"] ? root["perception"] : root, "perception.mount",
+           "missing: with a drive, the flat-ground test needs the camera mount (mount: FILE, or "
+           "height_m and pitch_deg)");
+  }
+  if (launch.perception.dark_regions != (launch.controller.spec.delta > 0.0)) {
+    r.fail(root["perception"] && root["perception"]["dark_regions"]
+               ? root["perception"]["dark_regions"]
+               : (root["controller"] ? root["controller"] : root),
+           "perception.dark_regions",
+           launch.perception.dark_regions
+               ? "true needs controller.delta > 0 to weigh the dark regions"
+               : "controller.delta > 0 weighs dark regions: set perception.dark_regions: true");
+  }
   return launch;
 }
 
 RobotLaunch read_robot_launch(const std::string& path) {
   const std::string text = read_text_file(path, "launch file");
   return parse_robot_launch(text, path, fs::path(path).parent_path().string());
+}
+
+std::string numerical_flow_method_names() {
+  std::string names;
+  for (const servo::FlowMethod method :
+       {servo::FlowMethod::dis_ultrafast, servo::FlowMethod::dis_fast,
+        servo::FlowMethod::dis_medium, servo::FlowMethod::farneback, servo::FlowMethod::tvl1}) {
+    names += (names.empty() ? "" : ", ") + std::string(servo::to_string(method));
+  }
+  return names;
 }
 
 std::unique_ptr<camera_io::FrameSource> make_camera(const CameraSection& section) {

@@ -75,7 +75,8 @@ TEST(RobotLaunch, BadFilesNameTheLineAndField) {
             "bad.yaml:2:34: drive.loop_rate_hz: one loop period must be shorter than "
             "camera.timeout_s");
   EXPECT_EQ(error_of("camera: {type: v4l2}\nmotors: {}\n"),
-            "bad.yaml:2:1: motors: unknown key (expected one of: camera, drive, goal)");
+            "bad.yaml:2:1: motors: unknown key (expected one of: camera, drive, goal, perception, "
+            "controller)");
   EXPECT_EQ(error_of("camera: {type: v4l2, calibration: /nonexistent/cam.yaml}\n").substr(0, 24),
             "/nonexistent/cam.yaml: c");
 }
@@ -145,7 +146,8 @@ class StallingCamera : public camera_io::FrameSource {
 std::unique_ptr<drivers::Base> sim_base() {
   const launch::RobotLaunch l = parse_robot_launch(
       "camera: {type: replay, replay: {path: x.avi}}\n"
-      "drive: {type: sim, loop_rate_hz: 50, watchdog: {timeout_s: 0.3, ramp_s: 0.1}}\n",
+      "drive: {type: sim, loop_rate_hz: 50, watchdog: {timeout_s: 0.3, ramp_s: 0.1}}\n"
+      "perception: {height_m: 0.3}\n",
       "test.yaml", "");
   return launch::make_base(*l.drive);
 }

@@ -53,6 +53,10 @@ class AgentPipeline {
 
 // The servo controller a scenario's agent asks for.
 servo::Controller make_controller(const sim_camera::AgentSpec& agent);
+// The same from the controller settings, the agent's (or robot's) own width and its preferred
+// speed v*.
+servo::Controller make_controller(const sim_camera::ControllerSpec& controller,
+                                  double agent_width_m, double preferred_speed_mps);
 
 // The perception a scenario's agent asks for.
 PerceptionOptions perception_options(const sim_camera::AgentSpec& agent);

@@ -11,6 +11,10 @@
 #include "flowsteer/camera_io/replay_source.hpp"
 #include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "flowsteer/launch/drive_config.hpp"
+#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/servo/flow_segmentation.hpp"
+#include "flowsteer/servo/optical_flow.hpp"
+#include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::launch {
 
@@ -32,10 +36,36 @@ struct GoalSection {
   double distance_m = 0.0;
 };
 
+// The `perception:` section: how the robot sees (numerical flow and flow segmentation; a camera
+// has neither the simulator's flow nor its object ids) and where the camera sits.
+struct PerceptionSection {
+  servo::FlowMethod flow = servo::FlowMethod::dis_fast;
+  servo::SegmentationMethod segmentation = servo::SegmentationMethod::flow_graph_fast;
+  bool dark_regions = false;  // MIG 2019's dark regions; needs controller.delta > 0
+  // From `mount: FILE` (calibration's camera mount file) or inline height_m / pitch_deg.
+  // Required with a drive: the flat-ground test predicts the floor's flow from it. Without a
+  // drive the measured speed is zero and the test is skipped, so the default (1 m, level) is
+  // never used.
+  servo::CameraMount mount;
+  std::string mount_file;  // resolved against the launch file's folder; empty when inline
+};
+
+// The `controller:` section: goal reaching (CGF's navigation function on the features), with
+// the robot's preferred speed and width.
+struct ControllerSection {
+  sim_camera::ControllerSpec spec;  // type vision, kind goal_reaching; use_depth false
+  double preferred_speed_mps = 0.3;
+  // The robot's own width in the avoidance terms (CGF §6.2's agent width, plus
+  // spec.clearance_margin_m).
+  double robot_width_m = 0.4;
+};
+
 struct RobotLaunch {
   CameraSection camera;
   std::optional<DriveSection> drive;  // none: perception and commands without a drive
   std::optional<GoalSection> goal;
+  PerceptionSection perception;
+  ControllerSection controller;
   std::vector<std::string> warnings;  // from the camera_info reader
 };
 
@@ -46,6 +76,9 @@ RobotLaunch read_robot_launch(const std::string& path);
 // The same for launch-file text; relative paths resolve against base_dir.
 RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& source_name,
                                const std::string& base_dir);
+
+// "dis_ultrafast, dis_fast, ...": the flow methods a camera can use (all but synthetic).
+std::string numerical_flow_method_names();
 
 // Opens the camera the section describes. Throws std::runtime_error naming the device or file
 // (a missing device, no camera found, an unreadable recording).

@@ -1,0 +1,274 @@
+// The robot's brain and its launch-file sections: perception and controller settings are
+// checked like the rest of the file; a blind frame brakes and holds the goal heading; and a
+// recording of rendered frames gives the same features as the frames themselves.
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "flowsteer/camera_io/replay_source.hpp"
+#include "flowsteer/launch/agent_pipeline.hpp"
+#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/launch/perception.hpp"
+#include "flowsteer/launch/robot_brain.hpp"
+#include "flowsteer/launch/robot_launch.hpp"
+#include "flowsteer/launch/scenario_file.hpp"
+#include "flowsteer/sim_camera/renderer.hpp"
+#include "flowsteer/sim_camera/world.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace flowsteer;
+
+const char* kCamera = "camera:\n  type: replay\n  replay: {path: run.mp4}\n";
+const char* kDrive =
+    "drive:\n  type: sim\n  loop_rate_hz: 50\n  geometry: {wheel_separation_m: 0.4, "
+    "wheel_radius_m: 0.05}\n";
+
+std::string error_of(const std::string& yaml) {
+  try {
+    launch::parse_robot_launch(yaml, "bad.yaml", "");
+  } catch (const launch::ConfigError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(RobotLaunchSections, PerceptionAndControllerAreRead) {
+  const launch::RobotLaunch l = launch::parse_robot_launch(
+      std::string(kCamera) + kDrive +
+          "perception: {flow: dis_medium, segmentation: flow_graph, dark_regions: true, "
+          "height_m: 0.3, pitch_deg: 10}\n"
+          "controller: {alpha: 2, gamma: 1, delta: 0.5, preferred_speed_mps: 0.4, "
+          "robot_width_m: 0.5}\n",
+      "ok.yaml", "");
+  EXPECT_EQ(l.perception.flow, servo::FlowMethod::dis_medium);
+  EXPECT_EQ(l.perception.segmentation, servo::SegmentationMethod::flow_graph);
+  EXPECT_TRUE(l.perception.dark_regions);
+  EXPECT_DOUBLE_EQ(l.perception.mount.height_m, 0.3);
+  EXPECT_NEAR(l.perception.mount.pitch_rad, 10.0 * M_PI / 180.0, 1e-12);
+  EXPECT_DOUBLE_EQ(l.controller.spec.alpha, 2.0);
+  EXPECT_DOUBLE_EQ(l.controller.spec.delta, 0.5);
+  EXPECT_FALSE(l.controller.spec.use_depth);
+  EXPECT_DOUBLE_EQ(l.controller.preferred_speed_mps, 0.4);
+  EXPECT_DOUBLE_EQ(l.controller.robot_width_m, 0.5);
+}
+
+TEST(RobotLaunchSections, BadSectionsNameTheLineAndField) {
+  const std::string camera(kCamera);
+  EXPECT_EQ(error_of(camera + "perception: {segmentation: semantic}\n"),
+            "bad.yaml:4:28: perception.segmentation: semantic segmentation needs a simulator's "
+            "object ids; a camera needs flow_graph or flow_graph_fast");
+  EXPECT_EQ(error_of(camera + "perception: {flow: lucas}\n").substr(0, 38),
+            "bad.yaml:4:20: perception.flow: expect");
+  EXPECT_EQ(error_of(camera + "controller: {kind: following}\n"),
+            "bad.yaml:4:14: controller.kind: unknown key (expected one of: alpha, beta, gamma, "
+            "delta, lambda, max_accel_mps2, max_turn_rate, clearance_margin_m, "
+            "preferred_speed_mps, robot_width_m)");
+  // The shared reader's checks hold here too.
+  EXPECT_EQ(error_of(camera + "controller: {gamma: 0.5, delta: 1}\n"),
+            "bad.yaml:4:33: controller.delta: must not exceed gamma (MIG 2019: visible "
+            "obstacles weigh at least as much)");
+  EXPECT_EQ(error_of(camera + "controller: {delta: 0.5}\n"),
+            "bad.yaml:4:13: perception.dark_regions: controller.delta > 0 weighs dark regions: "
+            "set perception.dark_regions: true");
+  EXPECT_EQ(error_of(camera + kDrive),
+            "bad.yaml:1:1: perception.mount: missing: with a drive, the flat-ground test needs "
+            "the camera mount (mount: FILE, or height_m and pitch_deg)");
+  EXPECT_EQ(error_of(camera + "perception: {mount: m.yaml, height_m: 0.3}\n"),
+            "bad.yaml:4:21: perception.mount: give a camera mount file or height_m and "
+            "pitch_deg, not both");
+  // A missing mount file is named with its path.
+  EXPECT_NE(error_of(camera + "perception: {mount: no_such_mount.yaml}\n").find("no_such_mount"),
+            std::string::npos);
+}
+
+camera_io::Frame textured_frame(double t_s, std::uint64_t sequence, int shift_px) {
+  cv::Mat texture(120, 200, CV_8UC3);
+  cv::theRNG().state = 3;
+  cv::randu(texture, cv::Scalar::all(0), cv::Scalar::all(255));
+  cv::GaussianBlur(texture, texture, {0, 0}, 1.5);
+  camera_io::Frame frame;
+  frame.image = texture(cv::Rect(shift_px, 0, 160, 120)).clone();
+  frame.timestamp_s = t_s;
+  frame.sequence = sequence;
+  return frame;
+}
+
+// A blind frame (no flow yet, or a single colour) brakes at the controller's limit and turns
+// towards the goal only; the switch to blind and back is logged once each.
+TEST(PerceptionBrain, BlindFramesBrakeAndHoldTheGoalHeading) {
+  launch::ControllerSection controller;
+  controller.spec.use_depth = false;
+  controller.spec.max_accel_mps2 = 0.7;
+  std::ostringstream log;
+  launch::PerceptionBrain brain(servo::CameraIntrinsics::from_horizontal_fov(160, 120, 1.0), {},
+                                controller, log);
+  const drivers::BodyVelocity moving{0.4, 0.0};
+  const double goal_right_rad = 0.3;
+
+  const camera_io::Frame first = textured_frame(0.0, 0, 0);
+  servo::Command c = brain.step({first, moving, goal_right_rad, 5.0});
+  EXPECT_TRUE(brain.blind());
+  EXPECT_DOUBLE_EQ(c.accel_mps2, -0.7);
+  EXPECT_GT(c.turn_rate, 0.0);  // towards the goal, on the right
+  // Stopped, it stays stopped: no reversing.
+  camera_io::Frame again = first;
+  again.sequence = 1;
+  c = brain.step({again, {0.0, 0.0}, goal_right_rad, 5.0});
+  EXPECT_TRUE(brain.blind());  // the same timestamp: no time for motion
+  EXPECT_DOUBLE_EQ(c.accel_mps2, 0.0);
+
+  camera_io::Frame grey = textured_frame(0.1, 2, 0);
+  grey.image.setTo(cv::Scalar::all(128));
+  c = brain.step({grey, moving, -goal_right_rad, 5.0});
+  EXPECT_TRUE(brain.blind());
+  EXPECT_LT(c.turn_rate, 0.0);
+  EXPECT_DOUBLE_EQ(c.accel_mps2, -0.7);
+
+  brain.step({textured_frame(0.2, 3, 2), moving, goal_right_rad, 5.0});
+  brain.step({textured_frame(0.3, 4, 4), moving, goal_right_rad, 5.0});
+  EXPECT_FALSE(brain.blind());
+  const std::string text = log.str();
+  EXPECT_NE(text.find("frame 0: blind (no previous frame): braking to a stop, holding the goal "
+                      "heading, no avoidance"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("frame 2: blind (single-colour frame)"), std::string::npos) << text;
+  EXPECT_NE(text.find("frame 4: flow ok, steering by the features"), std::string::npos) << text;
+}
+
+// The pixels of one region.
+std::vector<std::size_t> region_pixels(const launch::Perception& p, int label) {
+  std::vector<std::size_t> pixels;
+  const auto& labels = p.segmentation().labels;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (labels[i] == label) {
+      pixels.push_back(i);
+    }
+  }
+  return pixels;
+}
+
+struct Seen {
+  std::vector<int> labels;  // the direct render's segmentation
+  std::vector<servo::ObjectFeatures> objects;
+};
+
+// The check: frames rendered by sim_camera, encoded by OpenCV and replayed through
+// ReplaySource give the same features as the rendered frames themselves, through the same
+// Perception (DIS medium flow, flow-graph segmentation: a recording has no object ids). Regions
+// of the two runs are matched by overlap. The recording is FFV1 (lossless): with it the
+// container round trip (timestamps from the rate, intrinsics from the field of view, BGR
+// frames) is checked exactly; a lossy codec would add its own error to the flow.
+TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
+  sim_camera::WorldSpec spec = launch::builtin_scenario("flow_targets");
+  spec.agents[0].camera.width_px = spec.agents[0].camera.height_px = 256;
+  spec.agents[0].perception = {};
+  sim_camera::World world(spec);
+  const auto renderer = sim_camera::Renderer::create();
+  launch::AgentPipeline agent(world, *renderer, 0);
+
+  launch::PerceptionOptions options;
+  options.flow = servo::FlowMethod::dis_medium;
+  options.segmentation = servo::SegmentationMethod::flow_graph;
+  options.use_depth = false;
+  options.mount = {spec.agents[0].camera.height_m, spec.agents[0].camera.pitch_rad};
+  launch::Perception direct(agent.intrinsics(), options);
+
+  const fs::path video = fs::temp_directory_path() / "flowsteer_replay_of_render.avi";
+  constexpr int kFrames = 16;
+  std::vector<Seen> direct_seen(kFrames);
+  std::vector<double> speeds;
+  std::vector<cv::Mat> rendered;
+  {
+    // FFV1 is lossless: the only difference left is the container's round trip.
+    cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('F', 'F', 'V', '1'),
+                           1.0 / spec.step_s, {256, 256});
+    ASSERT_TRUE(writer.isOpened()) << "OpenCV cannot write FFV1 to " << video;
+    std::vector<std::pair<double, double>> commands(1);
+    for (int f = 0; f < kFrames; ++f) {
+      launch::StageTimes times;
+      const servo::ControlOutput& out = agent.step(times);
+      commands[0] = {out.command.accel_mps2, out.command.turn_rate};
+      const sim_camera::AgentState& state = world.agents()[0];
+      camera_io::Frame frame = agent.frame();
+      frame.sim.reset();  // as a camera would give it
+      writer.write(frame.image);
+      rendered.push_back(frame.image.clone());
+      speeds.push_back(state.speed_mps);
+      if (direct.process(frame, state.speed_mps, 0.0, times) == servo::FlowStatus::ok) {
+        direct_seen[f].labels = direct.segmentation().labels;
+        direct_seen[f].objects.assign(direct.objects().begin(), direct.objects().end());
+      }
+      world.step(commands);
+    }
+  }
+
+  camera_io::ReplayOptions replay_options;
+  replay_options.path = video.string();
+  replay_options.frame_rate_hz = 1.0 / spec.step_s;
+  replay_options.lens.horizontal_fov_rad = spec.agents[0].camera.hfov_rad;
+  camera_io::ReplaySource source(replay_options);
+  EXPECT_NEAR(source.intrinsics().fx_px, agent.intrinsics().fx_px, 1e-9);
+  launch::Perception replayed(source.intrinsics(), options);
+  camera_io::Frame frame;
+  int f = 0;
+  int compared = 0;
+  while (source.read(frame, 0.0) == camera_io::ReadStatus::ok) {
+    ASSERT_LT(f, kFrames);
+    ASSERT_EQ(cv::norm(frame.image, rendered[f], cv::NORM_INF), 0.0) << "frame " << f;
+    launch::StageTimes times;
+    if (replayed.process(frame, speeds[f], 0.0, times) == servo::FlowStatus::ok) {
+      for (const servo::ObjectFeatures& o : replayed.objects()) {
+        if (o.status != servo::MotionStatus::approaching || o.pixel_count < 300) {
+          continue;
+        }
+        // The same object: the direct region that overlaps this one most, by intersection over
+        // union; segmentations may split differently, so only close matches are compared.
+        std::map<int, int> shared;
+        for (const std::size_t i : region_pixels(replayed, o.label)) {
+          ++shared[direct_seen[f].labels[i]];
+        }
+        const servo::ObjectFeatures* match = nullptr;
+        double best_iou = 0.0;
+        for (const servo::ObjectFeatures& d : direct_seen[f].objects) {
+          const auto common = shared.find(d.label);
+          if (common == shared.end() || d.status != servo::MotionStatus::approaching) {
+            continue;
+          }
+          const double iou =
+              common->second / static_cast<double>(o.pixel_count + d.pixel_count - common->second);
+          if (iou > best_iou) {
+            best_iou = iou;
+            match = &d;
+          }
+        }
+        if (match == nullptr || best_iou < 0.8) {
+          continue;
+        }
+        SCOPED_TRACE("frame " + std::to_string(f) + ", region of " + std::to_string(o.pixel_count) +
+                     " px, IoU " + std::to_string(best_iou));
+        // FFV1 is lossless and keeps BGR: the decoded frames are the rendered ones bit for bit
+        // (checked above), so the same Perception gives the same features, up to rounding.
+        EXPECT_NEAR(o.ttc_s, match->ttc_s, 1e-9 * match->ttc_s);
+        EXPECT_NEAR(o.foe.x(), match->foe.x(), 1e-9);
+        EXPECT_NEAR((o.centre - match->centre).norm(), 0.0, 1e-9);
+        ++compared;
+      }
+    }
+    ++f;
+  }
+  EXPECT_EQ(f, kFrames);
+  EXPECT_GE(compared, 10) << "too few objects matched to compare";
+  fs::remove(video);
+}
+
+}  // namespace
