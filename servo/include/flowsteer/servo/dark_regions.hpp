@@ -8,7 +8,7 @@ namespace flowsteer::servo {
 
 struct DarkRegionOptions {
   // A pixel is dark below this grey level (0–255): too dark for its flow to be trusted.
-  double luminance_threshold = 30.0;
+  double luminance_threshold = 80.0;
   // Dark regions smaller than this fraction of the image are dropped (MIG §5: noise, small
   // shadows).
   double min_area_fraction = 0.003;
