@@ -118,7 +118,6 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     ground_mask_.assign(field_.size(), 0);
     servo::GroundRemovalOptions ground = options_.ground;
     if (optical_flow_) {
-      ground.flow_tolerance = std::max(ground.flow_tolerance, options_.numerical_ground_tolerance);
       ground.flow_floor =
           std::max(ground.flow_floor, options_.numerical_flow_noise_px /
                                           (field_.intrinsics().fx_px * field_.interval_s()));

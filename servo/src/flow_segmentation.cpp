@@ -161,7 +161,52 @@ void FlowSegmenter::segment(const FlowField& derotated, std::span<const std::uin
     }
   }
   out.kinds.assign(static_cast<std::size_t>(regions), RegionKind::visible);
-  out.source_ids.assign(static_cast<std::size_t>(regions), -1);
+  assign_track_ids(out);
+}
+
+void FlowSegmenter::assign_track_ids(Segmentation& out) {
+  const auto regions = static_cast<std::size_t>(out.region_count());
+  const std::size_t previous = previous_ids_.size();
+  const bool comparable = previous_labels_.size() == out.labels.size();
+  overlaps_.assign(regions * previous, 0);
+  region_sizes_.assign(regions, 0);
+  for (std::size_t i = 0; i < out.labels.size(); ++i) {
+    const std::int32_t label = out.labels[i];
+    if (label == Segmentation::kNoRegion)
+      continue;
+    ++region_sizes_[static_cast<std::size_t>(label)];
+    if (comparable && previous_labels_[i] != Segmentation::kNoRegion) {
+      ++overlaps_[static_cast<std::size_t>(label) * previous +
+                  static_cast<std::size_t>(previous_labels_[i])];
+    }
+  }
+  // Each region takes the id of the previous region covering most of it, when that covers at
+  // least half of it; a previous region's id goes to one region only, the one it covers most.
+  out.source_ids.assign(regions, -1);
+  for (std::size_t r = 0; r < regions; ++r) {
+    std::int32_t best_count = 0;
+    std::size_t best = previous;
+    for (std::size_t p = 0; p < previous; ++p) {
+      if (overlaps_[r * previous + p] > best_count) {
+        best_count = overlaps_[r * previous + p];
+        best = p;
+      }
+    }
+    if (best == previous || 2 * best_count < region_sizes_[r])
+      continue;
+    bool taken_by_larger = false;
+    for (std::size_t other = 0; other < regions && !taken_by_larger; ++other) {
+      taken_by_larger = other != r && overlaps_[other * previous + best] > best_count;
+    }
+    if (!taken_by_larger)
+      out.source_ids[r] = previous_ids_[best];
+  }
+  for (std::int32_t& id : out.source_ids) {
+    if (id < 0)
+      id = next_track_id_++;
+  }
+  previous_labels_.assign(out.labels.begin(), out.labels.end());
+  previous_ids_.assign(out.source_ids.begin(), out.source_ids.end());
 }
 
 }  // namespace flowsteer::servo

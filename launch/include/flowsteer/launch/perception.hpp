@@ -39,11 +39,9 @@ struct PerceptionOptions {
   servo::FlowSegmentationOptions flow_segmentation;
   servo::DarkRegionOptions dark;
   servo::GroundRemovalOptions ground;
-  // Numerical flow's error, in pixels over its interval, and relative to the motion (estimators
-  // fall short on large displacements): the ground test allows both, since the ground left over
-  // joins every object standing on it.
+  // Numerical flow's error in pixels over its interval: the ground test allows it on top of its
+  // relative tolerance, since the ground left over joins every object standing on it.
   double numerical_flow_noise_px = 0.3;
-  double numerical_ground_tolerance = 0.25;
 };
 
 // One frame through the servo core's perception: flow (from the simulator or computed from this
@@ -68,6 +66,8 @@ class Perception {
   const servo::FlowField& flow() const { return field_; }
   const servo::Segmentation& segmentation() const { return segmentation_; }
   std::span<const servo::ObjectFeatures> objects() const { return objects_; }
+  // 1 where the last frame's ground test found ground (flow segmentation only).
+  std::span<const std::uint8_t> ground_mask() const { return ground_mask_; }
 
  private:
   PerceptionOptions options_;

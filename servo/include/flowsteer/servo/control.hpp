@@ -148,7 +148,6 @@ class Controller {
   void step(const Percept& percept, const AgentState& agent, ControlOutput& out);
   ControlOutput step(const Percept& percept, const AgentState& agent);
 
-
  private:
   NavigationFunction navigation_;
   double lambda_;

@@ -6,6 +6,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -38,9 +39,14 @@ struct FlowSegmentationOptions {
 
 // Segmentation from the flow alone, which is what a real camera has. Regions are connected sets
 // of pixels whose derotated flow varies smoothly; pixels set in `excluded` (the ground) and
-// pixels without flow (NaN) belong to no region.
+// pixels without flow (NaN) belong to no region. Each region's source id follows it from frame
+// to frame (the previous region it overlaps most), so that what the controller remembers about
+// an object (its side, commit_band) stays with it; ids start at kFirstTrackId, clear of the
+// renderer's.
 class FlowSegmenter {
  public:
+  static constexpr std::int32_t kFirstTrackId = 1 << 24;
+
   // Throws std::invalid_argument for SegmentationMethod::semantic, which needs object ids.
   explicit FlowSegmenter(SegmentationMethod method, const FlowSegmentationOptions& options = {});
   ~FlowSegmenter();
@@ -61,6 +67,13 @@ class FlowSegmenter {
   cv::Mat graph_labels_;
   std::vector<std::int32_t> valid_counts_;
   std::vector<std::int32_t> region_of_segment_;
+
+  void assign_track_ids(Segmentation& out);
+  std::vector<std::int32_t> previous_labels_;
+  std::vector<std::int32_t> previous_ids_;
+  std::vector<std::int32_t> overlaps_;  // new region × previous region pixel counts
+  std::vector<std::int32_t> region_sizes_;
+  std::int32_t next_track_id_ = kFirstTrackId;
 };
 
 }  // namespace flowsteer::servo
