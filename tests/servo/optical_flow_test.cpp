@@ -1,0 +1,184 @@
+#include "flowsteer/servo/optical_flow.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "flowsteer/servo/flow_field.hpp"
+#include "flowsteer/servo/flow_segmentation.hpp"
+
+namespace flowsteer::servo {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A smooth random texture, so that every estimator has something to track everywhere.
+cv::Mat textured_image(int width, int height, unsigned seed) {
+  cv::Mat noise(height / 4 + 2, width / 4 + 2, CV_8UC1);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat image;
+  cv::resize(noise, image, cv::Size(width + 40, height + 40), 0, 0, cv::INTER_CUBIC);
+  return image;
+}
+
+// The texture moved by (dx, dy) pixels: a crop of a larger image.
+cv::Mat shifted(const cv::Mat& texture, int width, int height, int dx, int dy) {
+  return texture(cv::Rect(20 - dx, 20 - dy, width, height)).clone();
+}
+
+class EveryEstimator : public ::testing::TestWithParam<FlowMethod> {};
+
+TEST_P(EveryEstimator, ATranslatedTextureGivesItsShiftInNormalisedUnitsPerSecond) {
+  const int width = 96;
+  const int height = 64;
+  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
+  const cv::Mat texture = textured_image(width, height, 7);
+  OpticalFlowOptions options;
+  options.baseline_s = 0.1;
+  OpticalFlow flow(GetParam(), options);
+  FlowField field(intrinsics);
+  EXPECT_EQ(flow.update(shifted(texture, width, height, 0, 0), 1.0, field),
+            FlowStatus::no_previous_frame);
+  ASSERT_EQ(flow.update(shifted(texture, width, height, 2, -1), 1.1, field), FlowStatus::ok);
+  EXPECT_NEAR(field.interval_s(), 0.1, 1e-12);
+  // 2 px right and 1 px up in 0.1 s.
+  const double expected_u = 2.0 / intrinsics.fx_px / 0.1;
+  const double expected_v = -1.0 / intrinsics.fy_px / 0.1;
+  int near = 0;
+  int valid = 0;
+  for (int row = 8; row < height - 8; ++row) {
+    for (int col = 8; col < width - 8; ++col) {
+      const Eigen::Vector2f& u = field.at(col, row);
+      if (!u.allFinite())
+        continue;
+      ++valid;
+      near += std::abs(u.x() - expected_u) < 0.15 * expected_u &&
+              std::abs(u.y() - expected_v) < 0.3 * std::abs(expected_v);
+    }
+  }
+  EXPECT_GT(valid, (width - 16) * (height - 16) / 2);
+  EXPECT_GT(near, valid * 8 / 10) << to_string(GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, EveryEstimator,
+                         ::testing::ValuesIn(numerical_flow_methods().begin(),
+                                             numerical_flow_methods().end()),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
+
+TEST(OpticalFlow, BadFramesGiveAStatusNotACrash) {
+  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg);
+  FlowField field(intrinsics);
+  OpticalFlow flow(FlowMethod::dis_fast);
+  const cv::Mat texture = textured_image(64, 48, 3);
+  EXPECT_EQ(flow.update(cv::Mat(), 0.0, field), FlowStatus::empty_frame);
+  EXPECT_EQ(flow.update(cv::Mat(48, 64, CV_8UC1, cv::Scalar(128)), 0.0, field),
+            FlowStatus::untextured);
+  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 0, 0), 0.0, field), FlowStatus::no_previous_frame);
+  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 1, 0), 0.0, field), FlowStatus::no_time_elapsed);
+  // Another size: kept as the start of the next pair, nothing computed.
+  EXPECT_EQ(flow.update(textured_image(80, 60, 4), 0.1, field), FlowStatus::size_changed);
+  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 1, 0), 0.2, field), FlowStatus::size_changed);
+  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 2, 0), 0.3, field), FlowStatus::ok);
+  // A single-colour frame breaks the chain: the next textured one starts it again.
+  EXPECT_EQ(flow.update(cv::Mat(48, 64, CV_8UC3, cv::Scalar(9, 9, 9)), 0.4, field),
+            FlowStatus::untextured);
+  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 3, 0), 0.5, field), FlowStatus::no_previous_frame);
+  EXPECT_THROW(flow.update(cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0F)), 0.6, field),
+               std::invalid_argument);
+  EXPECT_THROW(OpticalFlow(FlowMethod::synthetic), std::invalid_argument);
+}
+
+TEST(OpticalFlow, MethodNamesRoundTrip) {
+  for (FlowMethod method : numerical_flow_methods()) {
+    EXPECT_EQ(parse_flow_method(to_string(method)), method);
+  }
+  EXPECT_EQ(parse_flow_method("synthetic"), FlowMethod::synthetic);
+  EXPECT_FALSE(parse_flow_method("flownet"));
+}
+
+TEST(FiniteDerotation, MatchesTheRateForSmallAnglesAndTheExactRotationForLargeOnes) {
+  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(48, 32, 120.0 * kDeg);
+  const Eigen::Vector3d omega = camera_angular_velocity(0.05, 0.1);
+  // A tiny rotation: the displacement over the interval is the rate times the interval.
+  FlowField small(intrinsics);
+  small.set_interval_s(1e-4);
+  for (auto& u : small.flow())
+    u.setZero();
+  derotate(small, omega);
+  FlowField rate(intrinsics);
+  for (auto& u : rate.flow())
+    u.setZero();
+  derotate(rate, omega);
+  for (std::size_t i = 0; i < small.size(); ++i) {
+    EXPECT_NEAR(small.flow()[i].x(), rate.flow()[i].x(), 1e-4);
+    EXPECT_NEAR(small.flow()[i].y(), rate.flow()[i].y(), 1e-4);
+  }
+  // A large yaw: a point at x in the newer image was at tan(atan(x) + θ) in the older one when
+  // the camera turned right by θ (ω_cy > 0), so its displacement is x − tan(atan(x) + θ).
+  const double turn_rate = 1.5;
+  const double interval_s = 0.4;
+  FlowField large(intrinsics);
+  large.set_interval_s(interval_s);
+  for (auto& u : large.flow())
+    u.setZero();
+  derotate(large, camera_angular_velocity(turn_rate, 0.0));
+  const int row = intrinsics.height_px / 2;
+  for (int col = 0; col < intrinsics.width_px; ++col) {
+    const double x = large.x(col);
+    const double before = std::atan(x) + turn_rate * interval_s;
+    if (before >= 0.5 * std::numbers::pi) {
+      EXPECT_FALSE(large.at(col, row).allFinite()) << col;
+      continue;
+    }
+    const double displacement = x - std::tan(before);
+    // derotate subtracts the rotation's displacement per second from zero flow.
+    EXPECT_NEAR(large.at(col, row).x(), -displacement / interval_s,
+                1e-4 * (1.0 + std::abs(displacement / interval_s)))
+        << col;
+  }
+}
+
+// Two halves moving differently, the bottom rows excluded as ground.
+TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame) {
+  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg);
+  FlowField field(intrinsics);
+  std::vector<std::uint8_t> ground(field.size(), 0);
+  for (int row = 0; row < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      field.at(col, row) = col < 32 ? Eigen::Vector2f(0.5F, 0.0F) : Eigen::Vector2f(-0.5F, 0.1F);
+      if (row >= 40)
+        ground[field.index(col, row)] = 1;
+    }
+  }
+  field.at(5, 5) = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
+  for (SegmentationMethod method :
+       {SegmentationMethod::flow_graph, SegmentationMethod::flow_graph_fast}) {
+    FlowSegmenter segmenter(method);
+    Segmentation out;
+    segmenter.segment(field, ground, out);
+    ASSERT_EQ(out.region_count(), 2) << to_string(method);
+    const std::int32_t left = out.labels[field.index(10, 10)];
+    const std::int32_t right = out.labels[field.index(50, 10)];
+    EXPECT_NE(left, right);
+    EXPECT_EQ(out.labels[field.index(10, 45)], Segmentation::kNoRegion);
+    EXPECT_EQ(out.labels[field.index(5, 5)], Segmentation::kNoRegion);
+    EXPECT_GE(out.source_ids[static_cast<std::size_t>(left)], FlowSegmenter::kFirstTrackId);
+    const std::int32_t left_id = out.source_ids[static_cast<std::size_t>(left)];
+    const std::int32_t right_id = out.source_ids[static_cast<std::size_t>(right)];
+    // The same motion a frame later: the regions keep their ids.
+    segmenter.segment(field, ground, out);
+    EXPECT_EQ(out.source_ids[static_cast<std::size_t>(out.labels[field.index(10, 10)])], left_id);
+    EXPECT_EQ(out.source_ids[static_cast<std::size_t>(out.labels[field.index(50, 10)])], right_id);
+  }
+  EXPECT_THROW(FlowSegmenter(SegmentationMethod::semantic), std::invalid_argument);
+  FlowSegmenter segmenter(SegmentationMethod::flow_graph);
+  Segmentation out;
+  EXPECT_THROW(segmenter.segment(field, std::vector<std::uint8_t>(3, 0), out),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace flowsteer::servo
