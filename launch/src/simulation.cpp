@@ -120,6 +120,7 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
       const servo::ControlOutput& output = loop.pipeline->step(times);
       commands[i] = {output.command.accel_mps2, output.command.turn_rate};
       loop.result.turn_rates.push_back(output.command.turn_rate);
+      loop.result.positions_m.push_back(state.position_m);
       sum += times;
       ++agent_steps;
 

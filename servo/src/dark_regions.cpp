@@ -23,18 +23,22 @@ int DarkRegionFinder::add_dark_regions(const cv::Mat& grey, Segmentation& out) {
                                 std::to_string(grey.cols) + "x" + std::to_string(grey.rows));
   }
   cv::threshold(grey, dark_mask_, options_.luminance_threshold - 1.0, 255.0, cv::THRESH_BINARY_INV);
+  // Only pixels below the middle row can be dark regions. At night the sky and the tops of walls
+  // are as dark as the ground ahead; counted in, they join every dark pixel into one component
+  // whose centroid lies in the upper half, and the dark ground the agent walks towards is lost
+  // with it. Above the middle row nothing is at risk of collision (MIG §5), so those pixels are
+  // left out before the components are formed rather than after.
+  const int first_lower_row = grey.rows / 2;
+  dark_mask_.rowRange(0, first_lower_row).setTo(0);
   const int components =
       cv::connectedComponentsWithStats(dark_mask_, component_labels_, stats_, centroids_, 8);
 
   const auto min_area_px = static_cast<int>(options_.min_area_fraction * grey.total());
-  const double middle_row = 0.5 * (grey.rows - 1);
   region_of_component_.assign(static_cast<std::size_t>(components), Segmentation::kNoRegion);
   int added = 0;
   // Component 0 is the background (the pixels that are not dark).
   for (int c = 1; c < components; ++c) {
     if (stats_.at<int>(c, cv::CC_STAT_AREA) < min_area_px)
-      continue;
-    if (centroids_.at<double>(c, 1) < middle_row)
       continue;
     region_of_component_[static_cast<std::size_t>(c)] = out.region_count();
     out.kinds.push_back(RegionKind::dark);
@@ -43,7 +47,7 @@ int DarkRegionFinder::add_dark_regions(const cv::Mat& grey, Segmentation& out) {
   }
   if (added == 0)
     return 0;
-  for (int row = 0; row < grey.rows; ++row) {
+  for (int row = first_lower_row; row < grey.rows; ++row) {
     const auto* component = component_labels_.ptr<std::int32_t>(row);
     std::int32_t* labels = out.labels.data() + static_cast<std::size_t>(row) * grey.cols;
     for (int col = 0; col < grey.cols; ++col) {

@@ -35,6 +35,8 @@ struct AgentResult {
   double final_distance_to_leader_m = -1.0;  // followers only
   // The commanded turn rate ω (rad/s, positive right) at every step the agent was steering.
   std::vector<double> turn_rates;
+  // Where the agent was (world frame, m) when it chose each of those turn rates.
+  std::vector<Eigen::Vector2d> positions_m;
 };
 
 struct SimResult {

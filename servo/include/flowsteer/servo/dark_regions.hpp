@@ -14,9 +14,10 @@ struct DarkRegionOptions {
   double min_area_fraction = 0.003;
 };
 
-// Dark regions (MIG 2019 §5): each connected set of dark pixels whose centroid lies in the lower
-// half of the image (the upper half is sky and far walls, not the way ahead) and that is large
-// enough becomes a region of kind dark, appended to `out`. Its pixels leave whatever region they
+// Dark regions (MIG 2019 §5): each connected set of dark pixels in the lower half of the image
+// (the upper half is sky and the tops of walls, not the way ahead; a night sky would otherwise
+// join all dark pixels into one region) that is large enough becomes a region of kind dark,
+// appended to `out`. Its pixels leave whatever region they
 // were in, since their flow is not to be trusted. `grey` is 8-bit with out's size.
 class DarkRegionFinder {
  public:
