@@ -94,8 +94,14 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     }
   }
   if (optical_flow_) {
+    const auto rotation = [&](double from_s, double to_s) {
+      return servo::rotation_over(
+          servo::camera_angular_velocity(mean_turn_rate(from_s, to_s, turn_rate_cy),
+                                         options_.mount.pitch_rad),
+          to_s - from_s);
+    };
     status_ = image.empty() ? servo::FlowStatus::empty_frame
-                            : optical_flow_->update(grey_, frame.timestamp_s, field_);
+                            : optical_flow_->update(grey_, frame.timestamp_s, field_, rotation);
   } else if (!frame_fits) {
     status_ = image.empty() ? servo::FlowStatus::empty_frame : servo::FlowStatus::size_changed;
   } else {
@@ -106,11 +112,10 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     times.flow = ms_since(stage);
     return status_;
   }
-  const double turn_rate =
-      field_.interval_s() > 0.0
-          ? mean_turn_rate(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, turn_rate_cy)
-          : turn_rate_cy;
-  servo::derotate(field_, servo::camera_angular_velocity(turn_rate, options_.mount.pitch_rad));
+  // Numerical flow comes out derotated: the estimator compared images of one orientation.
+  if (!optical_flow_) {
+    servo::derotate(field_, servo::camera_angular_velocity(turn_rate_cy, options_.mount.pitch_rad));
+  }
   times.flow = ms_since(stage);
 
   stage = Clock::now();
@@ -124,6 +129,9 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     }
     servo::mark_ground(field_, options_.mount, speed_mps, ground, ground_mask_);
     segmenter_->segment(field_, ground_mask_, segmentation_);
+    if (optical_flow_) {
+      servo::mark_ground_regions(field_, options_.mount, speed_mps, ground, segmentation_);
+    }
   } else {
     // The renderer's ground id already marks the ground.
     const cv::Mat& ids = frame.sim->object_ids;

@@ -39,6 +39,12 @@ Eigen::Vector2d rotational_flow(double x, double y, const Eigen::Vector3d& w) {
           (1.0 + y * y) * w.x() - x * y * w.y() - x * w.z()};
 }
 
+Eigen::Matrix3d rotation_over(const Eigen::Vector3d& camera_omega, double interval_s) {
+  const double angle = camera_omega.norm() * interval_s;
+  return angle > 0.0 ? Eigen::AngleAxisd(angle, camera_omega.normalized()).toRotationMatrix()
+                     : Eigen::Matrix3d::Identity();
+}
+
 void derotate(FlowField& field, const Eigen::Vector3d& camera_omega) {
   auto flow = field.flow();
   const double interval_s = field.interval_s();
@@ -47,10 +53,7 @@ void derotate(FlowField& field, const Eigen::Vector3d& camera_omega) {
     // not its first-order rate, which at 1.5 rad/s over 0.4 s is off by a factor 3 at the edge
     // of a 120° view. A static point moves as Ṗ = −ω × P, so its direction in the older image
     // is R p with R = exp([ω]× Δ).
-    const double angle = camera_omega.norm() * interval_s;
-    const Eigen::Matrix3d rotation =
-        angle > 0.0 ? Eigen::AngleAxisd(angle, camera_omega.normalized()).toRotationMatrix()
-                    : Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d rotation = rotation_over(camera_omega, interval_s);
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
     for (int row = 0; row < field.height(); ++row) {
       const double y = field.y(row);

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/LU>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/optflow.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -121,6 +122,11 @@ void OpticalFlow::reset() {
 }
 
 FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowField& field) {
+  return update(image, timestamp_s, field, RotationBetween{});
+}
+
+FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowField& field,
+                               const RotationBetween& rotation) {
   if (image.empty())
     return FlowStatus::empty_frame;
   if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
@@ -169,9 +175,30 @@ FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowFie
     }
   }
 
+  const double dt_s = timestamp_s - reference->timestamp_s;
+  const CameraIntrinsics& k = field.intrinsics();
+  // Pixel homography of the rotation: newer pixel → where its ray fell in the older image.
+  Eigen::Matrix3d to_older = Eigen::Matrix3d::Identity();
+  const cv::Mat* older = &reference->grey;
+  if (rotation) {
+    Eigen::Matrix3d camera_matrix;
+    camera_matrix << k.fx_px, 0.0, k.cx_px, 0.0, k.fy_px, k.cy_px, 0.0, 0.0, 1.0;
+    to_older =
+        camera_matrix * rotation(reference->timestamp_s, timestamp_s) * camera_matrix.inverse();
+    cv::Matx33d homography;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        homography(r, c) = to_older(r, c);
+      }
+    }
+    cv::warpPerspective(reference->grey, warped_, homography, grey_.size(),
+                        cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+    older = &warped_;
+  }
+
   // Backward flow (newer → older image) lands on the newer image's pixels, where this frame's
   // segmentation and depth are; its negation is the motion that brought each pixel there.
-  estimator_->algorithm->calc(grey_, reference->grey, flow_px_);
+  estimator_->algorithm->calc(grey_, *older, flow_px_);
 
   // Local texture: mean gradient magnitude over a 5×5 window (a 3×3 Sobel is 8× the gradient).
   cv::Sobel(grey_, gradient_x_, CV_32F, 1, 0, 3, 1.0 / 8.0);
@@ -179,7 +206,6 @@ FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowFie
   cv::magnitude(gradient_x_, gradient_y_, texture_);
   cv::blur(texture_, texture_, cv::Size(5, 5));
 
-  const double dt_s = timestamp_s - reference->timestamp_s;
   field.set_interval_s(dt_s);
   const auto to_x = static_cast<float>(-1.0 / (field.intrinsics().fx_px * dt_s));
   const auto to_y = static_cast<float>(-1.0 / (field.intrinsics().fy_px * dt_s));
@@ -190,7 +216,13 @@ FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowFie
     const auto* d = flow_px_.ptr<cv::Vec2f>(row);
     const auto* t = texture_.ptr<float>(row);
     for (int col = 0; col < grey_.cols; ++col) {
-      flow[field.index(col, row)] = t[col] < min_gradient
+      bool seen_before = true;
+      if (rotation) {
+        const Eigen::Vector3d at = to_older * Eigen::Vector3d(col, row, 1.0);
+        seen_before = at.z() > 0.0 && at.x() >= 0.0 && at.x() <= at.z() * (grey_.cols - 1) &&
+                      at.y() >= 0.0 && at.y() <= at.z() * (grey_.rows - 1);
+      }
+      flow[field.index(col, row)] = t[col] < min_gradient || !seen_before
                                         ? Eigen::Vector2f(kNaN, kNaN)
                                         : Eigen::Vector2f(d[col][0] * to_x, d[col][1] * to_y);
     }

@@ -52,8 +52,9 @@ class Perception {
   Perception(const servo::CameraIntrinsics& intrinsics, const PerceptionOptions& options);
 
   // speed_mps and turn_rate_cy are what the base measured (turn rate positive to the right) over
-  // the interval that ends with this frame; numerical flow spans several frames and is derotated
-  // with the mean of these over its span.
+  // the interval that ends with this frame; numerical flow spans several frames and is computed
+  // against the older image turned by the rotation these give over its span (rotation
+  // compensation), so it comes out derotated.
   // Anything but FlowStatus::ok leaves no objects: the first frame, a frame of another size, a
   // single-colour frame. Throws std::invalid_argument when the options need simulator channels
   // the frame does not carry.

@@ -62,6 +62,10 @@ Eigen::Vector3d camera_angular_velocity(double turn_rate_cy, double pitch_rad);
 // Flow that a rotation of the camera alone gives at normalised point (x, y).
 Eigen::Vector2d rotational_flow(double x, double y, const Eigen::Vector3d& camera_omega);
 
+// The rotation R = exp([ω]× Δ) of a camera turning at camera_omega for interval_s: a static
+// point's direction p in the newer image was R p in the older one.
+Eigen::Matrix3d rotation_over(const Eigen::Vector3d& camera_omega, double interval_s);
+
 // Removes the rotational part of every vector (CGF Eq. 1 -> Eq. 2). Non-finite vectors stay
 // non-finite so that later stages can count them. For displacement flow (interval_s() > 0),
 // camera_omega is the mean over the interval and the whole rotation's displacement is removed.

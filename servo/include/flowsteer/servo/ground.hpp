@@ -8,6 +8,7 @@
 
 #include "flowsteer/servo/camera.hpp"
 #include "flowsteer/servo/flow_field.hpp"
+#include "flowsteer/servo/segmentation.hpp"
 
 namespace flowsteer::servo {
 
@@ -38,6 +39,13 @@ struct GroundRemovalOptions {
   double flow_floor = 1e-3;
   // Below this speed the ground has no flow to tell it by: the flow test marks nothing.
   double min_speed_mps = 0.05;
+  // A region of numerical flow is ground when the median over its pixels of |u − u_ground| /
+  // (|u_ground| + flow_floor) is below this. Per pixel, numerical flow on weakly textured ground
+  // errs by more than flow_tolerance often enough to leave patches that the segmentation joins
+  // into wide regions at a TTC of 1–3 s (the ground's own τ = h / (y v)); their median is far
+  // tighter. An upright obstacle differs by h / (h − η) at height η, so its median pixel (half
+  // its height) stays above this for any obstacle over 2 h t / (1 + t), 0.64 m at h = 1.6 m.
+  double region_tolerance = 0.25;
 };
 
 enum class GroundTest { depth, flow, skipped_no_motion };
@@ -53,5 +61,11 @@ struct GroundRemovalResult {
 GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& mount,
                                 double speed_mps, const GroundRemovalOptions& options,
                                 std::span<std::uint8_t> ground_mask);
+
+// Marks as RegionKind::ground every visible region of `segmentation` whose flow as a whole
+// matches the flat ground (region_tolerance above), for flow segmentation of numerical flow.
+// A region with any pixel at or above the horizon is never ground. Returns how many it marked.
+int mark_ground_regions(const FlowField& derotated, const CameraMount& mount, double speed_mps,
+                        const GroundRemovalOptions& options, Segmentation& segmentation);
 
 }  // namespace flowsteer::servo

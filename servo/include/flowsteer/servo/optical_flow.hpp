@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -74,6 +75,19 @@ class OpticalFlow {
   // or 3 channels.
   FlowStatus update(const cv::Mat& image, double timestamp_s, FlowField& field);
 
+  // The camera's rotation between two times (from_s older): R with a static point's direction p
+  // in the newer image at R p in the older one (rotation_over in flow_field.hpp).
+  using RotationBetween = std::function<Eigen::Matrix3d(double from_s, double to_s)>;
+
+  // As above, with the rotation the base measured compensated before the estimator runs (MIG's
+  // rotation compensation): the older image is warped to the newer image's orientation, so the
+  // estimator sees only the translational flow and the field comes out derotated. A turning
+  // agent otherwise hands the estimator displacements of 20 px and more at the edge of a wide
+  // view, which DIS falls short of by a quarter; the derotation then leaves that shortfall in
+  // every vector as spurious motion. Pixels whose ray the older image did not see get NaN.
+  FlowStatus update(const cv::Mat& image, double timestamp_s, FlowField& field,
+                    const RotationBetween& rotation);
+
   // Forgets the previous images: the next update returns no_previous_frame.
   void reset();
 
@@ -97,6 +111,7 @@ class OpticalFlow {
   cv::Mat gradient_x_;
   cv::Mat gradient_y_;
   cv::Mat texture_;
+  cv::Mat warped_;
 };
 
 }  // namespace flowsteer::servo
