@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
   eval->require_subcommand(1);
   CLI::App* eval_flow = eval->add_subcommand(
       "flow", "Each optical-flow estimator against the renderer's flow and the exact features");
-  std::string eval_scenario = "room";
+  std::string eval_scenario = "flow_targets";
   std::vector<int> eval_resolutions{256};
   int eval_frames = 40;
   std::vector<std::string> eval_methods;
