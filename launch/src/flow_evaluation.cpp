@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
-#include <map>
 #include <memory>
 #include <sstream>
 
@@ -98,11 +97,7 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
       const sim_camera::AgentState& state = world.agents()[0];
       StageTimes times;
       truth.process(view, state.speed_mps, state.turn_rate, times);
-      std::map<std::int32_t, const servo::ObjectFeatures*> truth_objects;
-      for (const servo::ObjectFeatures& o : truth.objects()) {
-        if (o.status == servo::MotionStatus::approaching)
-          truth_objects[o.source_id] = &o;
-      }
+      const auto truth_objects = truth.objects();
       for (MethodRun& run : runs) {
         StageTimes method_times;
         if (run.perception->process(view, state.speed_mps, state.turn_rate, method_times) !=
@@ -122,10 +117,14 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
           run.epe_sum += (estimated[p] - exact[p]).cast<double>().norm() * to_px;
         }
         for (const servo::ObjectFeatures& o : run.perception->objects()) {
-          const auto t = truth_objects.find(o.source_id);
+          const auto t = std::find_if(truth_objects.begin(), truth_objects.end(),
+                                      [&](const servo::ObjectFeatures& exact) {
+                                        return exact.source_id == o.source_id &&
+                                               exact.status == servo::MotionStatus::approaching;
+                                      });
           if (t == truth_objects.end())
             continue;
-          if (t->second->pixel_count < options.min_object_px) {
+          if (t->pixel_count < options.min_object_px) {
             ++run.row.small_objects;
             continue;
           }
@@ -134,8 +133,8 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
             continue;
           }
           ++run.row.approaching_objects;
-          run.foe_errors.push_back(std::abs(o.foe.x() - t->second->foe.x()));
-          run.ttc_errors.push_back(std::abs(o.ttc_s - t->second->ttc_s) / t->second->ttc_s);
+          run.foe_errors.push_back(std::abs(o.foe.x() - t->foe.x()));
+          run.ttc_errors.push_back(std::abs(o.ttc_s - t->ttc_s) / t->ttc_s);
         }
       }
       world.step(commands);

@@ -47,30 +47,6 @@ Eigen::Matrix3d rotation_over(const Eigen::Vector3d& camera_omega, double interv
 
 void derotate(FlowField& field, const Eigen::Vector3d& camera_omega) {
   auto flow = field.flow();
-  const double interval_s = field.interval_s();
-  if (interval_s > 0.0) {
-    // Displacement flow: subtract the displacement the whole rotation over the interval gives,
-    // not its first-order rate, which at 1.5 rad/s over 0.4 s is off by a factor 3 at the edge
-    // of a 120° view. A static point moves as Ṗ = −ω × P, so its direction in the older image
-    // is R p with R = exp([ω]× Δ).
-    const Eigen::Matrix3d rotation = rotation_over(camera_omega, interval_s);
-    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-    for (int row = 0; row < field.height(); ++row) {
-      const double y = field.y(row);
-      for (int col = 0; col < field.width(); ++col) {
-        const double x = field.x(col);
-        const Eigen::Vector3d before = rotation * Eigen::Vector3d(x, y, 1.0);
-        Eigen::Vector2f& u = flow[field.index(col, row)];
-        if (before.z() <= 0.0) {
-          u = Eigen::Vector2f(kNaN, kNaN);
-          continue;
-        }
-        const Eigen::Vector2d moved(x - before.x() / before.z(), y - before.y() / before.z());
-        u -= (moved / interval_s).cast<float>();
-      }
-    }
-    return;
-  }
   for (int row = 0; row < field.height(); ++row) {
     const double y = field.y(row);
     for (int col = 0; col < field.width(); ++col) {

@@ -66,9 +66,9 @@ Eigen::Vector2d rotational_flow(double x, double y, const Eigen::Vector3d& camer
 // point's direction p in the newer image was R p in the older one.
 Eigen::Matrix3d rotation_over(const Eigen::Vector3d& camera_omega, double interval_s);
 
-// Removes the rotational part of every vector (CGF Eq. 1 -> Eq. 2). Non-finite vectors stay
-// non-finite so that later stages can count them. For displacement flow (interval_s() > 0),
-// camera_omega is the mean over the interval and the whole rotation's displacement is removed.
+// Removes the rotational part of every vector (CGF Eq. 1 -> Eq. 2) of instantaneous flow.
+// Non-finite vectors stay non-finite so that later stages can count them. Displacement flow has
+// its rotation compensated before it is estimated (OpticalFlow::update with a rotation).
 void derotate(FlowField& field, const Eigen::Vector3d& camera_omega);
 
 }  // namespace flowsteer::servo
