@@ -1,7 +1,6 @@
 #include "flowsteer/camera_io/libcamera_camera.hpp"
 
 #include <sys/mman.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <array>
@@ -16,6 +15,8 @@
 #include <libcamera/libcamera.h>
 #include <opencv2/imgproc.hpp>
 
+#include "flowsteer/servo/clock.hpp"
+
 namespace flowsteer::camera_io {
 namespace {
 
@@ -27,12 +28,6 @@ struct PlaneMapping {
   const std::uint8_t* data = nullptr;
   std::size_t length = 0;
 };
-
-double monotonic_now_s() {
-  timespec now{};
-  ::clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
-}
 
 }  // namespace
 
@@ -297,7 +292,7 @@ ReadStatus LibcameraCamera::read(Frame& frame, double timeout_s) {
     }
     // libcamera stamps frames with the sensor's (monotonic) start-of-exposure time.
     frame.timestamp_s =
-        timestamp_ns != 0 ? 1e-9 * static_cast<double>(timestamp_ns) : monotonic_now_s();
+        timestamp_ns != 0 ? 1e-9 * static_cast<double>(timestamp_ns) : servo::monotonic_now_s();
     frame.image = c.lens->apply(c.converted);
     frame.sequence = c.sequence++;
     frame.sim.reset();

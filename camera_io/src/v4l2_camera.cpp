@@ -20,6 +20,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "flowsteer/servo/clock.hpp"
+
 namespace flowsteer::camera_io {
 namespace {
 
@@ -54,12 +56,6 @@ template <std::size_t N>
 std::string fixed_text(const std::uint8_t (&chars)[N]) {
   const auto* begin = reinterpret_cast<const char*>(chars);
   return std::string(begin, strnlen(begin, N));
-}
-
-double monotonic_now_s() {
-  timespec now{};
-  ::clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
 [[noreturn]] void throw_errno(const std::string& device, const char* what, int error) {
@@ -434,7 +430,7 @@ ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
       // POLLERR with ENODEV or EIO: the camera was unplugged or the driver gave up.
       throw_errno(device_, "VIDIOC_DQBUF", errno);
     }
-    const double dequeued_s = monotonic_now_s();
+    const double dequeued_s = servo::monotonic_now_s();
     if (buffer.index >= buffers_.size()) {
       throw std::runtime_error(device_ + ": VIDIOC_DQBUF returned buffer " +
                                std::to_string(buffer.index) + " of " +

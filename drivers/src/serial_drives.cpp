@@ -11,13 +11,11 @@
 #include <utility>
 #include <vector>
 
+#include "flowsteer/servo/clock.hpp"
+
 namespace flowsteer::drivers {
 
 namespace {
-
-double monotonic_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 // Wheel rad/s → encoder ticks per `period_s`, rounded to the integer the firmware takes.
 std::int64_t ticks(double wheel_radps, double ticks_per_rev, double per_s) {
@@ -98,7 +96,7 @@ void ArduinoBridgeDrive::configure() {
   }
   // The encoder read doubles as the check that a ros_arduino_bridge board is listening.
   const auto [left, right] = read_encoders();
-  odometry_.reset(left, right, monotonic_s());
+  odometry_.reset(left, right, servo::monotonic_now_s());
 }
 
 void ArduinoBridgeDrive::activate() {
@@ -116,7 +114,7 @@ void ArduinoBridgeDrive::write(const WheelSpeeds& wheels) {
 
 DriveState ArduinoBridgeDrive::read() {
   const auto [left, right] = read_encoders();
-  odometry_.update(left, right, monotonic_s());
+  odometry_.update(left, right, servo::monotonic_now_s());
   return {odometry_.speeds(), odometry_.odometry(), {}};
 }
 
@@ -249,7 +247,7 @@ void RoboClawDrive::configure() {
       static_cast<std::uint8_t>(std::lround(config_.board_timeout_s * 10.0));
   send_acked(roboclaw::kSetSerialTimeout, std::span(&tenths, 1));
   const auto [left, right] = read_encoders();
-  odometry_.reset(left, right, monotonic_s());
+  odometry_.reset(left, right, servo::monotonic_now_s());
 }
 
 void RoboClawDrive::activate() {
@@ -271,7 +269,7 @@ void RoboClawDrive::write(const WheelSpeeds& wheels) {
 
 DriveState RoboClawDrive::read() {
   const auto [left, right] = read_encoders();
-  odometry_.update(left, right, monotonic_s());
+  odometry_.update(left, right, servo::monotonic_now_s());
   return {odometry_.speeds(), odometry_.odometry(), {}};
 }
 

@@ -1,21 +1,14 @@
 #include "flowsteer/drivers/sim_base.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
+#include "flowsteer/servo/clock.hpp"
+
 namespace flowsteer::drivers {
-
-namespace {
-
-double monotonic_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-}  // namespace
 
 SimBase::SimBase(SimBaseConfig config) : config_(std::move(config)), pose_(config_.start) {
   if (!(config_.geometry.wheel_radius_m > 0.0) || !(config_.geometry.wheel_separation_m > 0.0)) {
@@ -25,7 +18,7 @@ SimBase::SimBase(SimBaseConfig config) : config_(std::move(config)), pose_(confi
     throw std::invalid_argument("sim_base: wheel_time_constant_s must be >= 0");
   }
   if (!config_.clock) {
-    config_.clock = monotonic_s;
+    config_.clock = servo::monotonic_now_s;
   }
 }
 

@@ -1,18 +1,15 @@
 #include "flowsteer/launch/robot_loop.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
 
+#include "flowsteer/servo/clock.hpp"
+
 namespace flowsteer::launch {
 namespace {
-
-double monotonic_now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 // Leaves the base stopped and deactivated however the loop ends.
 class BaseStopper {
@@ -80,7 +77,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
                                const RobotLoopOptions& options,
                                const std::atomic<bool>& stop_requested, std::ostream& log) {
   RobotLoopResult result;
-  const double start_s = monotonic_now_s();
+  const double start_s = servo::monotonic_now_s();
   std::optional<GoalTracker> goal;
   if (options.goal) {
     goal.emplace(*options.goal);
@@ -88,10 +85,10 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
   BaseStopper stopper(base, log);
   if (base != nullptr) {
     base->configure();
-    base->activate(monotonic_now_s());
+    base->activate(servo::monotonic_now_s());
   }
   drivers::BodyVelocity measured;
-  double last_frame_s = monotonic_now_s();
+  double last_frame_s = servo::monotonic_now_s();
   double last_update_s = last_frame_s;
   camera_io::Frame frame;
   const auto stop = [&](StopReason reason, const std::string& why) {
@@ -109,13 +106,13 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
       stop(StopReason::stop_requested, "stop requested");
       break;
     }
-    const double now_s = monotonic_now_s();
+    const double now_s = servo::monotonic_now_s();
     const double left_s = options.camera_timeout_s - (now_s - last_frame_s);
     // Without a base nothing needs a steady rate: wait for the frame up to the timeout.
     const double wait_s =
         std::max(0.0, base != nullptr ? std::min(options.drive_period_s, left_s) : left_s);
     const camera_io::ReadStatus status = camera.read(frame, wait_s);
-    const double after_s = monotonic_now_s();
+    const double after_s = servo::monotonic_now_s();
     if (status == camera_io::ReadStatus::end_of_stream) {
       stop(StopReason::end_of_stream, options.camera_name + " ended");
       break;
@@ -130,7 +127,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
       }
       const servo::Command command = brain.step(input);
       if (base != nullptr) {
-        if (const auto rejected = base->command(command, monotonic_now_s())) {
+        if (const auto rejected = base->command(command, servo::monotonic_now_s())) {
           log << "flowsteer run: frame " << frame.sequence << ": command rejected: " << *rejected
               << "\n";
         }
@@ -143,7 +140,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
       break;
     }
     if (base != nullptr) {
-      const double update_s = monotonic_now_s();
+      const double update_s = servo::monotonic_now_s();
       const drivers::BaseState state = base->update(update_s);
       measured = state.measured;
       result.max_measured_speed_mps = std::max(result.max_measured_speed_mps, measured.speed_mps);
@@ -157,7 +154,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
       break;
     }
   }
-  result.duration_s = monotonic_now_s() - start_s;
+  result.duration_s = servo::monotonic_now_s() - start_s;
   return result;
 }
 

@@ -17,10 +17,12 @@
 
 #include "flowsteer/drivers/base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
+#include "flowsteer/servo/clock.hpp"
 
 namespace {
 
 using namespace flowsteer::drivers;
+using flowsteer::servo::monotonic_now_s;
 
 constexpr double kLoopPeriodS = 0.02;
 constexpr std::uint8_t kLeftNode = 3;
@@ -30,10 +32,6 @@ double realtime_s() {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-double monotonic_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // Two ODrive axes as firmware 0.5.x presents them on the bus: heartbeats every 20 ms,
@@ -58,9 +56,9 @@ class SimulatedAxes {
 
   void run() {
     double last_heartbeat_s = 0.0;
-    double last_s = monotonic_s();
+    double last_s = monotonic_now_s();
     while (!stop_) {
-      const double now_s = monotonic_s();
+      const double now_s = monotonic_now_s();
       for (Axis& axis : axes_) {
         axis.pos_turns += static_cast<float>(axis.vel_turns_per_s * (now_s - last_s));
       }
@@ -115,15 +113,15 @@ class SimulatedAxes {
 template <typename Command>
 double run_loop(Base& base, double duration_s, Command command, BaseState* commanded = nullptr) {
   double last_command_realtime_s = 0.0;
-  const double start_s = monotonic_s();
-  for (double next_s = start_s; monotonic_s() - start_s < duration_s; next_s += kLoopPeriodS) {
-    std::this_thread::sleep_for(std::chrono::duration<double>(next_s - monotonic_s()));
-    const bool fresh = command(monotonic_s() - start_s);
+  const double start_s = monotonic_now_s();
+  for (double next_s = start_s; monotonic_now_s() - start_s < duration_s; next_s += kLoopPeriodS) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(next_s - monotonic_now_s()));
+    const bool fresh = command(monotonic_now_s() - start_s);
     if (fresh) {
-      base.command({5.0, 0.6}, monotonic_s());
+      base.command({5.0, 0.6}, monotonic_now_s());
       last_command_realtime_s = realtime_s();
     }
-    const BaseState state = base.update(monotonic_s());
+    const BaseState state = base.update(monotonic_now_s());
     if (fresh && commanded != nullptr) {
       *commanded = state;
     }
@@ -162,7 +160,7 @@ int run() {
 
   base.configure();
   std::printf("PROBE activate %.6f\n", realtime_s());
-  base.activate(monotonic_s());
+  base.activate(monotonic_now_s());
   std::printf("PROBE stream %.6f\n", realtime_s());
   // Commands for 1 s, then none for 0.6 s while the loop goes on.
   BaseState commanded;
@@ -178,7 +176,7 @@ int run() {
   std::printf("PROBE deactivated %.6f\n", realtime_s());
 
   // An axis error while driving: the base stops and says which axis and what.
-  base.activate(monotonic_s());
+  base.activate(monotonic_now_s());
   try {
     run_loop(base, 2.0, [&](double t_s) {
       if (t_s > 0.3) {
