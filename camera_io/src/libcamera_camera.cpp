@@ -16,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "flowsteer/servo/clock.hpp"
+#include "sequence_gaps.hpp"
 
 namespace flowsteer::camera_io {
 namespace {
@@ -261,10 +262,7 @@ ReadStatus LibcameraCamera::read(Frame& frame, double timeout_s) {
     }
     const libcamera::FrameBuffer* buffer = request->findBuffer(c.stream);
     const libcamera::FrameMetadata& metadata = buffer->metadata();
-    if (c.last_sequence && metadata.sequence > *c.last_sequence + 1) {
-      c.dropped += metadata.sequence - *c.last_sequence - 1;
-    }
-    c.last_sequence = metadata.sequence;
+    c.dropped += skipped_frames(c.last_sequence, metadata.sequence);
     const bool good = request->status() == libcamera::Request::RequestComplete &&
                       metadata.status == libcamera::FrameMetadata::FrameSuccess;
     if (good) {

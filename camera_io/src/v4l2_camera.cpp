@@ -21,6 +21,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "flowsteer/servo/clock.hpp"
+#include "sequence_gaps.hpp"
 
 namespace flowsteer::camera_io {
 namespace {
@@ -58,9 +59,13 @@ std::string fixed_text(const std::uint8_t (&chars)[N]) {
   return std::string(begin, strnlen(begin, N));
 }
 
+// "VIDIOC_S_FMT on /dev/video0 failed: Invalid argument".
+std::string errno_message(const std::string& device, const char* what, int error) {
+  return std::string(what) + " on " + device + " failed: " + std::strerror(error);
+}
+
 [[noreturn]] void throw_errno(const std::string& device, const char* what, int error) {
-  throw std::runtime_error(std::string(what) + " on " + device +
-                           " failed: " + std::strerror(error));
+  throw std::runtime_error(errno_message(device, what, error));
 }
 
 // ioctl, retried when a signal interrupts it. Returns false with errno set on failure.
@@ -77,6 +82,20 @@ void checked_ioctl(int fd, unsigned long request, void* arg, const char* name,
   if (!try_ioctl(fd, request, arg)) {
     throw_errno(device, name, errno);
   }
+}
+
+// The fourcc names of the pixel formats the device offers (VIDIOC_ENUM_FMT). The driver ends the
+// list with EINVAL; another error ends it too and is left in `error` (0 when the list is whole).
+std::vector<std::string> offered_formats(int fd, int& error) {
+  std::vector<std::string> names;
+  v4l2_fmtdesc desc{};
+  desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  while (try_ioctl(fd, VIDIOC_ENUM_FMT, &desc)) {
+    names.push_back(fourcc_text(desc.pixelformat));
+    ++desc.index;
+  }
+  error = errno == EINVAL ? 0 : errno;
+  return names;
 }
 
 std::string capability_names(std::uint32_t caps) {
@@ -181,7 +200,6 @@ V4l2Camera::V4l2Camera(const V4l2Options& options)
   negotiate(options);
   set_frame_rate(options.frame_rate_hz);
   lens_.emplace(options.lens, width_px_, height_px_, "camera " + device_);
-  intrinsics_ = lens_->intrinsics();
   map_buffers(options.buffer_count);
   int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   checked_ioctl(fd_.get(), VIDIOC_STREAMON, &type, "VIDIOC_STREAMON", device_);
@@ -234,15 +252,10 @@ void V4l2Camera::open_device() {
 std::vector<std::string> V4l2Camera::list_formats(const std::string& device) {
   // A camera that streams nothing: open and check as the constructor does, then enumerate.
   V4l2Camera probe(device, OpenOnly{});
-  std::vector<std::string> names;
-  v4l2_fmtdesc desc{};
-  desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  while (try_ioctl(probe.fd_.get(), VIDIOC_ENUM_FMT, &desc)) {
-    names.push_back(fourcc_text(desc.pixelformat));
-    ++desc.index;
-  }
-  if (errno != EINVAL) {  // EINVAL ends the list
-    throw_errno(device, "VIDIOC_ENUM_FMT", errno);
+  int error = 0;
+  std::vector<std::string> names = offered_formats(probe.fd_.get(), error);
+  if (error != 0) {
+    throw_errno(device, "VIDIOC_ENUM_FMT", error);
   }
   return names;
 }
@@ -269,12 +282,11 @@ void V4l2Camera::negotiate(const V4l2Options& options) {
   // has, which is checked here.
   const v4l2_pix_format& got = format.fmt.pix;
   if (got.pixelformat != wanted) {
+    // What the driver listed before any error: the message is about the format asked for.
+    int ignored = 0;
     std::string offered;
-    v4l2_fmtdesc desc{};
-    desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    while (try_ioctl(fd_.get(), VIDIOC_ENUM_FMT, &desc)) {
-      offered += (offered.empty() ? "" : ", ") + fourcc_text(desc.pixelformat);
-      ++desc.index;
+    for (const std::string& name : offered_formats(fd_.get(), ignored)) {
+      offered += (offered.empty() ? "" : ", ") + name;
     }
     throw std::runtime_error(device_ + " (" + card_ + ") does not offer pixel format " +
                              std::string(fourcc_name(options.format)) + " (it offers " + offered +
@@ -436,11 +448,7 @@ ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
                                std::to_string(buffer.index) + " of " +
                                std::to_string(buffers_.size()));
     }
-    if (have_sequence_ && buffer.sequence > last_driver_sequence_ + 1) {
-      dropped_frames_ += buffer.sequence - last_driver_sequence_ - 1;
-    }
-    have_sequence_ = true;
-    last_driver_sequence_ = buffer.sequence;
+    dropped_frames_ += skipped_frames(last_driver_sequence_, buffer.sequence);
     const bool corrupt = (buffer.flags & V4L2_BUF_FLAG_ERROR) != 0;
     // Read before VIDIOC_QBUF, which writes the buffer's new state into the same struct.
     const bool monotonic =
@@ -479,7 +487,7 @@ void V4l2Camera::stop() {
     streaming_ = false;
     int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     if (!try_ioctl(fd_.get(), VIDIOC_STREAMOFF, &type)) {
-      failure = std::string("VIDIOC_STREAMOFF on ") + device_ + " failed: " + std::strerror(errno);
+      failure = errno_message(device_, "VIDIOC_STREAMOFF", errno);
     }
   }
   buffers_.clear();
@@ -487,7 +495,7 @@ void V4l2Camera::stop() {
   release.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   release.memory = V4L2_MEMORY_MMAP;
   if (!try_ioctl(fd_.get(), VIDIOC_REQBUFS, &release) && failure.empty()) {
-    failure = std::string("VIDIOC_REQBUFS(0) on ") + device_ + " failed: " + std::strerror(errno);
+    failure = errno_message(device_, "VIDIOC_REQBUFS(0)", errno);
   }
   converter_.reset();
   fd_ = DeviceFd();

@@ -57,7 +57,7 @@ class V4l2Camera final : public FrameSource {
   V4l2Camera(const V4l2Camera&) = delete;
   V4l2Camera& operator=(const V4l2Camera&) = delete;
 
-  const servo::CameraIntrinsics& intrinsics() const override { return intrinsics_; }
+  const servo::CameraIntrinsics& intrinsics() const override { return lens_->intrinsics(); }
   // Waits up to timeout_s for the next filled buffer, converts it to BGR and undistorts it;
   // frame.image shares the camera's buffer for that, valid until the next read(). Timestamps are
   // the driver's when it stamps buffers with the monotonic clock (driver_timestamps()), else the
@@ -73,7 +73,7 @@ class V4l2Camera final : public FrameSource {
   // returned flagged as corrupt.
   std::uint64_t dropped_frames() const { return dropped_frames_; }
   // The driver's sequence number of the last frame read (gaps are dropped frames).
-  std::uint32_t driver_sequence() const { return last_driver_sequence_; }
+  std::uint32_t driver_sequence() const { return last_driver_sequence_.value_or(0); }
   // The frame rate the driver set (S_PARM), 0 when it cannot set one.
   double frame_rate_hz() const { return frame_rate_hz_; }
   bool driver_timestamps() const { return driver_timestamps_; }
@@ -141,11 +141,9 @@ class V4l2Camera final : public FrameSource {
   // libv4lconvert's.
   std::unique_ptr<v4lconvert_data, void (*)(v4lconvert_data*)> converter_;
   std::optional<Lens> lens_;
-  servo::CameraIntrinsics intrinsics_;
   cv::Mat converted_;  // BGR, before undistortion
   bool driver_timestamps_ = false;
-  bool have_sequence_ = false;
-  std::uint32_t last_driver_sequence_ = 0;
+  std::optional<std::uint32_t> last_driver_sequence_;  // none before the first frame
   std::uint64_t dropped_frames_ = 0;
   std::uint64_t sequence_ = 0;
 };
