@@ -1,7 +1,5 @@
 #include "flowsteer/calibration/intrinsics.hpp"
 
-#include <glob.h>
-
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -10,6 +8,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "flowsteer/camera_io/glob.hpp"
 
 namespace flowsteer::calibration {
 
@@ -217,21 +217,10 @@ std::string CalibrationReport::text() const {
 }
 
 std::vector<std::filesystem::path> expand_glob(const std::string& pattern) {
-  // Folders that do not exist or cannot be read match nothing, as in a shell.
-  glob_t matches{};
-  const int status = ::glob(pattern.c_str(), 0, nullptr, &matches);
-  std::vector<std::filesystem::path> paths;
-  for (std::size_t i = 0; status == 0 && i < matches.gl_pathc; ++i) {
-    paths.emplace_back(matches.gl_pathv[i]);
-  }
-  ::globfree(&matches);
-  if (status != 0 && status != GLOB_NOMATCH) {
-    throw CalibrationError("cannot expand '" + pattern + "' (out of memory)");
-  }
+  std::vector<std::filesystem::path> paths = camera_io::expand_glob(pattern);
   if (paths.empty()) {
     throw CalibrationError("no file matches '" + pattern + "'");
   }
-  std::sort(paths.begin(), paths.end());
   return paths;
 }
 

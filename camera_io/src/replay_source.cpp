@@ -1,6 +1,5 @@
 #include "flowsteer/camera_io/replay_source.hpp"
 
-#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -8,8 +7,9 @@
 #include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+
+#include "flowsteer/camera_io/glob.hpp"
 
 namespace flowsteer::camera_io {
 namespace {
@@ -63,10 +63,9 @@ void check_printf_pattern(const std::string& pattern) {
 std::vector<std::string> expand_pattern(const std::string& pattern) {
   std::vector<std::string> files;
   if (is_glob(pattern)) {
-    std::vector<cv::String> matches;
-    cv::glob(pattern, matches, false);
-    files.assign(matches.begin(), matches.end());
-    std::sort(files.begin(), files.end());
+    for (const std::filesystem::path& path : expand_glob(pattern)) {
+      files.push_back(path.string());
+    }
     return files;
   }
   check_printf_pattern(pattern);
@@ -161,7 +160,7 @@ ReadStatus ReplaySource::read(Frame& frame, double /*timeout_s*/) {
     return ReadStatus::end_of_stream;
   }
   have_decoded_ = false;
-  const std::size_t index = next_index_ - 1;
+  const std::size_t index = next_index_ - 1;  // every frame decoded is delivered, in order
   double timestamp_s = frame_rate_hz_ > 0.0 ? static_cast<double>(index) / frame_rate_hz_ : 0.0;
   if (container_timestamps_) {
     // The presentation time of the frame just decoded. Containers without one (or a broken
@@ -180,7 +179,7 @@ ReadStatus ReplaySource::read(Frame& frame, double /*timeout_s*/) {
   previous_timestamp_s_ = timestamp_s;
   frame.image = lens_->apply(decoded_);
   frame.timestamp_s = timestamp_s;
-  frame.sequence = sequence_++;
+  frame.sequence = index;
   frame.sim.reset();
   return ReadStatus::ok;
 }

@@ -127,6 +127,21 @@ TEST_F(Replay, GlobIsSortedByName) {
   }
 }
 
+TEST_F(Replay, GlobTakesCharacterRanges) {
+  write_images("img_%02d.png", 0, 12);
+  ReplayOptions options;
+  options.path = (dir_ / "img_0[2-4].png").string();
+  options.frame_rate_hz = 30.0;
+  ReplaySource source(options);
+  EXPECT_EQ(source.frame_count(), 3u);
+  Frame frame;
+  for (int i = 2; i <= 4; ++i) {
+    ASSERT_EQ(source.read(frame, 0.1), ReadStatus::ok);
+    EXPECT_EQ(frame.image.at<cv::Vec3b>(0, 0)[0], 20 * i) << i;
+  }
+  EXPECT_EQ(source.read(frame, 0.1), ReadStatus::end_of_stream);
+}
+
 std::string error_of(const ReplayOptions& options) {
   try {
     ReplaySource source(options);

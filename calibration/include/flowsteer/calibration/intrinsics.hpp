@@ -71,7 +71,8 @@ IntrinsicsResult calibrate_intrinsics(const std::vector<CalibrationView>& views,
                                       std::vector<RejectedView> rejected, cv::Size image_size,
                                       const IntrinsicsOptions& options);
 
-// The image files a shell-style pattern names, sorted. Throws CalibrationError when none does.
+// The image files a shell-style pattern names, sorted (camera_io::expand_glob). Throws
+// CalibrationError when none does.
 std::vector<std::filesystem::path> expand_glob(const std::string& pattern);
 
 // Reads each image, finds the board and calibrates. Unreadable images, images of another size

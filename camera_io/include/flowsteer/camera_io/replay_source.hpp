@@ -1,7 +1,6 @@
 #pragma once
 
 #include <cstddef>
-#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -20,8 +19,8 @@ namespace flowsteer::camera_io {
 
 struct ReplayOptions {
   // A video file (anything OpenCV's FFmpeg backend decodes), or an image sequence: a glob
-  // ("run/*.png", sorted by name) or a printf pattern ("run/frame_%05d.png", numbered from 0
-  // or 1 up to the first missing number).
+  // ("run/*.png", "run/view_0[0-2].png"; sorted by name) or a printf pattern
+  // ("run/frame_%05d.png", numbered from 0 or 1 up to the first missing number).
   std::string path;
   // 0: timestamps from the video container (the frame's presentation time); a rate is needed
   // for an image sequence, which has none. > 0: frame n is at n / rate, for both.
@@ -58,7 +57,7 @@ class ReplaySource final : public FrameSource {
   std::string path_;
   std::unique_ptr<cv::VideoCapture> video_;
   std::vector<std::string> images_;
-  std::size_t next_index_ = 0;
+  std::size_t next_index_ = 0;  // of the next frame to decode; also its sequence number
   std::size_t frame_count_ = 0;
   double frame_rate_hz_ = 0.0;
   bool container_timestamps_ = false;
@@ -67,7 +66,6 @@ class ReplaySource final : public FrameSource {
   bool have_decoded_ = false;  // the first frame, read by the constructor and not yet delivered
   std::optional<Lens> lens_;
   cv::Size size_;
-  std::uint64_t sequence_ = 0;
 };
 
 }  // namespace flowsteer::camera_io
