@@ -3,19 +3,16 @@
 // frames and their sequence and timestamps, vivid's colour bars, a clean stop, dropped frames,
 // a timeout and the errors for bad devices and formats.
 
-#include <sys/wait.h>
-
 #include <array>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "vm_test_support.hpp"
 
 namespace {
 
@@ -35,39 +32,15 @@ struct VmRun {
   std::map<std::string, std::vector<ProbeFrame>> frames;  // "yuyv" → its frames
 };
 
-std::string run_command(const std::string& command, int& status) {
-  std::string out;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) {
-    status = -1;
-    return "popen failed";
-  }
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, pipe) != nullptr) {
-    out += buf;
-  }
-  const int raw = ::pclose(pipe);
-  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return out;
-}
-
 VmRun parse(const std::string& console) {
   VmRun run;
   run.console = console;
-  std::istringstream in(console);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') {
-      line.pop_back();
+  flowsteer::vm_test::for_each_line(console, [&](const std::string& line) {
+    const auto probe = flowsteer::vm_test::probe_line(line);
+    if (!probe) {
+      return;
     }
-    const std::size_t at = line.find("PROBE ");
-    if (at == std::string::npos) {
-      continue;
-    }
-    const std::string rest = line.substr(at + 6);
-    const std::size_t space = rest.find(' ');
-    const std::string key = rest.substr(0, space);
-    const std::string value = space == std::string::npos ? "" : rest.substr(space + 1);
+    const auto& [key, value] = *probe;
     if (key.ends_with("-frame")) {
       ProbeFrame f;
       if (std::sscanf(value.c_str(), "%llu %lf %lf %u %dx%d %d", &f.sequence, &f.timestamp_s,
@@ -77,7 +50,7 @@ VmRun parse(const std::string& console) {
       }
     }
     run.probe[key] = value;
-  }
+  });
   return run;
 }
 
@@ -94,31 +67,15 @@ std::vector<std::array<double, 3>> bars(const std::string& text) {
   return out;
 }
 
-class VividVm : public ::testing::Test {
+class VividVm : public flowsteer::vm_test::VmTest<VmRun, parse> {
  protected:
-  static void SetUpTestSuite() {
-    int status = 0;
-    script_output_ = run_command(std::string("bash '") + FLOWSTEER_VM_SCRIPT + "' '" +
-                                     FLOWSTEER_VM_WORK_DIR + "' '" + FLOWSTEER_VM_PROBE + "' 2>&1",
-                                 status);
-    status_ = status;
-    std::ifstream log(std::string(FLOWSTEER_VM_WORK_DIR) + "/console.log");
-    std::stringstream console;
-    console << log.rdbuf();
-    run_ = parse(console.str());
-  }
   void SetUp() override {
-    if (status_ == 77) {
-      GTEST_SKIP() << "qemu cannot run: " << script_output_;
+    VmTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) {
+      return;
     }
-    ASSERT_EQ(status_, 0) << script_output_ << "\n--- console ---\n" << run_.console;
-    ASSERT_TRUE(run_.probe.count("done")) << run_.console;
     ASSERT_EQ(run_.probe["done"], "") << run_.console;
   }
-
-  static inline int status_ = 0;
-  static inline std::string script_output_;
-  static inline VmRun run_;
 };
 
 TEST_F(VividVm, OffersYuyvAndGrey) {

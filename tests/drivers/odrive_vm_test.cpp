@@ -3,8 +3,6 @@
 // the exact frames for activate and deactivate, the velocity stream, the watchdog's stop and
 // the stop after an axis error.
 
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,15 +10,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <numbers>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "vm_test_support.hpp"
 
 namespace {
 
@@ -53,22 +51,6 @@ struct VmRun {
   std::vector<Frame> frames;
 };
 
-std::string run_command(const std::string& command, int& status) {
-  std::string out;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) {
-    status = -1;
-    return "popen failed";
-  }
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, pipe) != nullptr) {
-    out += buf;
-  }
-  const int raw = ::pclose(pipe);
-  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return out;
-}
-
 // "(1700000000.123456) vcan0 06B#0200000001000000" → Frame.
 std::optional<Frame> parse_candump(const std::string& line) {
   Frame f;
@@ -92,13 +74,8 @@ std::optional<Frame> parse_candump(const std::string& line) {
 VmRun parse(const std::string& console) {
   VmRun run;
   run.console = console;
-  std::istringstream in(console);
-  std::string line;
   bool in_capture = false;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') {
-      line.pop_back();
-    }
+  flowsteer::vm_test::for_each_line(console, [&](const std::string& line) {
     if (line.find("=== CAPTURE BEGIN ===") != std::string::npos) {
       in_capture = true;
     } else if (line.find("=== CAPTURE END ===") != std::string::npos) {
@@ -107,12 +84,10 @@ VmRun parse(const std::string& console) {
       if (const auto frame = parse_candump(line)) {
         run.frames.push_back(*frame);
       }
-    } else if (const std::size_t at = line.find("PROBE "); at != std::string::npos) {
-      const std::string rest = line.substr(at + 6);
-      const std::size_t space = rest.find_first_of(" :");
-      run.probe[rest.substr(0, space)] = space == std::string::npos ? "" : rest.substr(space + 1);
+    } else if (const auto probe = flowsteer::vm_test::probe_line(line)) {
+      run.probe[probe->key] = probe->value;
     }
-  }
+  });
   return run;
 }
 
@@ -136,33 +111,15 @@ std::vector<std::string> drive_frames_between(const VmRun& run, double from_s, d
   return out;
 }
 
-class OdriveVm : public ::testing::Test {
+class OdriveVm : public flowsteer::vm_test::VmTest<VmRun, parse> {
  protected:
-  static void SetUpTestSuite() {
-    int status = 0;
-    const std::string out =
-        run_command(std::string("bash '") + FLOWSTEER_VM_SCRIPT + "' '" + FLOWSTEER_VM_WORK_DIR +
-                        "' '" + FLOWSTEER_VM_PROBE + "' 2>&1",
-                    status);
-    status_ = status;
-    script_output_ = out;
-    std::ifstream log(std::string(FLOWSTEER_VM_WORK_DIR) + "/console.log");
-    std::stringstream console;
-    console << log.rdbuf();
-    run_ = parse(console.str());
-  }
   void SetUp() override {
-    if (status_ == 77) {
-      GTEST_SKIP() << "qemu cannot run: " << script_output_;
+    VmTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) {
+      return;
     }
-    ASSERT_EQ(status_, 0) << script_output_ << "\n--- console ---\n" << run_.console;
-    ASSERT_TRUE(run_.probe.count("done")) << run_.console;
     ASSERT_FALSE(run_.frames.empty()) << run_.console;
   }
-
-  static inline int status_ = 0;
-  static inline std::string script_output_;
-  static inline VmRun run_;
 };
 
 constexpr double kTimeoutS = 0.3;  // the probe's watchdog timeout

@@ -1,7 +1,7 @@
 // Runs inside the test VM (tests/vm/run_can_vm.sh): a simulated pair of ODrive axes and the
 // ODrive CAN drive behind a Base on vcan0, through activate, a velocity stream, commands that
 // cease (the watchdog must stop the wheels), deactivate and an axis error. It prints what it
-// did as "PROBE ..." lines with CLOCK_REALTIME stamps, the clock candump stamps frames with;
+// did as "PROBE key value" lines with CLOCK_REALTIME stamps, the clock candump stamps frames with;
 // the host test checks those against candump's capture of the bus.
 
 #include <time.h>
@@ -143,9 +143,9 @@ int run() {
     OdriveCanDrive drive(missing);
     try {
       drive.configure();
-      std::printf("PROBE missing-interface: no error\n");
+      std::printf("PROBE missing-interface no error\n");
     } catch (const DriveError& e) {
-      std::printf("PROBE missing-interface: %s\n", e.what());
+      std::printf("PROBE missing-interface %s\n", e.what());
     }
   }
 
@@ -184,9 +184,9 @@ int run() {
       }
       return true;
     });
-    std::printf("PROBE axis-error: no error\n");
+    std::printf("PROBE axis-error no error\n");
   } catch (const DriveError& e) {
-    std::printf("PROBE axis-error %.6f: %s\n", realtime_s(), e.what());
+    std::printf("PROBE axis-error %.6f %s\n", realtime_s(), e.what());
   }
   std::printf("PROBE done\n");
   return 0;
@@ -199,7 +199,7 @@ int main() {
   try {
     return run();
   } catch (const std::exception& e) {
-    std::printf("PROBE failed: %s\n", e.what());
+    std::printf("PROBE failed %s\n", e.what());
     return 1;
   }
 }

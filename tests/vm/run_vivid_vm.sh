@@ -1,24 +1,10 @@
 #!/usr/bin/env bash
-# Usage: run_vivid_vm.sh WORK_DIR PROBE
-# The V4L2 test VM: fetches the kernel (cached under WORK_DIR), builds the initramfs with the
-# vivid module and PROBE, boots it and leaves the console in WORK_DIR/console.log. Exits 77 with
-# the reason on stdout when qemu cannot run at all.
+# Usage: run_vivid_vm.sh KERNEL_CACHE WORK_DIR PROBE
+# The V4L2 test VM (run_vm.sh): the vivid module and PROBE, with vivid_init.sh as /init. The
+# console is left in WORK_DIR/console.log; exits 77 where qemu cannot run at all.
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
-work=${1:?usage}; probe=${2:?usage}
-mkdir -p "$work"
-
-if ! command -v qemu-system-x86_64 > /dev/null; then
-  echo "qemu-system-x86_64 not found: scripts/setup installs qemu-system-x86"
-  exit 77
-fi
-if ! version=$(qemu-system-x86_64 --version 2>&1); then
-  echo "qemu-system-x86_64 does not run here: ${version:0:300}"
-  exit 77
-fi
-
-kroot=$("$here/fetch_kernel.sh" "$work/kernel")
-"$here/make_initramfs.sh" "$kroot" "$work/vivid.cpio.gz" "$here/vivid_init.sh" \
+kernel_cache=${1:?usage}; work=${2:?usage}; probe=${3:?usage}
+exec "$here/run_vm.sh" "$kernel_cache" "$work" "$here/vivid_init.sh" 120 \
   --modules "vivid" --binaries "$probe"
-"$here/boot.sh" "$kroot" "$work/vivid.cpio.gz" "$work/console.log" 120

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Usage: run_vm.sh KERNEL_CACHE WORK_DIR INIT TIMEOUT_S [--modules "m1 m2"] [--binaries "b1 b2"]
+# A test VM: fetches the kernel (cached under KERNEL_CACHE, which every VM test shares), builds
+# WORK_DIR/initramfs.cpio.gz with INIT as /init and the modules and binaries (a name without a
+# slash is looked up on PATH), boots it for at most TIMEOUT_S and leaves the console in
+# WORK_DIR/console.log. Exits 77 with the reason on stdout when qemu cannot run at all.
+set -euo pipefail
+
+here=$(cd "$(dirname "$0")" && pwd)
+kernel_cache=${1:?usage}; work=${2:?usage}; init=${3:?usage}; timeout_s=${4:?usage}; shift 4
+modules=""; binaries=""
+while [[ $# -gt 0 ]]; do
+  case $1 in
+    --modules) modules=$2; shift 2 ;;
+    --binaries) binaries=$2; shift 2 ;;
+    *) echo "run_vm: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+mkdir -p "$work"
+
+if ! command -v qemu-system-x86_64 > /dev/null; then
+  echo "qemu-system-x86_64 not found: scripts/setup installs qemu-system-x86"
+  exit 77
+fi
+if ! version=$(qemu-system-x86_64 --version 2>&1); then
+  echo "qemu-system-x86_64 does not run here: ${version:0:300}"
+  exit 77
+fi
+
+paths=""
+for binary in $binaries; do
+  if [[ $binary != */* ]]; then
+    binary=$(command -v "$binary") ||
+      { echo "run_vm: $binary not found: scripts/setup installs what the VM tests need" >&2; exit 1; }
+  fi
+  paths+="$binary "
+done
+
+kroot=$("$here/fetch_kernel.sh" "$kernel_cache")
+"$here/make_initramfs.sh" "$kroot" "$work/initramfs.cpio.gz" "$init" \
+  --modules "$modules" --binaries "$paths"
+"$here/boot.sh" "$kroot" "$work/initramfs.cpio.gz" "$work/console.log" "$timeout_s"

@@ -1,0 +1,100 @@
+#pragma once
+
+// The host side of a VM test (tests/vm): boots the VM once per test suite with the runner the
+// test was built with and reads what the probe printed on the console, "PROBE key value" lines.
+// The test's CMake target defines FLOWSTEER_VM_SCRIPT (run_*_vm.sh), FLOWSTEER_VM_KERNEL_CACHE,
+// FLOWSTEER_VM_WORK_DIR and FLOWSTEER_VM_PROBE (flowsteer_add_vm_test in tests/CMakeLists.txt).
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
+
+#include <gtest/gtest.h>
+
+namespace flowsteer::vm_test {
+
+// Runs a shell command and returns its stdout; `status` is its exit status, -1 when it did not
+// exit normally.
+inline std::string run_command(const std::string& command, int& status) {
+  std::string out;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) {
+    status = -1;
+    return "popen failed";
+  }
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr) {
+    out += buf;
+  }
+  const int raw = ::pclose(pipe);
+  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return out;
+}
+
+// Calls on_line(line) for each line of the console, without the '\r' the serial port adds.
+template <typename OnLine>
+void for_each_line(const std::string& console, OnLine on_line) {
+  std::istringstream in(console);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') {
+      line.pop_back();
+    }
+    on_line(line);
+  }
+}
+
+struct ProbeLine {
+  std::string key;
+  std::string value;  // the rest after the key and one space; empty when there is none
+};
+
+// "PROBE key value", anywhere in the line (the kernel's messages may come first); nullopt for a
+// line without "PROBE ".
+inline std::optional<ProbeLine> probe_line(const std::string& line) {
+  const std::size_t at = line.find("PROBE ");
+  if (at == std::string::npos) {
+    return std::nullopt;
+  }
+  const std::string rest = line.substr(at + 6);
+  const std::size_t space = rest.find(' ');
+  return ProbeLine{rest.substr(0, space), space == std::string::npos ? "" : rest.substr(space + 1)};
+}
+
+// A test suite on one boot of the VM: SetUpTestSuite boots it and gives the console to Parse,
+// whose Run holds the console (`console`) and the probe's lines by key (`probe`); the probe
+// prints "PROBE done" last. Each test is skipped where qemu cannot run at all (the runner exits
+// 77) and fails at once when the boot failed or the probe did not finish.
+template <typename Run, Run (*Parse)(const std::string& console)>
+class VmTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    script_output_ = run_command(std::string("bash '") + FLOWSTEER_VM_SCRIPT + "' '" +
+                                     FLOWSTEER_VM_KERNEL_CACHE + "' '" + FLOWSTEER_VM_WORK_DIR +
+                                     "' '" + FLOWSTEER_VM_PROBE + "' 2>&1",
+                                 status_);
+    std::ifstream log(std::string(FLOWSTEER_VM_WORK_DIR) + "/console.log");
+    std::stringstream console;
+    console << log.rdbuf();
+    run_ = Parse(console.str());
+  }
+
+  void SetUp() override {
+    if (status_ == 77) {
+      GTEST_SKIP() << "qemu cannot run: " << script_output_;
+    }
+    ASSERT_EQ(status_, 0) << script_output_ << "\n--- console ---\n" << run_.console;
+    ASSERT_TRUE(run_.probe.count("done")) << run_.console;
+  }
+
+  static inline int status_ = 0;
+  static inline std::string script_output_;
+  static inline Run run_;
+};
+
+}  // namespace flowsteer::vm_test
