@@ -122,13 +122,8 @@ void check_stream(const VmRun& run, const std::string& key, std::size_t count, i
     gaps += frames[i].driver_sequence - frames[i - 1].driver_sequence - 1;
   }
   unsigned long long dropped = 0;
-  unsigned first = 0, last = 0;
-  ASSERT_EQ(
-      std::sscanf(run.probe.at(key + "-dropped").c_str(), "%llu %u %u", &dropped, &first, &last),
-      3);
+  ASSERT_EQ(std::sscanf(run.probe.at(key + "-dropped").c_str(), "%llu", &dropped), 1);
   EXPECT_EQ(dropped, gaps);
-  EXPECT_EQ(first, frames.front().driver_sequence);
-  EXPECT_EQ(last, frames.back().driver_sequence);
 }
 
 TEST_F(VividVm, YuyvStreamHasIncreasingSequenceAndMonotonicTimestamps) {

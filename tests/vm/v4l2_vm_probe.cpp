@@ -85,16 +85,12 @@ void capture(const char* key, const V4l2Options& options, int frames, bool bars)
   std::printf("PROBE %s-open %s %s rate=%.3f\n", key, camera.driver().c_str(),
               camera.card().c_str(), camera.frame_rate_hz());
   Frame frame;
-  std::uint32_t first_driver_sequence = 0;
   for (int i = 0; i < frames; ++i) {
     const ReadStatus status = camera.read(frame, 2.0);
     const double now_s = monotonic_now_s();
     if (status != ReadStatus::ok) {
       std::printf("PROBE %s-frame timeout\n", key);
       return;
-    }
-    if (i == 0) {
-      first_driver_sequence = camera.driver_sequence();
     }
     std::printf("PROBE %s-frame %llu %.6f %.6f %u %dx%d %d\n", key,
                 static_cast<unsigned long long>(frame.sequence), frame.timestamp_s, now_s,
@@ -104,9 +100,8 @@ void capture(const char* key, const V4l2Options& options, int frames, bool bars)
   if (bars) {
     print_bars((std::string(key) + "-bars").c_str(), frame.image);
   }
-  std::printf("PROBE %s-dropped %llu %u %u\n", key,
-              static_cast<unsigned long long>(camera.dropped_frames()), first_driver_sequence,
-              camera.driver_sequence());
+  std::printf("PROBE %s-dropped %llu\n", key,
+              static_cast<unsigned long long>(camera.dropped_frames()));
   try {
     camera.stop();
     std::printf("PROBE %s-stop ok\n", key);
