@@ -79,19 +79,8 @@ class MovingCamera final : public flowsteer::camera_io::FrameSource {
   std::unique_ptr<sim::SimCamera> camera_;
 };
 
-class Capture : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() { renderer_ = sim::Renderer::create().release(); }
-  static void TearDownTestSuite() {
-    delete renderer_;
-    renderer_ = nullptr;
-  }
-  static sim::Renderer* renderer_;
-};
-sim::Renderer* Capture::renderer_ = nullptr;
-
-TEST_F(Capture, KeepsViewsThatAddCoverageOrPoseAndSkipsDuplicates) {
-  MovingCamera source(*renderer_, true);
+TEST(Capture, KeepsViewsThatAddCoverageOrPoseAndSkipsDuplicates) {
+  MovingCamera source(test::shared_renderer(), true);
   const BoardDetector detector(test::test_board());
   CaptureOptions options;
   options.views = 100;  // more than there are: the source's end stops the capture
@@ -109,15 +98,15 @@ TEST_F(Capture, KeepsViewsThatAddCoverageOrPoseAndSkipsDuplicates) {
   }
 }
 
-TEST_F(Capture, AStillCameraGivesOneViewAndNoCalibration) {
-  MovingCamera source(*renderer_, false);
+TEST(Capture, AStillCameraGivesOneViewAndNoCalibration) {
+  MovingCamera source(test::shared_renderer(), false);
   const BoardDetector detector(test::test_board());
   CaptureOptions options;
   options.max_frames = 6;
   std::ostringstream log;
   EXPECT_EQ(capture_views(source, detector, options, log).views.size(), 1U);
 
-  MovingCamera again(*renderer_, false);
+  MovingCamera again(test::shared_renderer(), false);
   flowsteer::launch::CaptureCommand command;
   command.board = "chessboard:9x6:0.05";
   command.out_dir =
@@ -135,8 +124,8 @@ TEST_F(Capture, AStillCameraGivesOneViewAndNoCalibration) {
   fs::remove_all(command.out_dir);
 }
 
-TEST_F(Capture, CalibratesAndWritesItsFolder) {
-  MovingCamera source(*renderer_, true);
+TEST(Capture, CalibratesAndWritesItsFolder) {
+  MovingCamera source(test::shared_renderer(), true);
   flowsteer::launch::CaptureCommand command;
   command.board = "chessboard:9x6:0.05";
   command.out_dir = fs::temp_directory_path() / ("flowsteer_capture_" + std::to_string(::getpid()));

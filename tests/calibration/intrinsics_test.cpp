@@ -54,21 +54,10 @@ void expect_recovered(const CameraModel& truth, const IntrinsicsResult& result) 
   EXPECT_LT(result.report.rms_px, 0.3);
 }
 
-class RenderedTargets : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() { renderer_ = sim::Renderer::create().release(); }
-  static void TearDownTestSuite() {
-    delete renderer_;
-    renderer_ = nullptr;
-  }
-  static sim::Renderer* renderer_;
-};
-sim::Renderer* RenderedTargets::renderer_ = nullptr;
-
-TEST_F(RenderedTargets, RecoversPlumbBobIntrinsics) {
+TEST(RenderedTargets, RecoversPlumbBobIntrinsics) {
   const CameraModel truth = test::true_camera();
   std::vector<RejectedView> rejected;
-  const auto views = render_standing_views(truth, *renderer_, rejected);
+  const auto views = render_standing_views(truth, test::shared_renderer(), rejected);
   for (const auto& r : rejected) {
     std::cout << "not found: " << r.name << ": " << r.reason << "\n";
   }
@@ -79,12 +68,12 @@ TEST_F(RenderedTargets, RecoversPlumbBobIntrinsics) {
   EXPECT_NEAR(result.model.coefficients[0], truth.coefficients[0], 0.02);
 }
 
-TEST_F(RenderedTargets, RecoversEquidistantIntrinsics) {
+TEST(RenderedTargets, RecoversEquidistantIntrinsics) {
   CameraModel truth = test::true_camera();
   truth.distortion = DistortionModel::equidistant;
   truth.coefficients = {-0.05, 0.01, 0.0, 0.0};
   std::vector<RejectedView> rejected;
-  const auto views = render_standing_views(truth, *renderer_, rejected);
+  const auto views = render_standing_views(truth, test::shared_renderer(), rejected);
   EXPECT_GE(views.size(), 13U);
   IntrinsicsOptions options;
   options.model = DistortionModel::equidistant;
@@ -96,10 +85,10 @@ TEST_F(RenderedTargets, RecoversEquidistantIntrinsics) {
 
 // The board flat on the floor, seen from a known height and pitch: both recovered within 1 cm
 // and 0.5 degrees, roll within 0.5 degrees of level.
-TEST_F(RenderedTargets, RecoversTheMountFromABoardOnTheFloor) {
+TEST(RenderedTargets, RecoversTheMountFromABoardOnTheFloor) {
   const CameraModel camera = test::true_camera();
   const BoardDetector detector(test::test_board());
-  test::DistortedCamera distorted(camera, *renderer_);
+  test::DistortedCamera distorted(camera, test::shared_renderer());
   constexpr double kBoardTop = 0.002;
   struct Case {
     double height_m, pitch_deg, yaw_deg, board_x_m;

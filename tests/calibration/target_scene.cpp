@@ -1,6 +1,7 @@
 #include "target_scene.hpp"
 
 #include <cmath>
+#include <memory>
 #include <numbers>
 
 #include <opencv2/calib3d.hpp>
@@ -145,6 +146,11 @@ sim_camera::WorldSpec floor_board_world(const BoardSpec& board, const Eigen::Vec
   w.obstacles.push_back(
       box(centre, size + Eigen::Vector2d(2 * s, 2 * s), 0.5 * board_top_m, white()));
   return w;
+}
+
+sim_camera::Renderer& shared_renderer() {
+  static const std::unique_ptr<sim_camera::Renderer> renderer = sim_camera::Renderer::create();
+  return *renderer;
 }
 
 DistortedCamera::DistortedCamera(const camera_io::CameraModel& camera,

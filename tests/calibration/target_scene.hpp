@@ -14,6 +14,9 @@
 
 namespace flowsteer::calibration::test {
 
+// The renderer of every test in the process, made on first use (an EGL context is slow to make).
+sim_camera::Renderer& shared_renderer();
+
 // The camera the tests calibrate: 640 x 480, non-square pixels, principal point off centre,
 // barrel distortion (radial only).
 camera_io::CameraModel true_camera();
