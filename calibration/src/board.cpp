@@ -9,6 +9,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "number_text.hpp"
+
 namespace flowsteer::calibration {
 
 namespace {
@@ -62,6 +64,16 @@ std::vector<std::string> split(const std::string& text, char separator) {
   return parts;
 }
 
+// The dictionary named `name`; nullptr for a name OpenCV does not know.
+const Dictionary* find_dictionary(const std::string& name) {
+  for (const Dictionary& d : kDictionaries) {
+    if (name == d.name) {
+      return &d;
+    }
+  }
+  return nullptr;
+}
+
 [[noreturn]] void bad(const std::string& text, const std::string& why) {
   throw std::invalid_argument("board '" + text + "': " + why + " (expected " + kFormats + ")");
 }
@@ -88,12 +100,6 @@ double length(const std::string& text, const std::string& part, const char* what
     bad(text, std::string(what) + " must be positive, got " + part);
   }
   return value;
-}
-
-std::string number_text(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
 }
 
 }  // namespace
@@ -125,11 +131,7 @@ BoardSpec BoardSpec::parse(const std::string& text) {
       bad(text, "MARKER_M (" + parts[3] + ") must be smaller than SQUARE_M (" + parts[2] + ")");
     }
     spec.dictionary = parts[4];
-    bool known = false;
-    for (const Dictionary& d : kDictionaries) {
-      known = known || spec.dictionary == d.name;
-    }
-    if (!known) {
+    if (find_dictionary(spec.dictionary) == nullptr) {
       std::string names;
       for (const Dictionary& d : kDictionaries) {
         names += names.empty() ? d.name : std::string(", ") + d.name;
@@ -176,16 +178,13 @@ BoardDetector::BoardDetector(BoardSpec spec) : spec_(std::move(spec)) {
     }
     return;
   }
-  for (const Dictionary& d : kDictionaries) {
-    if (spec_.dictionary == d.name) {
-      charuco_ = cv::aruco::CharucoBoard::create(
-          spec_.cols, spec_.rows, static_cast<float>(spec_.square_m),
-          static_cast<float>(spec_.marker_m), cv::aruco::getPredefinedDictionary(d.id));
-    }
-  }
-  if (!charuco_) {
+  const Dictionary* dictionary = find_dictionary(spec_.dictionary);
+  if (dictionary == nullptr) {
     throw std::invalid_argument("board " + spec_.text() + ": unknown dictionary");
   }
+  charuco_ = cv::aruco::CharucoBoard::create(
+      spec_.cols, spec_.rows, static_cast<float>(spec_.square_m),
+      static_cast<float>(spec_.marker_m), cv::aruco::getPredefinedDictionary(dictionary->id));
   const auto markers = static_cast<std::size_t>(spec_.cols * spec_.rows / 2);
   if (charuco_->dictionary->bytesList.rows < static_cast<int>(markers)) {
     throw std::invalid_argument("board " + spec_.text() + ": needs " + std::to_string(markers) +

@@ -1,12 +1,12 @@
 #include "flowsteer/calibration/camera_info.hpp"
 
-#include <charconv>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
 #include "flowsteer/calibration/atomic_file.hpp"
 #include "flowsteer/calibration/yaml_reader.hpp"
+#include "number_text.hpp"
 
 namespace flowsteer::calibration {
 
@@ -64,12 +64,6 @@ std::vector<double> matrix(const YamlReader& reader, const YAML::Node& root, con
     values.push_back(reader.number(data[i], field + "[" + std::to_string(i) + "]"));
   }
   return values;
-}
-
-std::string number_text(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
 }
 
 void write_matrix(std::ostringstream& out, const char* key, int rows, int cols,

@@ -1,6 +1,5 @@
 #include "flowsteer/calibration/camera_mount.hpp"
 
-#include <charconv>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -8,16 +7,11 @@
 
 #include "flowsteer/calibration/atomic_file.hpp"
 #include "flowsteer/calibration/yaml_reader.hpp"
+#include "number_text.hpp"
 
 namespace flowsteer::calibration {
 
 namespace {
-
-std::string number_text(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
 
 double degrees(double rad) {
   return rad * 180.0 / std::numbers::pi;

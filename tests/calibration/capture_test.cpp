@@ -147,6 +147,14 @@ TEST(Capture, CalibratesAndWritesItsFolder) {
   fs::remove_all(command.out_dir);
 }
 
+TEST(BoardSpec, TextReadsBackAsTheSameNumbers) {
+  const BoardSpec spec = BoardSpec::parse("charuco:5x7:0.0254001:0.0190001:DICT_4X4_50");
+  EXPECT_EQ(spec.text(), "charuco:5x7:0.0254001:0.0190001:DICT_4X4_50");
+  const BoardSpec back = BoardSpec::parse(spec.text());
+  EXPECT_EQ(back.square_m, spec.square_m);
+  EXPECT_EQ(back.marker_m, spec.marker_m);
+}
+
 TEST(BoardSpec, ParsesAndExplainsBadSpecs) {
   const BoardSpec c = BoardSpec::parse("charuco:5x7:0.04:0.03:DICT_4X4_50");
   EXPECT_EQ(c.kind, BoardSpec::Kind::charuco);
