@@ -52,7 +52,7 @@ std::vector<bool> cells_of(const BoardView& view, cv::Size size) {
 
 }  // namespace
 
-BoardPose pose_of(const BoardView& view, const BoardSpec& /*spec*/, cv::Size image_size) {
+BoardPose pose_of(const BoardView& view, cv::Size image_size) {
   const auto [p0, p1, p2, p3] = outline(view);
   const cv::Point2f centre = 0.25F * (p0 + p1 + p2 + p3);
   const double area = 0.5 * std::abs((p2 - p0).cross(p3 - p1));
@@ -75,7 +75,7 @@ CaptureResult capture_views(camera_io::FrameSource& source, const BoardDetector&
   std::vector<BoardPose> poses;
   camera_io::Frame frame;
   double silent_s = 0.0;
-  cv::Size size;
+  cv::Size& size = result.image_size;
   while (static_cast<int>(result.views.size()) < options.views &&
          result.frames < options.max_frames) {
     const camera_io::ReadStatus status = source.read(frame, options.read_timeout_s);
@@ -109,7 +109,7 @@ CaptureResult capture_views(camera_io::FrameSource& source, const BoardDetector&
     for (std::size_t i = 0; i < cells.size(); ++i) {
       new_cells += cells[i] && !covered[i] ? 1 : 0;
     }
-    const BoardPose pose = pose_of(*board, detector.spec(), size);
+    const BoardPose pose = pose_of(*board, size);
     double nearest = std::numeric_limits<double>::infinity();
     for (const BoardPose& kept : poses) {
       double sum = 0.0;

@@ -72,11 +72,7 @@ Solved solve(const std::vector<CalibrationView>& views, cv::Size size, Distortio
     } else {
       cv::projectPoints(object[v], rvecs[v], tvecs[v], k, d, projected);
     }
-    double view_sq = 0.0;
-    for (std::size_t i = 0; i < projected.size(); ++i) {
-      const cv::Point2f e = projected[i] - image[v][i];
-      view_sq += e.dot(e);
-    }
+    const double view_sq = cv::norm(projected, image[v], cv::NORM_L2SQR);
     s.view_rms_px.push_back(std::sqrt(view_sq / static_cast<double>(projected.size())));
     sum_sq += view_sq;
     points += projected.size();
@@ -91,15 +87,21 @@ std::string format(double value, int decimals) {
   return out.str();
 }
 
+// Each rejected view on a line of its own: "\n  name: reason".
+std::string rejected_lines(const std::vector<RejectedView>& rejected) {
+  std::string lines;
+  for (const RejectedView& r : rejected) {
+    lines += "\n  " + r.name + ": " + r.reason;
+  }
+  return lines;
+}
+
 [[noreturn]] void too_few(std::size_t usable, int needed,
                           const std::vector<RejectedView>& rejected) {
   std::string message = "too few views to calibrate: " + std::to_string(usable) +
                         " usable, at least " + std::to_string(needed) + " needed";
   if (!rejected.empty()) {
-    message += "; rejected:";
-    for (const RejectedView& r : rejected) {
-      message += "\n  " + r.name + ": " + r.reason;
-    }
+    message += "; rejected:" + rejected_lines(rejected);
   }
   throw CalibrationError(message);
 }
@@ -186,10 +188,7 @@ std::string CalibrationReport::text() const {
     out << "  " << format(rms, 3) << " px  " << name << "\n";
   }
   if (!rejected.empty()) {
-    out << "rejected views: " << rejected.size() << "\n";
-    for (const RejectedView& r : rejected) {
-      out << "  " << r.name << ": " << r.reason << "\n";
-    }
+    out << "rejected views: " << rejected.size() << rejected_lines(rejected) << "\n";
   }
   out << "coverage: boards cover " << format(100.0 * coverage.fraction, 0) << "% of the image\n";
   for (int r = 0; r < 3; ++r) {
@@ -214,6 +213,19 @@ std::string CalibrationReport::text() const {
     out << "warning: " << w << "\n";
   }
   return out.str();
+}
+
+IntrinsicsResult calibrate_board_views(const std::vector<CalibrationView>& views,
+                                       std::vector<RejectedView> rejected, cv::Size image_size,
+                                       const BoardSpec& board, const std::string& searched,
+                                       const IntrinsicsOptions& options) {
+  if (views.empty()) {
+    throw CalibrationError("the board (" + board.text() + ") was found in none of the " + searched +
+                           rejected_lines(rejected));
+  }
+  IntrinsicsResult result = calibrate_intrinsics(views, std::move(rejected), image_size, options);
+  result.report.warnings = board.warnings();
+  return result;
 }
 
 std::vector<std::filesystem::path> expand_glob(const std::string& pattern) {
@@ -252,17 +264,8 @@ IntrinsicsResult calibrate_from_images(const std::vector<std::filesystem::path>&
       rejected.push_back({path.string(), why});
     }
   }
-  if (views.empty()) {
-    std::string message = "the board (" + detector.spec().text() + ") was found in none of the " +
-                          std::to_string(images.size()) + " images";
-    for (const RejectedView& r : rejected) {
-      message += "\n  " + r.name + ": " + r.reason;
-    }
-    throw CalibrationError(message);
-  }
-  IntrinsicsResult result = calibrate_intrinsics(views, std::move(rejected), size, options);
-  result.report.warnings = detector.spec().warnings();
-  return result;
+  return calibrate_board_views(views, std::move(rejected), size, detector.spec(),
+                               std::to_string(images.size()) + " images", options);
 }
 
 }  // namespace flowsteer::calibration

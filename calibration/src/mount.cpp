@@ -33,11 +33,7 @@ MountMeasurement measure_mount(const camera_io::CameraModel& camera, const Board
   }
   std::vector<cv::Point2f> projected;
   cv::projectPoints(board.object_points, rvec, tvec, k, distortion, projected);
-  double sum_sq = 0.0;
-  for (std::size_t i = 0; i < projected.size(); ++i) {
-    const cv::Point2f e = projected[i] - points[i];
-    sum_sq += e.dot(e);
-  }
+  const double sum_sq = cv::norm(projected, points, cv::NORM_L2SQR);
 
   cv::Matx33d r;
   cv::Rodrigues(rvec, r);

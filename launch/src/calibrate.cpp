@@ -87,20 +87,15 @@ void run_calibrate_capture(const CaptureCommand& command, camera_io::FrameSource
   log << "read " << capture.frames << " frames, the board in " << capture.frames_with_board
       << ", kept " << capture.views.size() << " views"
       << (capture.source_ended ? " (the source ended)" : "") << "\n";
-  if (capture.views.empty()) {
-    throw calibration::CalibrationError("the board (" + detector.spec().text() +
-                                        ") was found in none of the " +
-                                        std::to_string(capture.frames) + " frames read");
-  }
   std::vector<calibration::CalibrationView> views;
   for (std::size_t i = 0; i < capture.views.size(); ++i) {
     std::ostringstream name;
     name << "view_" << std::setw(2) << std::setfill('0') << i << ".png";
     views.push_back({name.str(), capture.views[i].board});
   }
-  calibration::IntrinsicsResult result =
-      calibration::calibrate_intrinsics(views, {}, capture.views.front().image.size(), options);
-  result.report.warnings = detector.spec().warnings();
+  const calibration::IntrinsicsResult result =
+      calibration::calibrate_board_views(views, {}, capture.image_size, detector.spec(),
+                                         std::to_string(capture.frames) + " frames read", options);
   const std::string report = result.report.text();
   out << report;
   print_model(result.model, out);

@@ -29,7 +29,7 @@ struct CaptureOptions {
 // far apart in these numbers constrain the calibration differently (the criterion of ROS's
 // camera_calibration).
 using BoardPose = std::array<double, 5>;
-BoardPose pose_of(const BoardView& view, const BoardSpec& spec, cv::Size image_size);
+BoardPose pose_of(const BoardView& view, cv::Size image_size);
 
 struct CapturedView {
   cv::Mat image;  // a copy: the source's buffers are only valid until its next read
@@ -41,6 +41,7 @@ struct CaptureResult {
   std::vector<CapturedView> views;
   int frames = 0;
   int frames_with_board = 0;
+  cv::Size image_size;  // of the frames read; empty when none was
   bool source_ended = false;
 };
 

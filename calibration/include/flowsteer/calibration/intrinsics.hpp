@@ -71,6 +71,15 @@ IntrinsicsResult calibrate_intrinsics(const std::vector<CalibrationView>& views,
                                       std::vector<RejectedView> rejected, cv::Size image_size,
                                       const IntrinsicsOptions& options);
 
+// calibrate_intrinsics on the views in which `board` was found, the report carrying the board's
+// warnings. `searched` says where it was looked for ("12 images", "300 frames read"): when no
+// view has it, throws CalibrationError "the board (...) was found in none of the <searched>",
+// listing the rejected views.
+IntrinsicsResult calibrate_board_views(const std::vector<CalibrationView>& views,
+                                       std::vector<RejectedView> rejected, cv::Size image_size,
+                                       const BoardSpec& board, const std::string& searched,
+                                       const IntrinsicsOptions& options);
+
 // The image files a shell-style pattern names, sorted (camera_io::expand_glob). Throws
 // CalibrationError when none does.
 std::vector<std::filesystem::path> expand_glob(const std::string& pattern);
