@@ -30,8 +30,11 @@ fi
 paths=""
 for binary in $binaries; do
   if [[ $binary != */* ]]; then
-    binary=$(command -v "$binary") ||
-      { echo "run_vm: $binary not found: scripts/setup installs what the VM tests need" >&2; exit 1; }
+    name=$binary
+    binary=$(command -v "$name") || {
+      echo "run_vm: $name not found: scripts/setup installs what the VM tests need" >&2
+      exit 1
+    }
   fi
   paths+="$binary "
 done
