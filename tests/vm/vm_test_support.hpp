@@ -67,10 +67,10 @@ inline std::optional<ProbeLine> probe_line(const std::string& line) {
 }
 
 // A test suite on one boot of the VM: SetUpTestSuite boots it and gives the console to Parse,
-// whose Run holds the console (`console`) and the probe's lines by key (`probe`); the probe
+// whose ProbeRun holds the console (`console`) and the probe's lines by key (`probe`); the probe
 // prints "PROBE done" last. Each test is skipped where qemu cannot run at all (the runner exits
 // 77) and fails at once when the boot failed or the probe did not finish.
-template <typename Run, Run (*Parse)(const std::string& console)>
+template <typename ProbeRun, ProbeRun (*Parse)(const std::string& console)>
 class VmTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -94,7 +94,7 @@ class VmTest : public ::testing::Test {
 
   static inline int status_ = 0;
   static inline std::string script_output_;
-  static inline Run run_;
+  static inline ProbeRun run_;
 };
 
 }  // namespace flowsteer::vm_test
