@@ -258,9 +258,7 @@ RobotLaunch read_robot_launch(const std::string& path) {
 
 std::string numerical_flow_method_names() {
   std::string names;
-  for (const servo::FlowMethod method :
-       {servo::FlowMethod::dis_ultrafast, servo::FlowMethod::dis_fast,
-        servo::FlowMethod::dis_medium, servo::FlowMethod::farneback, servo::FlowMethod::tvl1}) {
+  for (const servo::FlowMethod method : servo::numerical_flow_methods()) {
     names += (names.empty() ? "" : ", ") + std::string(servo::to_string(method));
   }
   return names;
