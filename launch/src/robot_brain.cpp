@@ -19,7 +19,8 @@ PerceptionOptions perception_options(const PerceptionSection& section) {
   options.segmentation = section.segmentation;
   options.dark_regions = section.dark_regions;
   options.use_depth = false;
-  options.mount = section.mount;
+  // Without a mount there is no drive, so the speed is zero and the ground test is skipped.
+  options.mount = section.mount.value_or(servo::CameraMount{});
   return options;
 }
 

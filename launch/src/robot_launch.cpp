@@ -155,12 +155,14 @@ PerceptionSection read_robot_perception(const YamlReader& r, const YAML::Node& n
     if (!node["height_m"]) {
       r.fail(node, "perception.height_m", "missing: the camera's height above the floor");
     }
-    p.mount.height_m = r.positive(node, "perception", "height_m", 0.0);
+    servo::CameraMount mount;
+    mount.height_m = r.positive(node, "perception", "height_m", 0.0);
     const double pitch_deg = r.number(node, "perception", "pitch_deg", 0.0);
     if (std::abs(pitch_deg) >= 89.0) {
       r.fail(node["pitch_deg"], "perception.pitch_deg", "must be within (-89, 89)");
     }
-    p.mount.pitch_rad = pitch_deg * std::numbers::pi / 180.0;
+    mount.pitch_rad = pitch_deg * std::numbers::pi / 180.0;
+    p.mount = mount;
   }
   return p;
 }
@@ -218,9 +220,7 @@ RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& 
   }
   launch.perception = read_robot_perception(r, root["perception"], base_dir);
   launch.controller = read_robot_controller(r, root["controller"]);
-  const bool mount_given =
-      root["perception"] && (root["perception"]["mount"] || root["perception"]["height_m"]);
-  if (launch.drive && !mount_given) {
+  if (launch.drive && !launch.perception.mount) {
     r.fail(root["perception"] ? root["perception"] : root, "perception.mount",
            "missing: with a drive, the flat-ground test needs the camera mount (mount: FILE, or "
            "height_m and pitch_deg)");

@@ -52,8 +52,9 @@ TEST(RobotLaunchSections, PerceptionAndControllerAreRead) {
   EXPECT_EQ(l.perception.flow, servo::FlowMethod::dis_medium);
   EXPECT_EQ(l.perception.segmentation, servo::SegmentationMethod::flow_graph);
   EXPECT_TRUE(l.perception.dark_regions);
-  EXPECT_DOUBLE_EQ(l.perception.mount.height_m, 0.3);
-  EXPECT_NEAR(l.perception.mount.pitch_rad, 10.0 * M_PI / 180.0, 1e-12);
+  ASSERT_TRUE(l.perception.mount);
+  EXPECT_DOUBLE_EQ(l.perception.mount->height_m, 0.3);
+  EXPECT_NEAR(l.perception.mount->pitch_rad, 10.0 * M_PI / 180.0, 1e-12);
   EXPECT_DOUBLE_EQ(l.controller.spec.alpha, 2.0);
   EXPECT_DOUBLE_EQ(l.controller.spec.delta, 0.5);
   EXPECT_FALSE(l.controller.spec.use_depth);
