@@ -12,6 +12,16 @@ YAML::Node load_yaml(const std::string& text, const std::string& source_name) {
   }
 }
 
+YAML::Node load_yaml_map(const std::string& text, const std::string& source_name,
+                         const std::string& contents, std::initializer_list<const char*> keys) {
+  const YAML::Node root = load_yaml(text, source_name);
+  if (!root.IsMap()) {
+    throw ConfigError(source_name, 1, 1, "", "expected a mapping with " + contents);
+  }
+  YamlReader(source_name).only_keys(root, "", keys);
+  return root;
+}
+
 std::string read_text_file(const std::string& path, const char* what) {
   std::ifstream in(path);
   if (!in) {

@@ -1,8 +1,6 @@
 #include "flowsteer/launch/agent_pipeline.hpp"
 
 #include <chrono>
-#include <cmath>
-#include <numbers>
 #include <string>
 
 namespace flowsteer::launch {
@@ -59,9 +57,10 @@ AgentPipeline::AgentPipeline(const sim_camera::World& world, sim_camera::Rendere
       perception_(camera_.intrinsics(), perception_options(world.spec().agents.at(agent))) {
   const std::string& type = world.spec().agents.at(agent).controller.type;
   if (type == "geometric") {
-    geometric_.emplace(world, agent);
+    geometric_.emplace(world, agent, camera_.intrinsics(), perception_.options().mount);
   } else if (type == "motion_energy") {
-    motion_energy_.emplace(world.spec().agents.at(agent), camera_.intrinsics());
+    motion_energy_.emplace(world.spec().agents.at(agent), camera_.intrinsics(),
+                           perception_.options().mount);
   }
 }
 
@@ -82,8 +81,7 @@ const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
   } else if (state.next_goal < agent.goals.size()) {
     // The goal is a known point (CGF §6.1): its bearing, positive to the right.
     const Eigen::Vector2d to_goal = agent.goals[state.next_goal] - state.position_m;
-    const double bearing_left = std::atan2(to_goal.y(), to_goal.x()) - state.yaw_rad;
-    percept_.goal_bearing_rad = -std::remainder(bearing_left, 2.0 * std::numbers::pi);
+    percept_.goal_bearing_rad = goal_bearing_rad(to_goal.x(), to_goal.y(), state.yaw_rad);
     percept_.goal_distance_m = to_goal.norm();
   }
   if (motion_energy_) {

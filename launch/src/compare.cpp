@@ -7,7 +7,6 @@
 #include <limits>
 #include <sstream>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "flowsteer/launch/config_error.hpp"
@@ -202,8 +201,8 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
           with_title(draw_histogram(run.turn_rate_counts, result.turn_rate_edges, max_share),
                      run.controller + ": turn rate"));
     }
-    cv::imwrite(out->staging_path("topviews.png").string(), side_by_side(topviews));
-    cv::imwrite(out->staging_path("turn_rates.png").string(), side_by_side(histograms));
+    write_image(out->staging_path("topviews.png"), side_by_side(topviews));
+    write_image(out->staging_path("turn_rates.png"), side_by_side(histograms));
     out->commit();
   }
   return result;

@@ -155,11 +155,8 @@ DemoScene default_demo_scene() {
 
 DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& source_name) {
   const YamlReader r(source_name);
-  const YAML::Node root = load_yaml(yaml_text, source_name);
-  if (!root.IsMap()) {
-    throw ConfigError(source_name, 1, 1, "", "expected a mapping with camera, agent, objects");
-  }
-  r.only_keys(root, "", {"camera", "agent", "goal", "controller", "objects"});
+  const YAML::Node root = load_yaml_map(yaml_text, source_name, "camera, agent, objects",
+                                        {"camera", "agent", "goal", "controller", "objects"});
 
   DemoScene d;
   servo::AnalyticScene& s = d.scene;

@@ -1,6 +1,6 @@
 #include "flowsteer/launch/drive_config.hpp"
 
-#include "yaml_reader.hpp"
+#include "drive_reader.hpp"
 
 namespace flowsteer::launch {
 
@@ -12,7 +12,7 @@ drivers::SerialConfig read_serial(const YamlReader& r, const YAML::Node& node,
   if (!node["device"]) {
     r.fail(node, field + ".device", "missing: which serial device, e.g. /dev/ttyACM0?");
   }
-  serial.device = node["device"].as<std::string>();
+  serial.device = r.text(node, field, "device", "", true);
   serial.baud = node["baud"] ? r.integer(node["baud"], field + ".baud", 1) : default_baud;
   serial.timeout_s = r.positive(node, field, "timeout_s", serial.timeout_s);
   return serial;
@@ -41,12 +41,15 @@ drivers::OdriveAxisConfig read_axis(const YamlReader& r, const YAML::Node& node,
 }  // namespace
 
 DriveSection parse_drive_section(const std::string& yaml_text, const std::string& source_name) {
-  const YamlReader r(source_name);
   const YAML::Node root = load_yaml(yaml_text, source_name);
   const YAML::Node drive = root.IsMap() ? root["drive"] : YAML::Node();
   if (!drive) {
     throw ConfigError(source_name, 1, 1, "drive", "missing: the launch file has no drive section");
   }
+  return read_drive(YamlReader(source_name), drive);
+}
+
+DriveSection read_drive(const YamlReader& r, const YAML::Node& drive) {
   r.only_keys(drive, "drive",
               {"type", "loop_rate_hz", "geometry", "limits", "watchdog", "sim", "odrive",
                "arduino_bridge", "roboclaw"});
@@ -117,9 +120,7 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
     if (own_node) {
       r.only_keys(own_node, field,
                   {"can_interface", "left", "right", "motor_turns_per_wheel_turn", "timeout_s"});
-      if (own_node["can_interface"]) {
-        c.interface = own_node["can_interface"].as<std::string>();
-      }
+      c.interface = r.text(own_node, field, "can_interface", c.interface, true);
       c.left = read_axis(r, own_node["left"], field + ".left", c.left);
       c.right = read_axis(r, own_node["right"], field + ".right", c.right);
       if (c.left.node_id == c.right.node_id) {

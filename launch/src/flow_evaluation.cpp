@@ -173,18 +173,17 @@ void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
 void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
                            const std::filesystem::path& out_dir) {
   OutputDir out(out_dir);
-  std::string text =
-      "method,resolution,frames,endpoint_error_px,valid_fraction,approaching_objects,"
-      "missed_objects,small_objects,foe_error_median,ttc_relative_error_median,ms_per_frame\n";
+  CsvTable csv({"method", "resolution", "frames", "endpoint_error_px", "valid_fraction",
+                "approaching_objects", "missed_objects", "small_objects", "foe_error_median",
+                "ttc_relative_error_median", "ms_per_frame"});
   for (const FlowEvalRow& r : rows) {
-    std::ostringstream line;
-    line << servo::to_string(r.method) << "," << r.resolution << "," << r.frames << ","
-         << r.endpoint_error_px << "," << r.valid_fraction << "," << r.approaching_objects << ","
-         << r.missed_objects << "," << r.small_objects << "," << r.foe_error_median << ","
-         << r.ttc_relative_error_median << "," << r.ms_per_frame << "\n";
-    text += line.str();
+    csv.add({std::string(servo::to_string(r.method))},
+            {static_cast<double>(r.resolution), static_cast<double>(r.frames), r.endpoint_error_px,
+             r.valid_fraction, static_cast<double>(r.approaching_objects),
+             static_cast<double>(r.missed_objects), static_cast<double>(r.small_objects),
+             r.foe_error_median, r.ttc_relative_error_median, r.ms_per_frame});
   }
-  write_text(out.staging_path("flow_eval.csv"), text);
+  csv.write(out.staging_path("flow_eval.csv"));
   std::ostringstream table;
   print_flow_table(rows, table);
   write_text(out.staging_path("flow_eval.txt"), table.str());

@@ -42,6 +42,38 @@ void install_stop_handlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
+// The flow method `name`, the value of `option`; CLI::ValidationError "unknown <noun> 'NAME'
+// (known: <known>)" when no method has that name or, with refuse_synthetic, for synthetic.
+flowsteer::servo::FlowMethod flow_method_option(const std::string& option, const std::string& name,
+                                                const std::string& noun, const std::string& known,
+                                                bool refuse_synthetic = false) {
+  const auto method = flowsteer::servo::parse_flow_method(name);
+  if (!method || (refuse_synthetic && *method == flowsteer::servo::FlowMethod::synthetic)) {
+    throw CLI::ValidationError(option,
+                               "unknown " + noun + " '" + name + "' (known: " + known + ")");
+  }
+  return *method;
+}
+
+// The scenario a command runs: a scenario file, a built-in scenario by name or, where the command
+// has --steersuite, a SteerSuite test case; at most one of them, the built-in "room" when none.
+flowsteer::sim_camera::WorldSpec load_world(const std::string& command, const std::string& file,
+                                            const std::string& name,
+                                            const std::string* steersuite = nullptr) {
+  const bool has_steersuite = steersuite && !steersuite->empty();
+  if (!file.empty() + !name.empty() + has_steersuite > 1) {
+    throw CLI::ValidationError(command, std::string("give one of SCENARIO_FILE, --scenario") +
+                                            (steersuite ? ", --steersuite" : ""));
+  }
+  if (!file.empty()) {
+    return flowsteer::launch::load_scenario(file);
+  }
+  if (has_steersuite) {
+    return flowsteer::launch::load_steersuite(*steersuite);
+  }
+  return flowsteer::launch::builtin_scenario(name.empty() ? "room" : name);
+}
+
 // "x,y,width[,vx,vy]": a box obstacle in the agent's body frame.
 flowsteer::servo::SceneObject parse_obstacle(const std::string& text, std::int32_t id) {
   std::vector<double> values;
@@ -305,13 +337,9 @@ int main(int argc, char** argv) {
       }
     }
     if (*replay) {
-      const auto method = flowsteer::servo::parse_flow_method(replay_flow);
-      if (!method || *method == flowsteer::servo::FlowMethod::synthetic) {
-        throw CLI::ValidationError(
-            "--flow", "unknown method '" + replay_flow +
-                          "' (known: " + flowsteer::launch::numerical_flow_method_names() + ")");
-      }
-      replay_command.flow = *method;
+      // run_replay_command refuses synthetic flow, saying why.
+      replay_command.flow = flow_method_option("--flow", replay_flow, "method",
+                                               flowsteer::launch::numerical_flow_method_names());
       if (*replay_hfov) {
         replay_command.hfov_deg = replay_hfov_deg;
       }
@@ -337,16 +365,8 @@ int main(int argc, char** argv) {
       flowsteer::launch::run_calibrate_mount(mount_command, std::cout, std::cerr);
     }
     if (*sim) {
-      const int sources =
-          !scenario_file.empty() + !scenario_name.empty() + !steersuite_file.empty();
-      if (sources > 1) {
-        throw CLI::ValidationError("sim", "give one of SCENARIO_FILE, --scenario, --steersuite");
-      }
       const flowsteer::sim_camera::WorldSpec world =
-          !scenario_file.empty() ? flowsteer::launch::load_scenario(scenario_file)
-          : !steersuite_file.empty()
-              ? flowsteer::launch::load_steersuite(steersuite_file)
-              : flowsteer::launch::builtin_scenario(scenario_name.empty() ? "room" : scenario_name);
+          load_world("sim", scenario_file, scenario_name, &steersuite_file);
       flowsteer::launch::SimOptions options;
       options.out_dir = out_dir;
       if (sim_resolution > 0) {
@@ -356,11 +376,8 @@ int main(int argc, char** argv) {
         options.steps = steps;
       }
       if (!flow_method.empty()) {
-        options.flow = flowsteer::servo::parse_flow_method(flow_method);
-        if (!options.flow) {
-          throw CLI::ValidationError("--flow", "unknown method '" + flow_method + "' (known: " +
-                                                   flowsteer::servo::flow_method_names() + ")");
-        }
+        options.flow = flow_method_option("--flow", flow_method, "method",
+                                          flowsteer::servo::flow_method_names());
       }
       if (!segmentation_method.empty()) {
         options.segmentation = flowsteer::servo::parse_segmentation_method(segmentation_method);
@@ -404,30 +421,21 @@ int main(int argc, char** argv) {
       options.resolutions = eval_resolutions;
       options.frames = eval_frames;
       for (const std::string& name : eval_methods) {
-        const auto method = flowsteer::servo::parse_flow_method(name);
-        if (!method || *method == flowsteer::servo::FlowMethod::synthetic) {
-          throw CLI::ValidationError("--method", "unknown estimator '" + name + "' (known: " +
-                                                     flowsteer::servo::flow_method_names() +
-                                                     "; synthetic is the truth)");
-        }
-        options.methods.push_back(*method);
+        options.methods.push_back(flow_method_option(
+            "--method", name, "estimator",
+            flowsteer::servo::flow_method_names() + "; synthetic is the truth", true));
       }
+      // --scenario takes a file name (it has a dot) or a built-in scenario's name.
+      const bool is_file = eval_scenario.find('.') != std::string::npos;
       const flowsteer::sim_camera::WorldSpec world =
-          eval_scenario.find('.') != std::string::npos
-              ? flowsteer::launch::load_scenario(eval_scenario)
-              : flowsteer::launch::builtin_scenario(eval_scenario);
+          load_world("eval flow", is_file ? eval_scenario : "", is_file ? "" : eval_scenario);
       const auto rows = flowsteer::launch::evaluate_flow(world, options, std::cerr);
       flowsteer::launch::print_flow_table(rows, std::cout);
       flowsteer::launch::write_flow_evaluation(rows, eval_out);
     }
     if (*compare) {
-      if (!compare_file.empty() && !compare_name.empty()) {
-        throw CLI::ValidationError("compare", "give one of SCENARIO_FILE, --scenario");
-      }
       const flowsteer::sim_camera::WorldSpec world =
-          !compare_file.empty()
-              ? flowsteer::launch::load_scenario(compare_file)
-              : flowsteer::launch::builtin_scenario(compare_name.empty() ? "room" : compare_name);
+          load_world("compare", compare_file, compare_name);
       flowsteer::launch::CompareOptions options;
       options.controllers = controllers;
       options.out_dir = compare_out;

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include <opencv2/imgcodecs.hpp>
+
 namespace flowsteer::launch {
 
 namespace {
@@ -98,6 +100,18 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
   out << text;
   out.close();
   if (!out) {
+    throw std::runtime_error("cannot write " + path.string());
+  }
+}
+
+void write_image(const std::filesystem::path& path, const cv::Mat& image) {
+  bool written = false;
+  try {
+    written = cv::imwrite(path.string(), image);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error("cannot write " + path.string() + ": " + e.what());
+  }
+  if (!written) {
     throw std::runtime_error("cannot write " + path.string());
   }
 }

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "flowsteer/launch/simulation.hpp"
 
 namespace flowsteer::launch {
@@ -54,5 +56,9 @@ void write_summary_json(const std::filesystem::path& path, const SimResult& resu
 
 // Writes `text` to `path`, or throws std::runtime_error naming the file.
 void write_text(const std::filesystem::path& path, const std::string& text);
+
+// Writes `image` to `path` in the format its extension names, or throws std::runtime_error
+// naming the file.
+void write_image(const std::filesystem::path& path, const cv::Mat& image);
 
 }  // namespace flowsteer::launch

@@ -1,6 +1,5 @@
 #include "overlay.hpp"
 
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -15,18 +14,6 @@ namespace {
 const cv::Scalar kFoeColor(255, 120, 0);
 const cv::Scalar kCentreColor(0, 140, 255);
 const cv::Scalar kGoalColor(200, 80, 255);
-
-// The corners of a box's footprint; a cylinder's bounding square.
-std::array<Eigen::Vector2d, 4> footprint_corners(const sim_camera::Solid& s) {
-  const Eigen::Vector2d half = s.shape == sim_camera::Solid::Shape::box
-                                   ? Eigen::Vector2d(0.5 * s.size_m)
-                                   : Eigen::Vector2d(s.radius_m, s.radius_m);
-  const Eigen::Rotation2D<double> rotation(s.yaw_rad);
-  return {s.centre_m + rotation * Eigen::Vector2d(-half.x(), -half.y()),
-          s.centre_m + rotation * Eigen::Vector2d(half.x(), -half.y()),
-          s.centre_m + rotation * Eigen::Vector2d(half.x(), half.y()),
-          s.centre_m + rotation * Eigen::Vector2d(-half.x(), half.y())};
-}
 
 cv::Scalar agent_color(std::size_t i) {
   static const cv::Scalar palette[] = {{200, 60, 30},  {40, 160, 40},  {30, 60, 220},
@@ -133,8 +120,13 @@ cv::Mat draw_topview(const sim_camera::World& world,
     }
   }
   for (const auto& o : spec.obstacles) {
-    for (const Eigen::Vector2d& corner : footprint_corners(o)) {
-      bounds.extend(corner);
+    if (o.shape == sim_camera::Solid::Shape::box) {
+      for (const Eigen::Vector2d& corner : sim_camera::box_corners(o)) {
+        bounds.extend(corner);
+      }
+    } else {
+      bounds.extend(o.centre_m - Eigen::Vector2d(o.radius_m, o.radius_m));
+      bounds.extend(o.centre_m + Eigen::Vector2d(o.radius_m, o.radius_m));
     }
   }
   const Eigen::Vector2d margin(1.5, 1.5);
@@ -156,7 +148,7 @@ cv::Mat draw_topview(const sim_camera::World& world,
       return;
     }
     std::vector<cv::Point> corners;
-    for (const Eigen::Vector2d& corner : footprint_corners(s)) {
+    for (const Eigen::Vector2d& corner : sim_camera::box_corners(s)) {
       corners.push_back(px(corner));
     }
     if (thickness == cv::FILLED) {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -173,6 +175,10 @@ double Perception::mean_turn_rate(double from_s, double to_s, double fallback) c
     }
   }
   return covered_s > 0.0 ? angle / covered_s : fallback;
+}
+
+double goal_bearing_rad(double dx_m, double dy_m, double yaw_rad) {
+  return -std::remainder(std::atan2(dy_m, dx_m) - yaw_rad, 2.0 * std::numbers::pi);
 }
 
 }  // namespace flowsteer::launch

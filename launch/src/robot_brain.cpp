@@ -11,14 +11,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The goal term alone: alpha kept, speed, avoidance and dark terms off.
-sim_camera::ControllerSpec heading_only(sim_camera::ControllerSpec spec) {
-  spec.beta = 0.0;
-  spec.gamma = 0.0;
-  spec.delta = 0.0;
-  return spec;
-}
-
 }  // namespace
 
 PerceptionOptions perception_options(const PerceptionSection& section) {
@@ -27,7 +19,8 @@ PerceptionOptions perception_options(const PerceptionSection& section) {
   options.segmentation = section.segmentation;
   options.dark_regions = section.dark_regions;
   options.use_depth = false;
-  options.mount = section.mount;
+  // Without a mount there is no drive, so the speed is zero and the ground test is skipped.
+  options.mount = section.mount.value_or(servo::CameraMount{});
   return options;
 }
 
@@ -38,8 +31,7 @@ PerceptionBrain::PerceptionBrain(const servo::CameraIntrinsics& intrinsics,
     : perception_(intrinsics, perception_options(perception)),
       controller_(make_controller(controller.spec, controller.robot_width_m,
                                   controller.preferred_speed_mps)),
-      heading_(make_controller(heading_only(controller.spec), controller.robot_width_m, 0.0)),
-      brake_mps2_(controller.spec.max_accel_mps2),
+      max_accel_mps2_(controller.spec.max_accel_mps2),
       log_(log),
       frame_log_(frame_log) {}
 
@@ -52,12 +44,12 @@ servo::Command PerceptionBrain::step(const LoopInput& input) {
   const auto control_start = Clock::now();
   percept_ = servo::Percept{perception_.objects(), input.goal_bearing_rad, input.goal_distance_m,
                             std::nullopt};
-  if (status == servo::FlowStatus::ok) {
-    controller_.step(percept_, {speed_mps}, output_);
-  } else {
-    heading_.step(percept_, {speed_mps}, output_);
-    // Braking only while moving: the drive never backs up, and a stopped robot stays put.
-    output_.command.accel_mps2 = speed_mps > 0.0 ? -brake_mps2_ : 0.0;
+  controller_.step(percept_, {speed_mps}, output_);
+  if (status != servo::FlowStatus::ok) {
+    // A blind frame has no objects, so only the goal term turns; the speed term's acceleration
+    // gives way to braking, only while moving: the drive never backs up, and a stopped robot
+    // stays put.
+    output_.command.accel_mps2 = speed_mps > 0.0 ? -max_accel_mps2_ : 0.0;
   }
   const auto end = Clock::now();
   times_.control = std::chrono::duration<double, std::milli>(end - control_start).count();

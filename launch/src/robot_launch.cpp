@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "controller_reader.hpp"
+#include "drive_reader.hpp"
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/calibration/camera_mount.hpp"
 #include "yaml_reader.hpp"
@@ -13,18 +14,6 @@ namespace flowsteer::launch {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string text(const YamlReader& r, const YAML::Node& map, const std::string& field,
-                 const char* key, const std::string& fallback) {
-  const YAML::Node node = map[key];
-  if (!node) {
-    return fallback;
-  }
-  if (!node.IsScalar() || node.Scalar().empty()) {
-    r.fail(node, YamlReader::join(field, key), "expected a non-empty text");
-  }
-  return node.Scalar();
-}
 
 std::string resolve(const std::string& path, const std::string& base_dir) {
   const fs::path p(path);
@@ -71,7 +60,7 @@ CameraSection read_camera(const YamlReader& r, const YAML::Node& camera,
     r.fail(camera["horizontal_fov_rad"], "camera.horizontal_fov_rad", "must be below pi");
   }
   if (camera["calibration"]) {
-    s.calibration_file = resolve(text(r, camera, "camera", "calibration", ""), base_dir);
+    s.calibration_file = resolve(r.text(camera, "camera", "calibration", "", true), base_dir);
     // The reader's ConfigError names the calibration file's own line and field.
     lens.model = calibration::read_camera_info(s.calibration_file, warnings).model;
   }
@@ -83,7 +72,7 @@ CameraSection read_camera(const YamlReader& r, const YAML::Node& camera,
         settings, field,
         {"device", "width_px", "height_px", "frame_rate_hz", "pixel_format", "buffer_count"});
     camera_io::V4l2Options o;
-    o.device = text(r, settings, field, "device", o.device);
+    o.device = r.text(settings, field, "device", o.device, true);
     read_size_and_rate(r, settings, field, o);
     o.format = *camera_io::pixel_format_from_name(
         r.word(settings, field, "pixel_format", {"YUYV", "MJPG", "MJPEG", "GREY"}, "YUYV"));
@@ -93,14 +82,14 @@ CameraSection read_camera(const YamlReader& r, const YAML::Node& camera,
     r.only_keys(settings, field,
                 {"camera_id", "width_px", "height_px", "frame_rate_hz", "buffer_count"});
     camera_io::LibcameraOptions o;
-    o.camera_id = text(r, settings, field, "camera_id", "");
+    o.camera_id = r.text(settings, field, "camera_id", "", true);
     read_size_and_rate(r, settings, field, o);
     o.lens = lens;
     s.source = o;
   } else {
     r.only_keys(settings, field, {"path", "frame_rate_hz"});
     camera_io::ReplayOptions o;
-    o.path = text(r, settings, field, "path", "");
+    o.path = r.text(settings, field, "path", "", true);
     if (o.path.empty()) {
       r.fail(settings, field + ".path", "missing: the video file or image pattern to replay");
     }
@@ -159,19 +148,21 @@ PerceptionSection read_robot_perception(const YamlReader& r, const YAML::Node& n
            "give a camera mount file or height_m and pitch_deg, not both");
   }
   if (node["mount"]) {
-    p.mount_file = resolve(text(r, node, "perception", "mount", ""), base_dir);
+    p.mount_file = resolve(r.text(node, "perception", "mount", "", true), base_dir);
     // The reader's ConfigError names the mount file's own line and field.
     p.mount = calibration::read_camera_mount(p.mount_file).mount;
   } else if (node["height_m"] || node["pitch_deg"]) {
     if (!node["height_m"]) {
       r.fail(node, "perception.height_m", "missing: the camera's height above the floor");
     }
-    p.mount.height_m = r.positive(node, "perception", "height_m", 0.0);
+    servo::CameraMount mount;
+    mount.height_m = r.positive(node, "perception", "height_m", 0.0);
     const double pitch_deg = r.number(node, "perception", "pitch_deg", 0.0);
     if (std::abs(pitch_deg) >= 89.0) {
       r.fail(node["pitch_deg"], "perception.pitch_deg", "must be within (-89, 89)");
     }
-    p.mount.pitch_rad = pitch_deg * std::numbers::pi / 180.0;
+    mount.pitch_rad = pitch_deg * std::numbers::pi / 180.0;
+    p.mount = mount;
   }
   return p;
 }
@@ -200,18 +191,15 @@ ControllerSection read_robot_controller(const YamlReader& r, const YAML::Node& n
 RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& source_name,
                                const std::string& base_dir) {
   const YamlReader r(source_name);
-  const YAML::Node root = load_yaml(yaml_text, source_name);
-  if (!root.IsMap()) {
-    throw ConfigError(source_name, 1, 1, "", "expected a mapping with camera, drive and goal");
-  }
-  r.only_keys(root, "", {"camera", "drive", "goal", "perception", "controller"});
+  const YAML::Node root = load_yaml_map(yaml_text, source_name, "camera, drive and goal",
+                                        {"camera", "drive", "goal", "perception", "controller"});
   RobotLaunch launch;
   if (!root["camera"]) {
     throw ConfigError(source_name, 1, 1, "camera", "missing: the launch file has no camera");
   }
   launch.camera = read_camera(r, root["camera"], base_dir, launch.warnings);
   if (root["drive"]) {
-    launch.drive = parse_drive_section(yaml_text, source_name);
+    launch.drive = read_drive(r, root["drive"]);
     if (1.0 / launch.drive->loop_rate_hz >= launch.camera.timeout_s) {
       r.fail(root["drive"]["loop_rate_hz"] ? root["drive"]["loop_rate_hz"] : root["drive"],
              "drive.loop_rate_hz", "one loop period must be shorter than camera.timeout_s");
@@ -232,9 +220,7 @@ RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& 
   }
   launch.perception = read_robot_perception(r, root["perception"], base_dir);
   launch.controller = read_robot_controller(r, root["controller"]);
-  const bool mount_given =
-      root["perception"] && (root["perception"]["mount"] || root["perception"]["height_m"]);
-  if (launch.drive && !mount_given) {
+  if (launch.drive && !launch.perception.mount) {
     r.fail(root["perception"] ? root["perception"] : root, "perception.mount",
            "missing: with a drive, the flat-ground test needs the camera mount (mount: FILE, or "
            "height_m and pitch_deg)");
@@ -258,9 +244,7 @@ RobotLaunch read_robot_launch(const std::string& path) {
 
 std::string numerical_flow_method_names() {
   std::string names;
-  for (const servo::FlowMethod method :
-       {servo::FlowMethod::dis_ultrafast, servo::FlowMethod::dis_fast,
-        servo::FlowMethod::dis_medium, servo::FlowMethod::farneback, servo::FlowMethod::tvl1}) {
+  for (const servo::FlowMethod method : servo::numerical_flow_methods()) {
     names += (names.empty() ? "" : ", ") + std::string(servo::to_string(method));
   }
   return names;

@@ -196,31 +196,18 @@ sim_camera::PointLight read_point_light(const YamlReader& r, const YAML::Node& n
 
 sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::string& source_name) {
   const YamlReader r(source_name);
-  const YAML::Node root = load_yaml(yaml_text, source_name);
-  if (!root.IsMap()) {
-    throw ConfigError(source_name, 1, 1, "", "expected a mapping with at least agents:");
-  }
-  r.only_keys(root, "",
-              {"name", "description", "step_s", "duration_s", "camera", "controller", "perception",
-               "lighting", "ground", "obstacles", "moving", "agents"});
+  const YAML::Node root =
+      load_yaml_map(yaml_text, source_name, "at least agents:",
+                    {"name", "description", "step_s", "duration_s", "camera", "controller",
+                     "perception", "lighting", "ground", "obstacles", "moving", "agents"});
   auto require_list = [&](const YAML::Node& node, const std::string& field) {
     if (!node.IsSequence()) {
       r.fail(node, field, "expected a list");
     }
   };
-  auto text = [&](const char* key, const std::string& fallback) {
-    const YAML::Node node = root[key];
-    if (!node) {
-      return fallback;
-    }
-    if (!node.IsScalar()) {
-      r.fail(node, key, "expected a text");
-    }
-    return node.Scalar();
-  };
   sim_camera::WorldSpec w;
-  w.name = text("name", source_name);
-  w.description = text("description", "");
+  w.name = r.text(root, "", "name", source_name);
+  w.description = r.text(root, "", "description", "");
   w.step_s = r.positive(root, "", "step_s", w.step_s);
   w.duration_s = r.positive(root, "", "duration_s", w.duration_s);
   const sim_camera::CameraSpec camera = read_camera(r, root["camera"], "camera", {});
@@ -310,7 +297,7 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
                  "max_speed_mps", "radius_m", "height_m", "goal", "goals", "goal_radius_m",
                  "leader", "controller", "perception", "camera", "material", "carried_light"});
     AgentSpec a;
-    a.name = node["name"] ? node["name"].as<std::string>() : "agent" + std::to_string(i);
+    a.name = r.text(node, field, "name", "agent" + std::to_string(i));
     if (!node["start"]) {
       r.fail(node, field + ".start", "missing: where does the agent start?");
     }

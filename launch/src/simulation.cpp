@@ -1,14 +1,12 @@
 #include "flowsteer/launch/simulation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
-#include <map>
 #include <numbers>
-#include <set>
 #include <sstream>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -88,12 +86,13 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
   }
 
   CsvTable trajectories({"t", "agent", "x", "y", "heading", "v", "a_c", "omega"});
+  // The cost terms by column, in the order they first appear; a row's terms[k] is the cost of
+  // term_names[k] (NaN where the agent's controller has no such term).
   std::vector<std::string> term_names;
-  std::set<std::string> seen_terms;
   struct CostRow {
     double t;
     std::size_t agent;
-    std::map<std::string, double> terms;
+    std::vector<double> terms;
     double total;
   };
   std::vector<CostRow> cost_rows;
@@ -126,10 +125,13 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
 
       CostRow row{world.time_s(), i, {}, output.cost};
       for (const servo::TermEvaluation& t : output.terms) {
-        row.terms[t.name] = t.gradient.cost;
-        if (seen_terms.insert(t.name).second) {
+        const auto column = static_cast<std::size_t>(
+            std::find(term_names.begin(), term_names.end(), t.name) - term_names.begin());
+        if (column == term_names.size()) {
           term_names.push_back(t.name);
         }
+        row.terms.resize(std::max(row.terms.size(), column + 1), std::nan(""));
+        row.terms[column] = t.gradient.cost;
       }
       cost_rows.push_back(std::move(row));
 
@@ -199,10 +201,8 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
     }());
     for (const CostRow& row : cost_rows) {
       std::vector<double> values = {row.t, static_cast<double>(row.agent)};
-      for (const std::string& name : term_names) {
-        const auto it = row.terms.find(name);
-        values.push_back(it != row.terms.end() ? it->second : std::nan(""));
-      }
+      values.insert(values.end(), row.terms.begin(), row.terms.end());
+      values.resize(2 + term_names.size(), std::nan(""));
       values.push_back(row.total);
       costs.add(values);
     }
@@ -212,7 +212,7 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
         loop.video->release();
       }
     }
-    cv::imwrite(out->staging_path("topview.png").string(), result.topview);
+    write_image(out->staging_path("topview.png"), result.topview);
     write_summary_json(out->staging_path("summary.json"), result);
     out->commit();
   }

@@ -6,10 +6,6 @@ namespace flowsteer::launch {
 
 namespace {
 
-servo::CameraMount mount_of(const sim_camera::AgentSpec& agent) {
-  return {agent.camera.height_m, agent.camera.pitch_rad};
-}
-
 // Derotated flow slower than this above the horizon is sky or far background for
 // mass_from: ground: 0.01 normalised units per second is the flow of a point 100 m away
 // passed at 1 m/s.
@@ -17,14 +13,10 @@ constexpr double kStillFlow = 0.01;
 
 }  // namespace
 
-GeometricPerception::GeometricPerception(const sim_camera::World& world, std::size_t agent)
-    : world_(world),
-      agent_(agent),
-      intrinsics_(servo::CameraIntrinsics::from_horizontal_fov(
-          world.spec().agents.at(agent).camera.width_px,
-          world.spec().agents.at(agent).camera.height_px,
-          world.spec().agents.at(agent).camera.hfov_rad)),
-      mount_(mount_of(world.spec().agents.at(agent))) {}
+GeometricPerception::GeometricPerception(const sim_camera::World& world, std::size_t agent,
+                                         const servo::CameraIntrinsics& intrinsics,
+                                         const servo::CameraMount& mount)
+    : world_(world), agent_(agent), intrinsics_(intrinsics), mount_(mount) {}
 
 std::span<const servo::ObjectFeatures> GeometricPerception::perceive() {
   return features_.compute(geometry_.bodies_seen_by(world_, agent_), intrinsics_, mount_,
@@ -32,9 +24,10 @@ std::span<const servo::ObjectFeatures> GeometricPerception::perceive() {
 }
 
 MotionEnergySteering::MotionEnergySteering(const sim_camera::AgentSpec& agent,
-                                           const servo::CameraIntrinsics& intrinsics)
+                                           const servo::CameraIntrinsics& intrinsics,
+                                           const servo::CameraMount& mount)
     : mass_from_ground_(agent.controller.mass_from == "ground"),
-      mount_(mount_of(agent)),
+      mount_(mount),
       controller_(intrinsics, mount_, agent.controller.motion_energy,
                   {agent.preferred_speed_mps, agent.controller.max_accel_mps2,
                    agent.controller.max_turn_rate,

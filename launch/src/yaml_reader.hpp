@@ -8,6 +8,7 @@
 namespace flowsteer::launch {
 
 using calibration::load_yaml;
+using calibration::load_yaml_map;
 using calibration::read_text_file;
 using calibration::YamlReader;
 

@@ -100,6 +100,7 @@ MotionEnergyController::MotionEnergyController(const CameraIntrinsics& intrinsic
   ridge_.assign(static_cast<std::size_t>(width), -1);
   openings_.reserve(static_cast<std::size_t>(width));
   horizon_row_ = intrinsics.cy_px - intrinsics.fy_px * std::tan(mount.pitch_rad);
+  corner_rise_rows_ = options.corner_rise * std::max(1.0, height - 1 - horizon_row_);
 
   // The danger zone is fixed in the image: the pixels that see the floor within
   // danger_distance_m ahead and half_width_m to either side, at the bottom centre.
@@ -179,7 +180,6 @@ void MotionEnergyController::find_openings() {
   const int width = intrinsics_.width_px;
   const int height = intrinsics_.height_px;
   const int step = std::max(1, static_cast<int>(std::lround(options_.corner_step * width)));
-  const double rise = options_.corner_rise * std::max(1.0, height - 1 - horizon_row_);
   auto floor_rows = [&](int col) { return height - 1 - ridge_[static_cast<std::size_t>(col)]; };
   auto push = [&](int first, int last) {
     if (last >= first) {
@@ -190,10 +190,10 @@ void MotionEnergyController::find_openings() {
   int start = 0;
   for (int col = 0; col + step < width; ++col) {
     const int change = floor_rows(col + step) - floor_rows(col);
-    if (change < -rise && start >= 0) {
+    if (change < -corner_rise_rows_ && start >= 0) {
       push(start, col);
       start = -1;
-    } else if (change > rise && start < 0) {
+    } else if (change > corner_rise_rows_ && start < 0) {
       start = col + step;
     }
   }
@@ -275,10 +275,9 @@ Command MotionEnergyController::step(std::span<const float> intensity,
   } else if (state_.side == 0.0) {
     // Pick a side and keep it until the case is over: away from the half with more energy
     // when they differ, else toward the half with more floor, else toward the goal.
-    const double rise = options_.corner_rise * std::max(1.0, height - 1 - horizon_row_);
     if (std::abs(difference) >= options_.head_on_balance * sum && sum > 0.0) {
       state_.side = sign_of(difference);
-    } else if (std::abs(floor_right - floor_left) / std::max(1, width / 2) > rise) {
+    } else if (std::abs(floor_right - floor_left) / std::max(1, width / 2) > corner_rise_rows_) {
       state_.side = sign_of(floor_right - floor_left);
     } else if (goal && std::abs(*goal) > kGoalSideBearingRad) {
       state_.side = sign_of(*goal);

@@ -13,6 +13,21 @@ constexpr int kCircleSides = 16;
 
 }  // namespace
 
+std::array<Eigen::Vector2d, 4> box_corners(const Solid& box) {
+  const double cy = std::cos(box.yaw_rad);
+  const double sy = std::sin(box.yaw_rad);
+  const Eigen::Vector2d half = 0.5 * box.size_m;
+  std::array<Eigen::Vector2d, 4> corners = {
+      Eigen::Vector2d(half.x(), half.y()), Eigen::Vector2d(-half.x(), half.y()),
+      Eigen::Vector2d(-half.x(), -half.y()), Eigen::Vector2d(half.x(), -half.y())};
+  for (Eigen::Vector2d& corner : corners) {
+    const Eigen::Vector2d rotated(cy * corner.x() - sy * corner.y(),
+                                  sy * corner.x() + cy * corner.y());
+    corner = box.centre_m + rotated;
+  }
+  return corners;
+}
+
 std::span<const servo::GeometricBody> WorldGeometry::bodies_seen_by(const World& world,
                                                                     std::size_t agent) {
   const AgentState& self = world.agents().at(agent);
@@ -39,15 +54,8 @@ std::span<const servo::GeometricBody> WorldGeometry::bodies_seen_by(const World&
       add_circle(solid.centre_m, solid.radius_m);
       return;
     }
-    const double cy = std::cos(solid.yaw_rad);
-    const double sy = std::sin(solid.yaw_rad);
-    const Eigen::Vector2d half = 0.5 * solid.size_m;
-    for (const Eigen::Vector2d& corner :
-         {Eigen::Vector2d(half.x(), half.y()), Eigen::Vector2d(-half.x(), half.y()),
-          Eigen::Vector2d(-half.x(), -half.y()), Eigen::Vector2d(half.x(), -half.y())}) {
-      const Eigen::Vector2d rotated(cy * corner.x() - sy * corner.y(),
-                                    sy * corner.x() + cy * corner.y());
-      points_.push_back(to_body(solid.centre_m + rotated - self.position_m));
+    for (const Eigen::Vector2d& corner : box_corners(solid)) {
+      points_.push_back(to_body(corner - self.position_m));
     }
   };
   auto add_body = [&](std::int32_t id, double height_m, const Eigen::Vector2d& velocity_world) {

@@ -13,9 +13,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/videoio.hpp>
 
-#include "flowsteer/launch/config_error.hpp"
 #include "flowsteer/launch/robot_launch.hpp"
 #include "flowsteer/launch/robot_loop.hpp"
+#include "robot_launch_errors.hpp"
 
 namespace {
 
@@ -23,14 +23,7 @@ namespace fs = std::filesystem;
 using namespace flowsteer;
 using launch::parse_robot_launch;
 
-std::string error_of(const std::string& yaml) {
-  try {
-    parse_robot_launch(yaml, "bad.yaml", "");
-  } catch (const launch::ConfigError& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using launch::test_support::error_of;
 
 TEST(RobotLaunch, ShippedLaunchFilesParse) {
   for (const char* name : {"v4l2_sim_base.yaml", "v4l2_odrive.yaml", "replay.yaml"}) {

@@ -78,9 +78,10 @@ TEST(MotionEnergy, HeadOnPicksASideAndKeepsIt) {
   Command c = controller.step(scene.intensity, scene.classes, goal_at(0.2, 8.0), {1.0});
   EXPECT_EQ(controller.state().mode, MotionEnergyMode::head_on);
   EXPECT_DOUBLE_EQ(c.turn_rate, kLimits.max_turn_rate);  // to the goal's side
-  // A little more energy on the right, still balanced: the side stays.
+  // A little more energy on the right, still balanced, and the goal now on the other side: a
+  // fresh choice would turn left, the side kept turns right.
   scene.mass(48, 63, 46, 47);
-  c = controller.step(scene.intensity, scene.classes, goal_at(0.2, 8.0), {1.0});
+  c = controller.step(scene.intensity, scene.classes, goal_at(-0.2, 8.0), {1.0});
   EXPECT_EQ(controller.state().mode, MotionEnergyMode::head_on);
   EXPECT_DOUBLE_EQ(c.turn_rate, kLimits.max_turn_rate);
 }

@@ -59,7 +59,7 @@ class YamlReader {
   double number(const YAML::Node& node, const std::string& field) const {
     double value = 0.0;
     if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value)) {
-      fail(node, field, "expected a finite number, got '" + text(node) + "'");
+      fail(node, field, "expected a finite number, got '" + describe(node) + "'");
     }
     return value;
   }
@@ -85,7 +85,7 @@ class YamlReader {
   int integer(const YAML::Node& node, const std::string& field, int min_value) const {
     int value = 0;
     if (!node.IsScalar() || !YAML::convert<int>::decode(node, value)) {
-      fail(node, field, "expected an integer, got '" + text(node) + "'");
+      fail(node, field, "expected an integer, got '" + describe(node) + "'");
     }
     if (value < min_value) {
       fail(node, field,
@@ -122,7 +122,20 @@ class YamlReader {
     for (const char* a : allowed) {
       list += list.empty() ? a : std::string(", ") + a;
     }
-    fail(node, join(field, key), "expected one of: " + list + "; got '" + text(node) + "'");
+    fail(node, join(field, key), "expected one of: " + list + "; got '" + describe(node) + "'");
+  }
+
+  // A text value: a scalar, else a ConfigError at the node. `non_empty` also refuses "".
+  std::string text(const YAML::Node& map, const std::string& field, const char* key,
+                   const std::string& fallback, bool non_empty = false) const {
+    const YAML::Node node = map[key];
+    if (!node) {
+      return fallback;
+    }
+    if (!node.IsScalar() || (non_empty && node.Scalar().empty())) {
+      fail(node, join(field, key), non_empty ? "expected a non-empty text" : "expected a text");
+    }
+    return node.Scalar();
   }
 
   bool boolean(const YAML::Node& map, const std::string& field, const char* key,
@@ -133,7 +146,7 @@ class YamlReader {
     }
     bool value = false;
     if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value)) {
-      fail(node, join(field, key), "expected true or false, got '" + text(node) + "'");
+      fail(node, join(field, key), "expected true or false, got '" + describe(node) + "'");
     }
     return value;
   }
@@ -143,7 +156,7 @@ class YamlReader {
   }
 
  private:
-  static std::string text(const YAML::Node& node) {
+  static std::string describe(const YAML::Node& node) {
     if (node.IsScalar()) {
       return node.Scalar();
     }
@@ -160,6 +173,11 @@ class YamlReader {
 
 // Parses YAML text, turning a syntax error into a ConfigError at its line and column.
 YAML::Node load_yaml(const std::string& text, const std::string& source_name);
+
+// load_yaml for a file whose top level is a mapping with the given keys only: ConfigError
+// "expected a mapping with <contents>" at line 1 otherwise, and at an unknown key.
+YAML::Node load_yaml_map(const std::string& text, const std::string& source_name,
+                         const std::string& contents, std::initializer_list<const char*> keys);
 
 // Reads a whole file; ConfigError when it cannot be opened or read.
 std::string read_text_file(const std::string& path, const char* what);

@@ -25,6 +25,11 @@ struct StageTimes {
   StageTimes& operator+=(const StageTimes& other);
 };
 
+// The bearing of a goal dx_m ahead and dy_m to the left (a frame with x forward, y left, such as
+// the world's or a start pose's) from a heading of yaw_rad (counter-clockwise from x), as
+// servo::Percept::goal_bearing_rad wants it: positive to the right, in [-pi, pi].
+double goal_bearing_rad(double dx_m, double dy_m, double yaw_rad);
+
 // How an agent sees: where its flow comes from, how it finds objects, whether it looks for dark
 // regions. The same choices serve a simulated agent and a robot; the synthetic flow and semantic
 // segmentation need a simulator's frames.

@@ -44,9 +44,7 @@ class PerceptionBrain final : public Brain {
  private:
   Perception perception_;
   servo::Controller controller_;
-  // The goal term alone: the heading while blind.
-  servo::Controller heading_;
-  double brake_mps2_;
+  double max_accel_mps2_;  // controller.spec.max_accel_mps2, the braking while blind
   std::ostream& log_;
   std::ostream* frame_log_;
   servo::Percept percept_;

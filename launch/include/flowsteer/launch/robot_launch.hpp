@@ -42,11 +42,11 @@ struct PerceptionSection {
   servo::FlowMethod flow = servo::FlowMethod::dis_fast;
   servo::SegmentationMethod segmentation = servo::SegmentationMethod::flow_graph_fast;
   bool dark_regions = false;  // MIG 2019's dark regions; needs controller.delta > 0
-  // From `mount: FILE` (calibration's camera mount file) or inline height_m / pitch_deg.
-  // Required with a drive: the flat-ground test predicts the floor's flow from it. Without a
-  // drive the measured speed is zero and the test is skipped, so the default (1 m, level) is
-  // never used.
-  servo::CameraMount mount;
+  // From `mount: FILE` (calibration's camera mount file) or inline height_m / pitch_deg; none
+  // when the file gives neither. Required with a drive: the flat-ground test predicts the
+  // floor's flow from it. Without a drive the measured speed is zero and the test is skipped,
+  // so any mount serves.
+  std::optional<servo::CameraMount> mount;
   std::string mount_file;  // resolved against the launch file's folder; empty when inline
 };
 

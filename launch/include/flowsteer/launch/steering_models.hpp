@@ -17,8 +17,9 @@ namespace flowsteer::launch {
 // world's exact geometry, for the same navigation function as the vision controller.
 class GeometricPerception {
  public:
-  // The world must outlive this.
-  GeometricPerception(const sim_camera::World& world, std::size_t agent);
+  // The world must outlive this. `intrinsics` and `mount` are the agent's camera's.
+  GeometricPerception(const sim_camera::World& world, std::size_t agent,
+                      const servo::CameraIntrinsics& intrinsics, const servo::CameraMount& mount);
   std::span<const servo::ObjectFeatures> perceive();
 
  private:
@@ -34,8 +35,9 @@ class GeometricPerception {
 // (from the renderer's ids, or with mass_from: ground from the flat-ground test on the flow).
 class MotionEnergySteering {
  public:
+  // `intrinsics` and `mount` are the agent's camera's.
   MotionEnergySteering(const sim_camera::AgentSpec& agent,
-                       const servo::CameraIntrinsics& intrinsics);
+                       const servo::CameraIntrinsics& intrinsics, const servo::CameraMount& mount);
 
   // `derotated` is used with mass_from: ground only. Fills out.command (and out.unclamped);
   // the navigation function's cost and terms stay empty.

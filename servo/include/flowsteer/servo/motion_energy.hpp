@@ -128,6 +128,8 @@ class MotionEnergyController {
   MotionEnergyOptions options_;
   MotionEnergyLimits limits_;
   double horizon_row_ = 0.0;
+  // options_.corner_rise of the rows below the horizon (at least one): a corner's rise in rows.
+  double corner_rise_rows_ = 0.0;
   std::vector<float> previous_;
   bool has_previous_ = false;
   std::vector<std::uint8_t> danger_zone_;  // per pixel

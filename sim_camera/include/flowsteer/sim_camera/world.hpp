@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -8,8 +9,8 @@
 #include <Eigen/Core>
 
 #include "flowsteer/servo/flow_segmentation.hpp"
-#include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/motion_energy.hpp"
+#include "flowsteer/servo/optical_flow.hpp"
 
 namespace flowsteer::sim_camera {
 
@@ -215,5 +216,9 @@ class World {
 
 // Distance from a point to a solid's footprint (negative inside).
 double footprint_distance(const Solid& solid, const Eigen::Vector2d& point);
+
+// The corners of a box's footprint (size_m turned by yaw_rad about centre_m), counter-clockwise
+// from the front left.
+std::array<Eigen::Vector2d, 4> box_corners(const Solid& box);
 
 }  // namespace flowsteer::sim_camera
