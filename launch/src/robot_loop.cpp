@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
-#include <numbers>
 #include <sstream>
 
+#include "flowsteer/launch/perception.hpp"
 #include "flowsteer/servo/clock.hpp"
 
 namespace flowsteer::launch {
@@ -51,8 +51,7 @@ void GoalTracker::advance(const drivers::BodyVelocity& measured, double dt_s) {
 }
 
 double GoalTracker::bearing_rad() const {
-  const double left = std::atan2(goal_y_m_ - y_m_, goal_x_m_ - x_m_) - yaw_rad_;
-  return -std::remainder(left, 2.0 * std::numbers::pi);
+  return goal_bearing_rad(goal_x_m_ - x_m_, goal_y_m_ - y_m_, yaw_rad_);
 }
 
 double GoalTracker::distance_m() const {
