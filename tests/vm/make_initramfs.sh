@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Usage: make_initramfs.sh KERNEL_ROOT OUT.cpio.gz INIT [--modules "m1 m2"] [--binaries "b1 b2"]
+# (a binary named without a slash is looked up on PATH)
 # Builds a busybox-static initramfs for the kernel unpacked at KERNEL_ROOT (fetch_kernel.sh):
 # INIT becomes /init, the named modules and everything they depend on go under /lib/modules
 # (depmod -b, so busybox's modprobe finds them), and each binary goes to /bin with the shared
@@ -51,6 +52,13 @@ copy_with_path() {
   cp -L "$1" "$stage/$1"
 }
 for binary in $binaries; do
+  if [[ $binary != */* ]]; then
+    name=$binary
+    binary=$(command -v "$name") || {
+      echo "make_initramfs: $name not found: scripts/setup installs what the VM tests need" >&2
+      exit 1
+    }
+  fi
   cp "$binary" "$stage/bin/"
   # Lines look like "libc.so.6 => /lib/x86_64-linux-gnu/libc.so.6 (0x...)" or
   # "/lib64/ld-linux-x86-64.so.2 (0x...)".

@@ -8,14 +8,6 @@ set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
 kernel_cache=${1:?usage}; work=${2:?usage}; init=${3:?usage}; timeout_s=${4:?usage}; shift 4
-modules=""; binaries=""
-while [[ $# -gt 0 ]]; do
-  case $1 in
-    --modules) modules=$2; shift 2 ;;
-    --binaries) binaries=$2; shift 2 ;;
-    *) echo "run_vm: unknown argument $1" >&2; exit 2 ;;
-  esac
-done
 mkdir -p "$work"
 
 if ! command -v qemu-system-x86_64 > /dev/null; then
@@ -27,19 +19,7 @@ if ! version=$(qemu-system-x86_64 --version 2>&1); then
   exit 77
 fi
 
-paths=""
-for binary in $binaries; do
-  if [[ $binary != */* ]]; then
-    name=$binary
-    binary=$(command -v "$name") || {
-      echo "run_vm: $name not found: scripts/setup installs what the VM tests need" >&2
-      exit 1
-    }
-  fi
-  paths+="$binary "
-done
-
 kroot=$("$here/fetch_kernel.sh" "$kernel_cache")
-"$here/make_initramfs.sh" "$kroot" "$work/initramfs.cpio.gz" "$init" \
-  --modules "$modules" --binaries "$paths"
+# The rest of the arguments (--modules, --binaries) are make_initramfs.sh's.
+"$here/make_initramfs.sh" "$kroot" "$work/initramfs.cpio.gz" "$init" "$@"
 "$here/boot.sh" "$kroot" "$work/initramfs.cpio.gz" "$work/console.log" "$timeout_s"
