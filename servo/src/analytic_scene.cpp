@@ -13,18 +13,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Camera-to-body rotation: columns are the camera's x (right), y (down) and z (forward,
-// pitched down by θ) axes in the body frame.
-Eigen::Matrix3d camera_to_body(double pitch_rad) {
-  const double c = std::cos(pitch_rad);
-  const double s = std::sin(pitch_rad);
-  Eigen::Matrix3d r;
-  r.col(0) = Eigen::Vector3d(0.0, -1.0, 0.0);
-  r.col(1) = Eigen::Vector3d(-s, 0.0, -c);
-  r.col(2) = Eigen::Vector3d(c, 0.0, -s);
-  return r;
-}
-
 // Nearest positive ray parameter at which origin + t·dir enters the object, or +inf.
 double intersect_box(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
                      const SceneObject& box) {
@@ -97,7 +85,7 @@ Eigen::Vector3d relative_velocity_camera(const AnalyticScene& scene,
                                          const Eigen::Vector2d& velocity_mps) {
   const Eigen::Vector3d relative_body(velocity_mps.x() - scene.agent_speed_mps, velocity_mps.y(),
                                       0.0);
-  return camera_to_body(scene.mount.pitch_rad).transpose() * relative_body;
+  return scene.mount.camera_to_body().transpose() * relative_body;
 }
 
 }  // namespace
@@ -135,7 +123,7 @@ SceneRender render_scene(const AnalyticScene& scene) {
   SceneRender out{FlowField(scene.intrinsics, true), {}};
   FlowField& field = out.flow;
   out.ids.assign(field.size(), kSkyId);
-  const Eigen::Matrix3d r = camera_to_body(scene.mount.pitch_rad);
+  const Eigen::Matrix3d r = scene.mount.camera_to_body();
   const Eigen::Vector3d origin(0.0, 0.0, scene.mount.height_m);
   const Eigen::Vector3d omega =
       camera_angular_velocity(scene.agent_turn_rate, scene.mount.pitch_rad);
@@ -192,7 +180,7 @@ ObjectTruth object_truth(const AnalyticScene& scene, const SceneObject& object) 
   const Eigen::Vector3d& v = truth.relative_velocity_mps;
   truth.foe = Eigen::Vector2d(v.x() / v.z(), v.y() / v.z());  // CGF Eq. 3
   const Eigen::Vector3d centre(object.position_m.x(), object.position_m.y(), scene.mount.height_m);
-  const Eigen::Vector3d in_camera = camera_to_body(scene.mount.pitch_rad).transpose() *
+  const Eigen::Vector3d in_camera = scene.mount.camera_to_body().transpose() *
                                     (centre - Eigen::Vector3d(0.0, 0.0, scene.mount.height_m));
   truth.centre_depth_m = in_camera.z();
   truth.ttc_s = -truth.centre_depth_m / v.z();

@@ -54,4 +54,14 @@ void CameraMount::validate() const {
       "camera mount: pitch_rad must be within (-90, 90) degrees, got " + std::to_string(pitch_rad));
 }
 
+Eigen::Matrix3d CameraMount::camera_to_body() const {
+  const double c = std::cos(pitch_rad);
+  const double s = std::sin(pitch_rad);
+  Eigen::Matrix3d r;
+  r.col(0) = Eigen::Vector3d(0.0, -1.0, 0.0);
+  r.col(1) = Eigen::Vector3d(-s, 0.0, -c);
+  r.col(2) = Eigen::Vector3d(c, 0.0, -s);
+  return r;
+}
+
 }  // namespace flowsteer::servo

@@ -42,23 +42,25 @@ std::span<const ObjectFeatures> GeometricFeatures::compute(std::span<const Geome
                                                            const CameraMount& mount,
                                                            double agent_speed_mps) {
   features_.clear();
+  const Eigen::Matrix3d body_to_camera = mount.camera_to_body().transpose();
   const double cp = std::cos(mount.pitch_rad);
-  const double sp = std::sin(mount.pitch_rad);
   // Edges of the view: the outer edges of the first and last pixel columns and rows.
   const double left_x = (-0.5 - intrinsics.cx_px) / intrinsics.fx_px;
   const double right_x = (intrinsics.width_px - 0.5 - intrinsics.cx_px) / intrinsics.fx_px;
   const double top_y = (-0.5 - intrinsics.cy_px) / intrinsics.fy_px;
   const double bottom_y = (intrinsics.height_px - 0.5 - intrinsics.cy_px) / intrinsics.fy_px;
-  // A body point (x forward, y left, z_up above the camera) in the camera frame, as the
-  // renderer places it: X = −y, Y = −sin p·x − cos p·z_up, Z = cos p·x − sin p·z_up.
+  // The image row of a body point x ahead, z_up above the camera, on the optical axis' plane.
   auto image_y = [&](double x, double z_up) {
-    return (-sp * x - cp * z_up) / (cp * x - sp * z_up);
+    const Eigen::Vector3d p = body_to_camera * Eigen::Vector3d(x, 0.0, z_up);
+    return p.y() / p.z();
   };
 
   for (const GeometricBody& body : bodies) {
     clip_in_.clear();
     for (const Eigen::Vector2d& p : body.footprint_m) {
-      clip_in_.emplace_back(-p.y(), cp * p.x());  // (X, Z) at the camera's height
+      // (X, Z) at the camera's height.
+      const Eigen::Vector3d in_camera = body_to_camera * Eigen::Vector3d(p.x(), p.y(), 0.0);
+      clip_in_.emplace_back(in_camera.x(), in_camera.z());
     }
     if (clip_in_.size() < 3) {
       continue;
@@ -105,7 +107,7 @@ std::span<const ObjectFeatures> GeometricFeatures::compute(std::span<const Geome
     f.pixel_count = std::max(1, static_cast<int>(std::lround(columns * rows)));
 
     const Eigen::Vector2d relative = body.velocity_mps - Eigen::Vector2d(agent_speed_mps, 0.0);
-    const Eigen::Vector3d v(-relative.y(), -sp * relative.x(), cp * relative.x());
+    const Eigen::Vector3d v = body_to_camera * Eigen::Vector3d(relative.x(), relative.y(), 0.0);
     const double inverse_ttc = -v.z() / depth;  // 1/τ with τ = −Z / v_z
     // The flow fit's threshold on |1/τ| (RadialFitOptions::min_inverse_ttc) tells lateral motion.
     if (std::abs(inverse_ttc) < RadialFitOptions{}.min_inverse_ttc) {

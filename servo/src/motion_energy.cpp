@@ -106,8 +106,7 @@ MotionEnergyController::MotionEnergyController(const CameraIntrinsics& intrinsic
   // danger_distance_m ahead and half_width_m to either side, at the bottom centre.
   danger_zone_.assign(pixels, 0);
   const FlatGround plane(mount);
-  const double cp = std::cos(mount.pitch_rad);
-  const double sp = std::sin(mount.pitch_rad);
+  const Eigen::Matrix3d camera_to_body = mount.camera_to_body();
   for (int row = 0; row < height; ++row) {
     for (int col = 0; col < width; ++col) {
       const Eigen::Vector2d p = intrinsics.normalise(col, row);
@@ -115,9 +114,9 @@ MotionEnergyController::MotionEnergyController(const CameraIntrinsics& intrinsic
       if (!depth) {
         continue;
       }
-      // Camera (X, Y, Z) = Z (x, y, 1) back to the body frame: forward = cos p·Z − sin p·Y.
-      const double forward_m = cp * *depth - sp * p.y() * *depth;
-      const double lateral_m = p.x() * *depth;
+      const Eigen::Vector3d body = camera_to_body * (*depth * Eigen::Vector3d(p.x(), p.y(), 1.0));
+      const double forward_m = body.x();
+      const double lateral_m = body.y();
       if (forward_m <= options.danger_distance_m && std::abs(lateral_m) <= limits.half_width_m) {
         danger_zone_[static_cast<std::size_t>(row) * static_cast<std::size_t>(width) +
                      static_cast<std::size_t>(col)] = 1;
@@ -131,8 +130,7 @@ bool MotionEnergyController::free_path_to(double bearing_rad, double distance_m)
   // Blumberg's test is a straight line from the bottom centre of the image to the point of
   // interest that must cross no non-floor pixel. The agent is not a point: the floor is
   // checked along three such lines, the path's centre and its two edges half_width_m aside.
-  const double cp = std::cos(mount_.pitch_rad);
-  const double sp = std::sin(mount_.pitch_rad);
+  const Eigen::Matrix3d body_to_camera = mount_.camera_to_body().transpose();
   const double h = mount_.height_m;
   const double c = std::cos(bearing_rad);
   const double s = std::sin(bearing_rad);
@@ -145,12 +143,12 @@ bool MotionEnergyController::free_path_to(double bearing_rad, double distance_m)
     const double forward = along * c - aside * s;
     const double left = -along * s - aside * c;
     // The ground point in the camera frame (as FlatGround: z_up = −h).
-    const double cam_z = cp * forward + sp * h;
-    if (cam_z <= 0.0) {
+    const Eigen::Vector3d camera = body_to_camera * Eigen::Vector3d(forward, left, -h);
+    if (camera.z() <= 0.0) {
       return std::nullopt;
     }
-    const double col = intrinsics_.cx_px - intrinsics_.fx_px * left / cam_z;
-    const double row = intrinsics_.cy_px + intrinsics_.fy_px * (-sp * forward + cp * h) / cam_z;
+    const double col = intrinsics_.cx_px + intrinsics_.fx_px * camera.x() / camera.z();
+    const double row = intrinsics_.cy_px + intrinsics_.fy_px * camera.y() / camera.z();
     if (row > height - 0.5 || col < -0.5 || col > width - 0.5) {
       return std::nullopt;
     }

@@ -34,6 +34,11 @@ struct CameraMount {
   double pitch_rad = 0.0;
 
   void validate() const;
+
+  // The rotation from the camera frame (x right, y down, z forward) to the body frame (x
+  // forward, y left, z up): its columns are the camera's axes in the body frame. Its transpose
+  // takes a body vector into the camera frame.
+  Eigen::Matrix3d camera_to_body() const;
 };
 
 }  // namespace flowsteer::servo
