@@ -1,5 +1,8 @@
-// MIG 2019 §7.3, Fig. 4, with numerical flow: an agent aware of dark regions keeps away from a
-// hard shadow, an unaware one walks through it.
+// MIG 2019 §7.3 with numerical flow (DIS fast; objects from the renderer's ids, as in MIG's
+// semantic images, so that the comparison is of the light and not of a flow segmentation): an
+// agent aware of dark regions keeps away from a hard shadow (Fig. 4) and takes the lit branch of
+// a fork (Fig. 5), where an unaware one walks through the shadow and takes the nearer, dark
+// branch.
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -99,6 +102,63 @@ TEST(DarkRegions, ShadowStreetAwareAgentKeepsAwayFromTheShadow) {
   EXPECT_EQ(aware.agents.at(0).collisions, 0);
   EXPECT_TRUE(aware.agents.at(0).reached_goal);
   EXPECT_TRUE(unaware.agents.at(0).reached_goal);
+}
+
+// Where the agent walks while it passes the obstacle: its y (world, left positive) at each step
+// whose x lies within [from_x_m, to_x_m].
+struct Passage {
+  double min_y_m = INFINITY;
+  double max_y_m = -INFINITY;
+  int steps = 0;
+};
+
+Passage passage(const AgentResult& agent, double from_x_m, double to_x_m) {
+  Passage p;
+  for (const Eigen::Vector2d& position : agent.positions_m) {
+    if (position.x() < from_x_m || position.x() > to_x_m) {
+      continue;
+    }
+    p.min_y_m = std::min(p.min_y_m, position.y());
+    p.max_y_m = std::max(p.max_y_m, position.y());
+    ++p.steps;
+  }
+  return p;
+}
+
+// MIG §7.3, Fig. 5: at a fork into a lit and a dark branch, the aware agent (blue) takes the lit
+// one; the unaware one (red) takes the dark one, which is the nearer.
+TEST(DarkRegions, LitForkAwareAgentTakesTheLitBranch) {
+  const sim_camera::WorldSpec spec = builtin_scenario("lit_fork");
+  const sim_camera::Solid& block = spec.obstacles.at(0);
+  const double block_left_m = block.centre_m.y() + 0.5 * block.size_m.y();
+  const double block_right_m = block.centre_m.y() - 0.5 * block.size_m.y();
+  const double from_x_m = block.centre_m.x() - 0.5 * block.size_m.x();
+  const double to_x_m = block.centre_m.x() + 0.5 * block.size_m.x();
+  // The straight line from start to goal meets the block, nearer its right side than its left.
+  const double line_y = spec.agents.at(0).start_m.y();
+  ASSERT_EQ(line_y, spec.agents.at(0).goals.back().y());
+  ASSERT_LT(block_right_m, line_y);
+  ASSERT_LT(line_y - block_right_m, block_left_m - line_y);
+
+  const SimResult aware = run_with_delta(spec, 1.0);
+  const SimResult unaware = run_with_delta(spec, 0.0);
+  const Passage a = passage(aware.agents.at(0), from_x_m, to_x_m);
+  const Passage u = passage(unaware.agents.at(0), from_x_m, to_x_m);
+  std::cout << "lit_fork, y beside the block (" << block_right_m << " .. " << block_left_m
+            << "): aware " << a.min_y_m << " .. " << a.max_y_m << " m; unaware " << u.min_y_m
+            << " .. " << u.max_y_m << " m; min clearance aware "
+            << aware.agents.at(0).min_clearance_m << " m, unaware "
+            << unaware.agents.at(0).min_clearance_m << " m\n";
+  ASSERT_GT(a.steps, 0);
+  ASSERT_GT(u.steps, 0);
+  // All the way along the block, the aware agent is on its left (lit) side and the unaware one on
+  // its right (dark) side.
+  EXPECT_GT(a.min_y_m, block_left_m);
+  EXPECT_LT(u.max_y_m, block_right_m);
+  EXPECT_TRUE(aware.agents.at(0).reached_goal);
+  EXPECT_TRUE(unaware.agents.at(0).reached_goal);
+  EXPECT_EQ(aware.agents.at(0).collisions, 0);
+  EXPECT_EQ(unaware.agents.at(0).collisions, 0);
 }
 
 }  // namespace
