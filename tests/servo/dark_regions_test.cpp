@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "flowsteer/servo/control.hpp"
 #include "flowsteer/servo/dark_regions.hpp"
 #include "flowsteer/servo/features.hpp"
 #include "flowsteer/servo/flow_field.hpp"
@@ -109,6 +110,84 @@ TEST(DarkRegionFinder, DarkReachingIntoTheUpperHalfKeepsItsLowerPart) {
       EXPECT_EQ(label == 1, dark_below) << col << "," << row;
     }
   }
+}
+
+// MIG §5: a dark pixel's flow is not trusted wherever it is. Above the middle row it leaves its
+// object without becoming part of a dark region.
+TEST(DarkRegionFinder, DarkPixelsInTheUpperHalfLeaveTheirObject) {
+  cv::Mat grey = lit_image();
+  const cv::Rect patch(5, 4, 10, 8);  // rows 4–11
+  grey(patch).setTo(kDark);
+  Segmentation s = with_visible_lower_half();
+  for (int row = 0; row < kSide / 2; ++row) {  // the object reaches into the upper half
+    for (int col = 0; col < kSide; ++col) {
+      s.labels[static_cast<std::size_t>(row * kSide + col)] = 0;
+    }
+  }
+  DarkRegionFinder finder;
+  EXPECT_EQ(finder.add_dark_regions(grey, s), 0);
+  EXPECT_EQ(s.region_count(), 1);
+  for (int row = 0; row < kSide; ++row) {
+    for (int col = 0; col < kSide; ++col) {
+      const std::int32_t label = s.labels[static_cast<std::size_t>(row * kSide + col)];
+      EXPECT_EQ(label, patch.contains(cv::Point(col, row)) ? Segmentation::kNoRegion : 0)
+          << col << "," << row;
+    }
+  }
+}
+
+// Dark ground across the whole width (at night, beyond the light) is split at the middle column
+// into the dark on the left and the dark on the right of the heading.
+TEST(DarkRegionFinder, DarkAcrossTheWholeWidthIsSplitAtTheHeading) {
+  cv::Mat grey = lit_image();
+  grey(cv::Rect(0, 24, kSide, 6)).setTo(kDark);  // rows 24–29, every column
+  Segmentation s = with_visible_lower_half();
+  DarkRegionFinder finder;
+  ASSERT_EQ(finder.add_dark_regions(grey, s), 2);
+  for (int row = 24; row < 30; ++row) {
+    for (int col = 0; col < kSide; ++col) {
+      EXPECT_EQ(s.labels[static_cast<std::size_t>(row * kSide + col)], col < kSide / 2 ? 1 : 2)
+          << col << "," << row;
+    }
+  }
+  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(kSide, kSide, 1.5707963);
+  FlowField field(k);
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(field, s);
+  ASSERT_EQ(objects.size(), 3U);
+  EXPECT_TRUE(objects[1].cut_left && !objects[1].cut_right);
+  EXPECT_TRUE(objects[2].cut_right && !objects[2].cut_left);
+  EXPECT_NEAR(objects[1].centre.x(), -objects[2].centre.x(), 1e-9);
+  EXPECT_LT(objects[1].centre.x(), -0.3);
+}
+
+// The turn the dark term asks for (ω = −δ ∂L_dark/∂ω, positive to the right) from what the
+// finder makes of `grey`.
+double dark_turn(const cv::Mat& grey) {
+  Segmentation s = with_visible_lower_half();
+  DarkRegionFinder finder;
+  finder.add_dark_regions(grey, s);
+  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(kSide, kSide, 1.5707963);
+  FlowField field(k);
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(field, s);
+  const auto term = dark_term();
+  return -term->evaluate(Percept{objects, {}, {}, {}}, AgentState{1.0}).per_turn;
+}
+
+// Even dark on both sides of the heading asks for no turn. Unsplit, the band's centroid sits at
+// the cusp of exp(−|g|/σ): one dark pixel more on either side turned the agent at ±1/σ. With
+// more of the dark on the right, the agent turns left, away from it.
+TEST(DarkRegionFinder, EvenDarkAcrossTheViewAsksForNoTurn) {
+  cv::Mat even = lit_image();
+  even(cv::Rect(0, 24, kSide, 6)).setTo(kDark);
+  EXPECT_NEAR(dark_turn(even), 0.0, 1e-9);
+  cv::Mat one_more = even.clone();
+  one_more.at<std::uint8_t>(30, kSide / 2 + 3) = kDark;  // below the band, right of the middle
+  EXPECT_NEAR(dark_turn(one_more), 0.0, 0.05);
+  cv::Mat right_heavy = even.clone();
+  right_heavy(cv::Rect(kSide / 2, 30, 8, 6)).setTo(kDark);  // a dark patch just right of ahead
+  EXPECT_LT(dark_turn(right_heavy), -0.1);
 }
 
 TEST(DarkRegionFinder, BadInputThrows) {
