@@ -88,7 +88,9 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   const cv::Mat& image = frame.image;
   const bool frame_fits =
       !image.empty() && image.cols == field_.width() && image.rows == field_.height();
-  if (!image.empty() && (options_.dark_regions || optical_flow_)) {
+  // Grey for the dark regions only: OpticalFlow converts the frame into the grey image it keeps,
+  // and a grey image handed to it is copied (which costs less than converting twice).
+  if (!image.empty() && options_.dark_regions) {
     if (image.channels() == 3) {
       cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);
     } else {
@@ -103,7 +105,8 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
           to_s - from_s);
     };
     status_ = image.empty() ? servo::FlowStatus::empty_frame
-                            : optical_flow_->update(grey_, frame.timestamp_s, field_, rotation);
+                            : optical_flow_->update(options_.dark_regions ? grey_ : image,
+                                                    frame.timestamp_s, field_, rotation);
   } else if (!frame_fits) {
     status_ = image.empty() ? servo::FlowStatus::empty_frame : servo::FlowStatus::size_changed;
   } else {

@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ximgproc/segmentation.hpp>
@@ -52,8 +56,174 @@ std::string segmentation_method_names() {
   return names;
 }
 
+namespace {
+
+// Felzenszwalb–Huttenlocher segmentation (IJCV 2004) of the 4-connected grid of pixels of a
+// CV_32FC3 image, with the result of OpenCV's ximgproc GraphSegmentation with sigma 0 (the same
+// edge weights in the same order, merge test, small-segment merge, and segments numbered in order
+// of first appearance), but with its buffers kept from call to call: OpenCV allocates its graph
+// and its sets, and converts and copies the image, on every call, which with the full-resolution
+// features and their resized copy took as long as the DIS flow at 256².
+class GridSegmentation {
+ public:
+  // Writes each pixel's segment to `labels` (CV_32S, the image's size) and returns how many.
+  int segment(const cv::Mat& features, float k, int min_size, cv::Mat& labels) {
+    const int width = features.cols;
+    const int height = features.rows;
+    const auto pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    build_edges(features);
+    sort_edges();
+    parent_.resize(pixels);
+    for (std::size_t p = 0; p < pixels; ++p) {
+      parent_[p] = static_cast<std::int32_t>(p);
+    }
+    size_.assign(pixels, 1);
+    threshold_.assign(pixels, k);
+    // A merge when the edge is no heavier than either segment's internal difference plus
+    // k / |segment|, lightest edges first.
+    for (const std::uint64_t edge : edges_) {
+      const auto [a, b] = ends(edge, width);
+      const std::int32_t root_a = find(a);
+      const std::int32_t root_b = find(b);
+      const float weight = weight_of(edge);
+      if (root_a != root_b && weight <= threshold_[static_cast<std::size_t>(root_a)] &&
+          weight <= threshold_[static_cast<std::size_t>(root_b)]) {
+        const std::int32_t root = join(root_a, root_b);
+        threshold_[static_cast<std::size_t>(root)] =
+            weight + k / static_cast<float>(size_[static_cast<std::size_t>(root)]);
+      }
+    }
+    // Segments under min_size join a neighbour, again along the lightest edges first.
+    for (const std::uint64_t edge : edges_) {
+      const auto [a, b] = ends(edge, width);
+      const std::int32_t root_a = find(a);
+      const std::int32_t root_b = find(b);
+      if (root_a != root_b && (size_[static_cast<std::size_t>(root_a)] < min_size ||
+                               size_[static_cast<std::size_t>(root_b)] < min_size)) {
+        join(root_a, root_b);
+      }
+    }
+    labels.create(height, width, CV_32S);
+    label_of_root_.assign(pixels, -1);
+    std::int32_t segments = 0;
+    auto* label = labels.ptr<std::int32_t>();
+    for (std::size_t p = 0; p < pixels; ++p) {
+      std::int32_t& of_root =
+          label_of_root_[static_cast<std::size_t>(find(static_cast<std::int32_t>(p)))];
+      if (of_root < 0)
+        of_root = segments++;
+      label[p] = of_root;
+    }
+    return segments;
+  }
+
+ private:
+  // An edge is its weight's bits (a non-negative float's bits order as the floats do) over its
+  // id, 4 p + the direction from pixel p (up, left, down, right: OpenCV's order).
+  static float weight_of(std::uint64_t edge) {
+    return std::bit_cast<float>(static_cast<std::uint32_t>(edge >> 32U));
+  }
+  static std::pair<std::int32_t, std::int32_t> ends(std::uint64_t edge, int width) {
+    const auto id = static_cast<std::uint32_t>(edge);
+    const auto a = static_cast<std::int32_t>(id / 4U);
+    const std::array<std::int32_t, 4> step{-width, -1, width, 1};
+    return {a, a + step[id % 4U]};
+  }
+
+  // Every edge twice, once from each end, in OpenCV's order: sorted by the same std::sort, equal
+  // weights come out in OpenCV's order too, so that the segments are OpenCV's to the pixel (which
+  // of several equally light edges merges a small segment changes the regions it joins).
+  void build_edges(const cv::Mat& features) {
+    edges_.clear();
+    const int width = features.cols;
+    const int height = features.rows;
+    for (int row = 0; row < height; ++row) {
+      const auto* f = features.ptr<cv::Vec3f>(row);
+      const auto* above = row > 0 ? features.ptr<cv::Vec3f>(row - 1) : nullptr;
+      const auto* below = row + 1 < height ? features.ptr<cv::Vec3f>(row + 1) : nullptr;
+      for (int col = 0; col < width; ++col) {
+        const auto id = 4U * static_cast<std::uint32_t>(row * width + col);
+        if (above != nullptr)
+          edges_.push_back(edge(f[col], above[col], id));
+        if (col > 0)
+          edges_.push_back(edge(f[col], f[col - 1], id + 1U));
+        if (below != nullptr)
+          edges_.push_back(edge(f[col], below[col], id + 2U));
+        if (col + 1 < width)
+          edges_.push_back(edge(f[col], f[col + 1], id + 3U));
+      }
+    }
+  }
+  static std::uint64_t edge(const cv::Vec3f& a, const cv::Vec3f& b, std::uint32_t id) {
+    // OpenCV sums the squares in double and keeps the sum in a float: the same weights here.
+    float sum = 0.0F;
+    for (int c = 0; c < 3; ++c) {
+      const double d = a[c] - b[c];
+      sum = static_cast<float>(sum + d * d);
+    }
+    return (static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(std::sqrt(sum))) << 32U) | id;
+  }
+
+  void sort_edges() {
+    std::sort(edges_.begin(), edges_.end(),
+              [](std::uint64_t a, std::uint64_t b) { return (a >> 32U) < (b >> 32U); });
+  }
+
+  std::int32_t find(std::int32_t p) {
+    while (parent_[static_cast<std::size_t>(p)] != p) {
+      // Path halving: each step also links p to its grandparent.
+      std::int32_t& parent = parent_[static_cast<std::size_t>(p)];
+      parent = parent_[static_cast<std::size_t>(parent)];
+      p = parent;
+    }
+    return p;
+  }
+  // Joins two roots, the smaller segment under the larger; returns the new root.
+  std::int32_t join(std::int32_t a, std::int32_t b) {
+    if (size_[static_cast<std::size_t>(a)] < size_[static_cast<std::size_t>(b)])
+      std::swap(a, b);
+    parent_[static_cast<std::size_t>(b)] = a;
+    size_[static_cast<std::size_t>(a)] += size_[static_cast<std::size_t>(b)];
+    return a;
+  }
+
+  std::vector<std::uint64_t> edges_;
+  std::vector<std::int32_t> parent_;
+  std::vector<std::int32_t> size_;
+  std::vector<float> threshold_;
+  std::vector<std::int32_t> label_of_root_;
+};
+
+// Counts keys into counts[key] by runs: neighbouring pixels mostly share a key, and adding one
+// to the same counter pixel after pixel waits each time for the previous store.
+class RunCounter {
+ public:
+  explicit RunCounter(std::vector<std::int32_t>& counts) : counts_(counts) {}
+  void add(std::size_t key) {
+    if (key != key_) {
+      counts_[key_] += run_;
+      key_ = key;
+      run_ = 0;
+    }
+    ++run_;
+  }
+  // Adds the current run; call after the last add.
+  void flush() {
+    counts_[key_] += run_;
+    run_ = 0;
+  }
+
+ private:
+  std::vector<std::int32_t>& counts_;
+  std::size_t key_ = 0;
+  std::int32_t run_ = 0;
+};
+
+}  // namespace
+
 struct FlowSegmenter::Graph {
-  cv::Ptr<cv::ximgproc::segmentation::GraphSegmentation> segmentation;
+  cv::Ptr<cv::ximgproc::segmentation::GraphSegmentation> opencv;  // flow_graph
+  GridSegmentation own;                                           // flow_graph_fast
 };
 
 FlowSegmenter::FlowSegmenter(SegmentationMethod method, const FlowSegmentationOptions& options)
@@ -65,9 +235,11 @@ FlowSegmenter::FlowSegmenter(SegmentationMethod method, const FlowSegmentationOp
     throw std::invalid_argument(
         "FlowSegmenter: k and reference_interval_s must be positive, fast_max_side_px >= 8");
   }
-  // The flow is smooth already (the estimators regularise it): no pre-smoothing, which would
-  // also smear the validity channel into valid pixels.
-  graph_->segmentation = cv::ximgproc::segmentation::createGraphSegmentation(0.0);
+  if (method == SegmentationMethod::flow_graph) {
+    // The flow is smooth already (the estimators regularise it): no pre-smoothing, which would
+    // also smear the validity channel into valid pixels.
+    graph_->opencv = cv::ximgproc::segmentation::createGraphSegmentation(0.0);
+  }
 }
 
 FlowSegmenter::~FlowSegmenter() = default;
@@ -86,100 +258,117 @@ void FlowSegmenter::segment(const FlowField& derotated, std::span<const std::uin
   }
 
   // Graph features: flow in pixels per reference interval, and a validity channel.
-  features_.create(height, width, CV_32FC3);
   const auto to_px_x =
       static_cast<float>(derotated.intrinsics().fx_px * options_.reference_interval_s);
   const auto to_px_y =
       static_cast<float>(derotated.intrinsics().fy_px * options_.reference_interval_s);
   const auto flow = derotated.flow();
-  for (int row = 0; row < height; ++row) {
-    auto* f = features_.ptr<cv::Vec3f>(row);
-    for (int col = 0; col < width; ++col) {
-      const std::size_t i = derotated.index(col, row);
-      const Eigen::Vector2f& u = flow[i];
-      const bool valid = (excluded.empty() || excluded[i] == 0) && u.allFinite();
-      f[col] = valid ? cv::Vec3f(u.x() * to_px_x, u.y() * to_px_y, 0.0F)
-                     : cv::Vec3f(0.0F, 0.0F, kInvalidMark);
-    }
-  }
+  const auto valid = [&](std::size_t i) {
+    return (excluded.empty() || excluded[i] == 0) && flow[i].allFinite();
+  };
+  const auto feature = [&](std::size_t i) {
+    return valid(i) ? cv::Vec3f(flow[i].x() * to_px_x, flow[i].y() * to_px_y, 0.0F)
+                    : cv::Vec3f(0.0F, 0.0F, kInvalidMark);
+  };
 
-  // The fast method segments a reduced copy; k and the smallest region scale with pixel area so
-  // that it finds the same regions, coarser.
-  const cv::Mat* graph_input = &features_;
-  double scale = 1.0;
+  // The fast method segments the features at the nearest pixels of a grid of at most
+  // fast_max_side_px per side; k and the smallest region scale with pixel area so that it finds
+  // the same regions, coarser.
+  cv::Size graph_size(width, height);
   if (method_ == SegmentationMethod::flow_graph_fast &&
       std::max(width, height) > options_.fast_max_side_px) {
-    scale = static_cast<double>(options_.fast_max_side_px) / std::max(width, height);
-    const cv::Size reduced_size(std::max(1, static_cast<int>(std::lround(width * scale))),
-                                std::max(1, static_cast<int>(std::lround(height * scale))));
-    cv::resize(features_, reduced_, reduced_size, 0.0, 0.0, cv::INTER_NEAREST);
-    graph_input = &reduced_;
+    const double scale = static_cast<double>(options_.fast_max_side_px) / std::max(width, height);
+    graph_size = {std::max(1, static_cast<int>(std::lround(width * scale))),
+                  std::max(1, static_cast<int>(std::lround(height * scale)))};
   }
-  const double area_scale = (static_cast<double>(graph_input->total()) / pixels);
+  features_.create(graph_size, CV_32FC3);
+  for (int row = 0; row < graph_size.height; ++row) {
+    auto* f = features_.ptr<cv::Vec3f>(row);
+    const int source_row = row * height / graph_size.height;
+    for (int col = 0; col < graph_size.width; ++col) {
+      f[col] = feature(derotated.index(col * width / graph_size.width, source_row));
+    }
+  }
+  const double area_scale = static_cast<double>(features_.total()) / pixels;
   const int min_region_px =
-      std::max(1, static_cast<int>(options_.min_region_fraction * graph_input->total()));
-  graph_->segmentation->setK(static_cast<float>(options_.k * area_scale));
-  graph_->segmentation->setMinSize(min_region_px);
-  graph_->segmentation->processImage(*graph_input, graph_labels_);
+      std::max(1, static_cast<int>(options_.min_region_fraction * features_.total()));
+  const auto k = static_cast<float>(options_.k * area_scale);
+  std::size_t segments = 0;
+  if (graph_->opencv) {
+    graph_->opencv->setK(k);
+    graph_->opencv->setMinSize(min_region_px);
+    graph_->opencv->processImage(features_, graph_labels_);
+    double max_label = 0.0;
+    cv::minMaxLoc(graph_labels_, nullptr, &max_label);
+    segments = static_cast<std::size_t>(max_label) + 1;
+  } else {
+    segments =
+        static_cast<std::size_t>(graph_->own.segment(features_, k, min_region_px, graph_labels_));
+  }
 
-  double max_label = 0.0;
-  cv::minMaxLoc(graph_labels_, nullptr, &max_label);
-  const auto segments = static_cast<std::size_t>(max_label) + 1;
-
-  // Labels at full resolution (nearest reduced pixel), kept only for valid pixels.
+  // Labels at full resolution (nearest graph pixel), kept only for valid pixels. Counts sit one
+  // slot up, slot 0 counting the pixels without a label, so that no pixel takes a branch.
   out.width = width;
   out.height = height;
-  out.labels.assign(pixels, Segmentation::kNoRegion);
-  valid_counts_.assign(segments, 0);
+  out.labels.resize(pixels);
+  valid_counts_.assign(segments + 1, 0);
+  graph_cols_.resize(static_cast<std::size_t>(width));
   const double col_scale = static_cast<double>(graph_labels_.cols) / width;
   const double row_scale = static_cast<double>(graph_labels_.rows) / height;
+  for (int col = 0; col < width; ++col) {
+    graph_cols_[static_cast<std::size_t>(col)] =
+        std::min(graph_labels_.cols - 1, static_cast<int>(col * col_scale));
+  }
+  RunCounter valid_count(valid_counts_);
   for (int row = 0; row < height; ++row) {
-    const auto* f = features_.ptr<cv::Vec3f>(row);
     const auto* g = graph_labels_.ptr<std::int32_t>(
         std::min(graph_labels_.rows - 1, static_cast<int>(row * row_scale)));
     for (int col = 0; col < width; ++col) {
-      if (f[col][2] != 0.0F)
-        continue;
+      const std::size_t i = derotated.index(col, row);
       const std::int32_t segment =
-          g[std::min(graph_labels_.cols - 1, static_cast<int>(col * col_scale))];
-      out.labels[derotated.index(col, row)] = segment;
-      ++valid_counts_[static_cast<std::size_t>(segment)];
+          valid(i) ? g[graph_cols_[static_cast<std::size_t>(col)]] : Segmentation::kNoRegion;
+      out.labels[i] = segment;
+      valid_count.add(static_cast<std::size_t>(segment + 1));
     }
   }
+  valid_count.flush();
 
-  // Compact the segments with enough valid pixels into regions 0..n-1.
+  // Compact the segments with enough valid pixels into regions 0..n-1 (region_of_label_ is
+  // indexed one up too).
   const auto min_full_px = static_cast<std::int32_t>(options_.min_region_fraction * pixels);
-  region_of_segment_.assign(segments, Segmentation::kNoRegion);
-  std::int32_t regions = 0;
-  for (std::size_t s = 0; s < segments; ++s) {
-    if (valid_counts_[s] > 0 && valid_counts_[s] >= min_full_px)
-      region_of_segment_[s] = regions++;
-  }
-  for (std::int32_t& label : out.labels) {
-    if (label != Segmentation::kNoRegion) {
-      label = region_of_segment_[static_cast<std::size_t>(label)];
+  region_of_label_.assign(segments + 1, Segmentation::kNoRegion);
+  region_sizes_.clear();
+  for (std::size_t s = 1; s <= segments; ++s) {
+    if (valid_counts_[s] > 0 && valid_counts_[s] >= min_full_px) {
+      region_of_label_[s] = static_cast<std::int32_t>(region_sizes_.size());
+      region_sizes_.push_back(valid_counts_[s]);
     }
   }
-  out.kinds.assign(static_cast<std::size_t>(regions), RegionKind::visible);
+  const std::size_t regions = region_sizes_.size();
+  // Overlaps with the previous frame's regions, counted in the same pass, one row and column up.
+  const std::size_t previous = previous_ids_.size();
+  const bool comparable = previous_labels_.size() == pixels;
+  overlaps_.assign((regions + 1) * (previous + 1), 0);
+  RunCounter overlap(overlaps_);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::int32_t region = region_of_label_[static_cast<std::size_t>(out.labels[i] + 1)];
+    out.labels[i] = region;
+    if (comparable) {
+      overlap.add(static_cast<std::size_t>(region + 1) * (previous + 1) +
+                  static_cast<std::size_t>(previous_labels_[i] + 1));
+    }
+  }
+  overlap.flush();
+  out.kinds.assign(regions, RegionKind::visible);
   assign_track_ids(out);
 }
 
 void FlowSegmenter::assign_track_ids(Segmentation& out) {
   const auto regions = static_cast<std::size_t>(out.region_count());
   const std::size_t previous = previous_ids_.size();
-  const bool comparable = previous_labels_.size() == out.labels.size();
-  overlaps_.assign(regions * previous, 0);
-  region_sizes_.assign(regions, 0);
-  for (std::size_t i = 0; i < out.labels.size(); ++i) {
-    const std::int32_t label = out.labels[i];
-    if (label == Segmentation::kNoRegion)
-      continue;
-    ++region_sizes_[static_cast<std::size_t>(label)];
-    if (comparable && previous_labels_[i] != Segmentation::kNoRegion) {
-      ++overlaps_[static_cast<std::size_t>(label) * previous +
-                  static_cast<std::size_t>(previous_labels_[i])];
-    }
-  }
+  const auto overlap = [&](std::size_t region, std::size_t previous_region) {
+    return overlaps_[(region + 1) * (previous + 1) + previous_region + 1];
+  };
   // Each region takes the id of the previous region covering most of it, when that covers at
   // least half of it; a previous region's id goes to one region only, the one it covers most.
   out.source_ids.assign(regions, -1);
@@ -187,8 +376,8 @@ void FlowSegmenter::assign_track_ids(Segmentation& out) {
     std::int32_t best_count = 0;
     std::size_t best = previous;
     for (std::size_t p = 0; p < previous; ++p) {
-      if (overlaps_[r * previous + p] > best_count) {
-        best_count = overlaps_[r * previous + p];
+      if (overlap(r, p) > best_count) {
+        best_count = overlap(r, p);
         best = p;
       }
     }
@@ -196,7 +385,7 @@ void FlowSegmenter::assign_track_ids(Segmentation& out) {
       continue;
     bool taken_by_larger = false;
     for (std::size_t other = 0; other < regions && !taken_by_larger; ++other) {
-      taken_by_larger = other != r && overlaps_[other * previous + best] > best_count;
+      taken_by_larger = other != r && overlap(other, best) > best_count;
     }
     if (!taken_by_larger)
       out.source_ids[r] = previous_ids_[best];

@@ -1,6 +1,5 @@
 #include "flowsteer/servo/ground.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -50,6 +49,23 @@ std::optional<Eigen::Vector2d> expected_ground_flow(const FlatGround& ground, do
   return expected;
 }
 
+// expected_ground_flow along one image row, at_zero + x per_x: the ground's depth, and with it
+// the flow's scale, depend on the row alone, so the pixel loops need no division.
+struct GroundRowFlow {
+  Eigen::Vector2d at_zero;
+  Eigen::Vector2d per_x;
+};
+
+std::optional<GroundRowFlow> ground_row_flow(const FlatGround& ground, double y, double speed_mps,
+                                             double approach_mps, double interval_s) {
+  const auto at_zero = expected_ground_flow(ground, 0.0, y, speed_mps, approach_mps, interval_s);
+  if (!at_zero) {
+    return std::nullopt;
+  }
+  const auto at_one = expected_ground_flow(ground, 1.0, y, speed_mps, approach_mps, interval_s);
+  return GroundRowFlow{*at_zero, *at_one - *at_zero};
+}
+
 }  // namespace
 
 GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& mount,
@@ -71,28 +87,39 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& m
   const auto depth = derotated.depth();
   const double interval_s = derotated.interval_s();
   const double approach_mps = speed_mps * std::cos(mount.pitch_rad);
+  const auto mark = [&](std::size_t i, bool is_ground) {
+    if (is_ground) {
+      ground_mask[i] = 1;
+      ++result.ground_pixels;
+    }
+  };
   for (int row = 0; row < derotated.height(); ++row) {
     const double y = derotated.y(row);
+    const std::size_t first = derotated.index(0, row);
+    if (use_depth) {
+      // The ground's depth does not depend on x.
+      const auto expected = ground.depth_at(0.0, y);
+      if (!expected) {
+        continue;
+      }
+      for (int col = 0; col < derotated.width(); ++col) {
+        const std::size_t i = first + static_cast<std::size_t>(col);
+        mark(i, std::isfinite(depth[i]) &&
+                    std::abs(depth[i] - *expected) <= options.depth_tolerance * *expected);
+      }
+      continue;
+    }
+    const auto expected_row = ground_row_flow(ground, y, speed_mps, approach_mps, interval_s);
+    if (!expected_row) {
+      continue;
+    }
     for (int col = 0; col < derotated.width(); ++col) {
-      const double x = derotated.x(col);
-      const std::size_t i = derotated.index(col, row);
-      bool is_ground = false;
-      if (use_depth) {
-        const auto expected = ground.depth_at(x, y);
-        is_ground = expected && std::isfinite(depth[i]) &&
-                    std::abs(depth[i] - *expected) <= options.depth_tolerance * *expected;
-      } else {
-        const auto expected =
-            expected_ground_flow(ground, x, y, speed_mps, approach_mps, interval_s);
-        if (expected && flow[i].allFinite()) {
-          const double error = (flow[i].cast<double>() - *expected).norm();
-          is_ground = error <= options.flow_tolerance * expected->norm() + options.flow_floor;
-        }
-      }
-      if (is_ground) {
-        ground_mask[i] = 1;
-        ++result.ground_pixels;
-      }
+      const std::size_t i = first + static_cast<std::size_t>(col);
+      const Eigen::Vector2d expected =
+          expected_row->at_zero + derotated.x(col) * expected_row->per_x;
+      const double error = (flow[i].cast<double>() - expected).norm();
+      // NaN flow compares false: no flow, no ground.
+      mark(i, error <= options.flow_tolerance * expected.norm() + options.flow_floor);
     }
   }
   return result;
@@ -109,40 +136,61 @@ int mark_ground_regions(const FlowField& derotated, const CameraMount& mount, do
     return 0;
   }
   const FlatGround ground(mount);
-  const auto regions = static_cast<std::size_t>(segmentation.region_count());
-  std::vector<std::vector<double>> errors(regions);
-  std::vector<bool> above_horizon(regions, false);
+  // The median of a region's errors is within region_tolerance exactly when more than half of
+  // them (the middle one among them) are: counts serve, no error needs keeping. Counted by runs
+  // of one label, which neighbouring pixels mostly share.
+  struct Tally {
+    int errors = 0;
+    int within = 0;
+    bool above_horizon = false;
+  };
+  std::vector<Tally> tallies(static_cast<std::size_t>(segmentation.region_count()));
   const auto flow = derotated.flow();
   const double interval_s = derotated.interval_s();
   const double approach_mps = speed_mps * std::cos(mount.pitch_rad);
   for (int row = 0; row < derotated.height(); ++row) {
-    const double y = derotated.y(row);
+    const auto expected_row =
+        ground_row_flow(ground, derotated.y(row), speed_mps, approach_mps, interval_s);
+    std::int32_t label = Segmentation::kNoRegion;
+    Tally run;
+    const auto flush = [&] {
+      if (label != Segmentation::kNoRegion) {
+        Tally& tally = tallies[static_cast<std::size_t>(label)];
+        tally.errors += run.errors;
+        tally.within += run.within;
+        tally.above_horizon = tally.above_horizon || run.above_horizon;
+      }
+      run = {};
+    };
     for (int col = 0; col < derotated.width(); ++col) {
       const std::size_t i = derotated.index(col, row);
-      const std::int32_t label = segmentation.labels[i];
+      if (segmentation.labels[i] != label) {
+        flush();
+        label = segmentation.labels[i];
+      }
       if (label == Segmentation::kNoRegion) {
         continue;
       }
-      const auto r = static_cast<std::size_t>(label);
-      const auto expected =
-          expected_ground_flow(ground, derotated.x(col), y, speed_mps, approach_mps, interval_s);
-      if (!expected) {
-        above_horizon[r] = true;
+      if (!expected_row) {
+        run.above_horizon = true;
       } else if (flow[i].allFinite()) {
-        errors[r].push_back((flow[i].cast<double>() - *expected).norm() /
-                            (expected->norm() + options.flow_floor));
+        const Eigen::Vector2d expected =
+            expected_row->at_zero + derotated.x(col) * expected_row->per_x;
+        const double error =
+            (flow[i].cast<double>() - expected).norm() / (expected.norm() + options.flow_floor);
+        ++run.errors;
+        run.within += error <= options.region_tolerance ? 1 : 0;
       }
     }
+    flush();
   }
   int marked = 0;
-  for (std::size_t r = 0; r < regions; ++r) {
-    auto& e = errors[r];
-    if (segmentation.kinds[r] != RegionKind::visible || above_horizon[r] || e.empty()) {
+  for (std::size_t r = 0; r < tallies.size(); ++r) {
+    const Tally& tally = tallies[r];
+    if (segmentation.kinds[r] != RegionKind::visible || tally.above_horizon || tally.errors == 0) {
       continue;
     }
-    const auto middle = e.begin() + static_cast<std::ptrdiff_t>(e.size() / 2);
-    std::nth_element(e.begin(), middle, e.end());
-    if (*middle <= options.region_tolerance) {
+    if (tally.within > tally.errors / 2) {
       segmentation.kinds[r] = RegionKind::ground;
       ++marked;
     }

@@ -201,10 +201,12 @@ FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowFie
   estimator_->algorithm->calc(grey_, *older, flow_px_);
 
   // Local texture: mean gradient magnitude over a 5×5 window (a 3×3 Sobel is 8× the gradient).
+  // The mean as a separable filter of two 5-tap means: cv::blur sums floats in double, 4× slower.
   cv::Sobel(grey_, gradient_x_, CV_32F, 1, 0, 3, 1.0 / 8.0);
   cv::Sobel(grey_, gradient_y_, CV_32F, 0, 1, 3, 1.0 / 8.0);
-  cv::magnitude(gradient_x_, gradient_y_, texture_);
-  cv::blur(texture_, texture_, cv::Size(5, 5));
+  cv::magnitude(gradient_x_, gradient_y_, gradient_magnitude_);
+  const cv::Matx<float, 5, 1> mean_of_5 = cv::Matx<float, 5, 1>::all(0.2F);
+  cv::sepFilter2D(gradient_magnitude_, texture_, CV_32F, mean_of_5, mean_of_5);
 
   field.set_interval_s(dt_s);
   const auto to_x = static_cast<float>(-1.0 / (field.intrinsics().fx_px * dt_s));

@@ -182,5 +182,70 @@ TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame
                std::invalid_argument);
 }
 
+// A field wider than fast_max_side_px: flow_graph_fast segments it on a reduced grid and brings
+// the labels back to every pixel.
+TEST(FlowSegmenter, FastGraphLabelsEveryPixelOfAReducedField) {
+  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(256, 192, 90.0 * kDeg);
+  FlowField field(intrinsics);
+  std::vector<std::uint8_t> ground(field.size(), 0);
+  for (int row = 0; row < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      field.at(col, row) = col < 128 ? Eigen::Vector2f(0.5F, 0.0F) : Eigen::Vector2f(-0.5F, 0.1F);
+      if (row >= 160)
+        ground[field.index(col, row)] = 1;
+    }
+  }
+  FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast);
+  Segmentation out;
+  segmenter.segment(field, ground, out);
+  ASSERT_EQ(out.region_count(), 2);
+  for (int row = 0; row < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      const std::int32_t label = out.labels[field.index(col, row)];
+      if (row >= 160) {
+        EXPECT_EQ(label, Segmentation::kNoRegion) << col << ", " << row;
+      } else {
+        EXPECT_EQ(label, col < 128 ? out.labels[0] : out.labels[255]) << col << ", " << row;
+      }
+    }
+  }
+  EXPECT_NE(out.labels[0], out.labels[255]);
+}
+
+// flow_graph_fast runs its own Felzenszwalb–Huttenlocher segmentation, flow_graph OpenCV's. On a
+// field no wider than fast_max_side_px neither reduces the flow, and they must agree to the pixel,
+// numbers and ids included. Noisy flow over four differently moving quarters, with pixels without
+// flow and excluded ones, exercises the merge test, the merge of small segments and the many
+// edges of equal weight between pixels with and without flow, whose order decides which segment
+// a small one joins.
+TEST(FlowSegmenter, FastGraphSegmentsAsOpenCvGraphSegmentationDoes) {
+  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(80, 60, 90.0 * kDeg);
+  const Eigen::Vector2f motions[] = {{0.0F, 0.0F}, {3.0F, 0.0F}, {-2.0F, 1.0F}, {0.5F, -3.0F}};
+  for (const std::uint64_t seed : {1U, 2U, 3U}) {
+    FlowField field(intrinsics);
+    std::vector<std::uint8_t> excluded(field.size(), 0);
+    cv::RNG rng(seed);
+    for (int row = 0; row < field.height(); ++row) {
+      for (int col = 0; col < field.width(); ++col) {
+        const Eigen::Vector2f noise(rng.uniform(-0.6F, 0.6F), rng.uniform(-0.6F, 0.6F));
+        field.at(col, row) = motions[(col >= 40 ? 1 : 0) + (row >= 30 ? 2 : 0)] + noise;
+        if (rng.uniform(0, 40) == 0)
+          field.at(col, row) = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
+        if (row >= 54)
+          excluded[field.index(col, row)] = 1;
+      }
+    }
+    FlowSegmenter opencv(SegmentationMethod::flow_graph);
+    FlowSegmenter own(SegmentationMethod::flow_graph_fast);
+    Segmentation expected;
+    Segmentation out;
+    opencv.segment(field, excluded, expected);
+    own.segment(field, excluded, out);
+    EXPECT_GE(expected.region_count(), 4) << seed;
+    EXPECT_EQ(out.labels, expected.labels) << seed;
+    EXPECT_EQ(out.source_ids, expected.source_ids) << seed;
+  }
+}
+
 }  // namespace
 }  // namespace flowsteer::servo

@@ -16,8 +16,9 @@
 namespace flowsteer::servo {
 
 // How an agent splits its view into objects: by the renderer's object ids (semantic, MIG 2019),
-// or from the flow alone with Felzenszwalb–Huttenlocher graph segmentation (CGF §4), at full
-// resolution or, faster, on a copy of the flow reduced to at most fast_max_side_px per side.
+// or from the flow alone with Felzenszwalb–Huttenlocher graph segmentation (CGF §4): flow_graph
+// at full resolution with OpenCV's GraphSegmentation, flow_graph_fast with our own
+// implementation, which keeps its buffers, on the flow sampled at most fast_max_side_px per side.
 enum class SegmentationMethod { semantic, flow_graph, flow_graph_fast };
 
 std::string_view to_string(SegmentationMethod method);
@@ -62,12 +63,13 @@ class FlowSegmenter {
   SegmentationMethod method_;
   FlowSegmentationOptions options_;
   std::unique_ptr<Graph> graph_;
-  cv::Mat features_;
-  cv::Mat reduced_;
+  cv::Mat features_;  // one per pixel of the graph
   cv::Mat graph_labels_;
+  std::vector<int> graph_cols_;  // the graph's column of each column
   std::vector<std::int32_t> valid_counts_;
-  std::vector<std::int32_t> region_of_segment_;
+  std::vector<std::int32_t> region_of_label_;
 
+  // From overlaps_ and region_sizes_, which segment() counts.
   void assign_track_ids(Segmentation& out);
   std::vector<std::int32_t> previous_labels_;
   std::vector<std::int32_t> previous_ids_;

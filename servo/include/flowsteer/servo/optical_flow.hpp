@@ -110,6 +110,7 @@ class OpticalFlow {
   cv::Mat flow_px_;
   cv::Mat gradient_x_;
   cv::Mat gradient_y_;
+  cv::Mat gradient_magnitude_;
   cv::Mat texture_;
   cv::Mat warped_;
 };
