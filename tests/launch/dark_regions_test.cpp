@@ -215,38 +215,34 @@ Trace walk(const sim_camera::WorldSpec& spec) {
   return trace;
 }
 
+// The gap to the first obstacle at the first step where `happened` holds, -inf if none.
+template <typename Predicate>
+double gap_when(const Trace& trace, Predicate happened) {
+  for (std::size_t k = 0; k < trace.gaps_m.size(); ++k) {
+    if (happened(k)) {
+      return trace.gaps_m[k];
+    }
+  }
+  return -INFINITY;
+}
+
 // The reaction distance: the gap to the first obstacle when the agent has left its straight line
 // to the goal by 0.1 m. The goal lies straight ahead and nothing else is within the avoidance
 // horizon before the first obstacle, so leaving the line is the reaction to it. It is measured
 // on the path rather than on the turn rate: a single frame's flow fit can give a far obstacle a
 // τ of 3 s, and a turn of 1.5 rad/s for a step or two, which the path hardly shows.
 double reaction_gap_m(const Trace& trace) {
-  for (std::size_t k = 0; k < trace.gaps_m.size(); ++k) {
-    if (trace.offsets_m[k] >= 0.1) {
-      return trace.gaps_m[k];
-    }
-  }
-  return -INFINITY;
+  return gap_when(trace, [&](std::size_t k) { return trace.offsets_m[k] >= 0.1; });
 }
 
 // The gap at which avoidance first asks for a turn of 0.3 rad/s or more (reported only).
 double avoidance_onset_gap_m(const Trace& trace) {
-  for (std::size_t k = 0; k < trace.gaps_m.size(); ++k) {
-    if (std::abs(trace.avoidance_turns[k]) >= 0.3) {
-      return trace.gaps_m[k];
-    }
-  }
-  return -INFINITY;
+  return gap_when(trace, [&](std::size_t k) { return std::abs(trace.avoidance_turns[k]) >= 0.3; });
 }
 
 // The gap at which the first obstacle first was a visible object to the agent.
 double first_seen_gap_m(const Trace& trace) {
-  for (std::size_t k = 0; k < trace.gaps_m.size(); ++k) {
-    if (trace.obstacle_visible[k]) {
-      return trace.gaps_m[k];
-    }
-  }
-  return -INFINITY;
+  return gap_when(trace, [&](std::size_t k) { return trace.obstacle_visible[k]; });
 }
 
 // MIG §7.4, Fig. 6: the agent "reacts to obstacles only as soon as they are perceived as visible

@@ -143,18 +143,25 @@ TEST(RotationOver, MatchesTheRateForSmallAnglesAndTheExactRotationForLargeOnes) 
   }
 }
 
-// Two halves moving differently, the bottom rows excluded as ground.
-TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame) {
-  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg);
-  FlowField field(intrinsics);
+// Fills the field with a left and a right half moving differently; returns a ground mask of the
+// rows from ground_from_row down.
+std::vector<std::uint8_t> two_halves_over_ground(FlowField& field, int ground_from_row) {
   std::vector<std::uint8_t> ground(field.size(), 0);
   for (int row = 0; row < field.height(); ++row) {
     for (int col = 0; col < field.width(); ++col) {
-      field.at(col, row) = col < 32 ? Eigen::Vector2f(0.5F, 0.0F) : Eigen::Vector2f(-0.5F, 0.1F);
-      if (row >= 40)
+      field.at(col, row) =
+          col < field.width() / 2 ? Eigen::Vector2f(0.5F, 0.0F) : Eigen::Vector2f(-0.5F, 0.1F);
+      if (row >= ground_from_row)
         ground[field.index(col, row)] = 1;
     }
   }
+  return ground;
+}
+
+// Two halves moving differently, the bottom rows excluded as ground.
+TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame) {
+  FlowField field(CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
+  const std::vector<std::uint8_t> ground = two_halves_over_ground(field, 40);
   field.at(5, 5) = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
   for (SegmentationMethod method :
        {SegmentationMethod::flow_graph, SegmentationMethod::flow_graph_fast}) {
@@ -185,16 +192,8 @@ TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame
 // A field wider than fast_max_side_px: flow_graph_fast segments it on a reduced grid and brings
 // the labels back to every pixel.
 TEST(FlowSegmenter, FastGraphLabelsEveryPixelOfAReducedField) {
-  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(256, 192, 90.0 * kDeg);
-  FlowField field(intrinsics);
-  std::vector<std::uint8_t> ground(field.size(), 0);
-  for (int row = 0; row < field.height(); ++row) {
-    for (int col = 0; col < field.width(); ++col) {
-      field.at(col, row) = col < 128 ? Eigen::Vector2f(0.5F, 0.0F) : Eigen::Vector2f(-0.5F, 0.1F);
-      if (row >= 160)
-        ground[field.index(col, row)] = 1;
-    }
-  }
+  FlowField field(CameraIntrinsics::from_horizontal_fov(256, 192, 90.0 * kDeg));
+  const std::vector<std::uint8_t> ground = two_halves_over_ground(field, 160);
   FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast);
   Segmentation out;
   segmenter.segment(field, ground, out);
