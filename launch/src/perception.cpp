@@ -26,6 +26,8 @@ bool synthetic(const PerceptionOptions& options) {
 servo::FeatureOptions feature_options(const PerceptionOptions& options) {
   servo::FeatureOptions features;
   features.use_depth = synthetic(options) && options.use_depth;
+  features.static_foe = options.mount.forward_foe();
+  features.flow_noise_correlation_px = servo::noise_correlation_px(options.flow);
   return features;
 }
 

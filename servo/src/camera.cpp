@@ -64,4 +64,9 @@ Eigen::Matrix3d CameraMount::camera_to_body() const {
   return r;
 }
 
+Eigen::Vector2d CameraMount::forward_foe() const {
+  const Eigen::Vector3d forward = camera_to_body().transpose() * Eigen::Vector3d::UnitX();
+  return forward.head<2>() / forward.z();
+}
+
 }  // namespace flowsteer::servo

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -26,46 +27,53 @@ const char* to_string(MotionStatus status) {
 
 namespace {
 
-// The radial model in a form linear in its parameters p = (1/τ, −f_x/τ, −f_y/τ):
-// u = p0 x + p1, v = p0 y + p2. It is well conditioned for any τ, including the lateral case
-// 1/τ → 0 where f runs off to infinity. Each sample's residual carries a weight that the
-// robust rounds set, in the form Ceres' TinySolver takes.
+// The radial model in a form linear in its parameters. With N = 3, p = (1/τ, −f_x/τ, −f_y/τ)
+// and u = p0 x + p1, v = p0 y + p2: well conditioned for any τ, including the lateral case
+// 1/τ → 0 where f runs off to infinity. With N = 1 the FOE is given as `foe` and only p0 = 1/τ
+// is fitted: u = p0 (x − f). Row k of the design maps p to flow component k.
+template <int N>
+Eigen::Matrix<double, 2, N> design(const FlowSample& s, const Eigen::Vector2d& foe) {
+  Eigen::Matrix<double, 2, N> a = Eigen::Matrix<double, 2, N>::Zero();
+  a.col(0) = s.point - foe;
+  if constexpr (N == 3) {
+    a(0, 1) = 1.0;
+    a(1, 2) = 1.0;
+  }
+  return a;
+}
+
+// Each sample's residual carries a weight that the robust rounds set, in the form Ceres'
+// TinySolver takes.
+template <int N>
 struct WeightedRadialResiduals {
   using Scalar = double;
-  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = 3 };
+  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = N };
 
   std::span<const FlowSample> samples;
   std::span<const double> weights;
+  Eigen::Vector2d foe;
 
   int NumResiduals() const { return static_cast<int>(2 * samples.size()); }
 
   bool operator()(const double* p, double* residuals, double* jacobian) const {
+    const Eigen::Map<const Eigen::Matrix<double, N, 1>> params(p);
     const auto rows = static_cast<std::size_t>(NumResiduals());
     for (std::size_t j = 0; j < samples.size(); ++j) {
-      const FlowSample& s = samples[j];
+      const Eigen::Matrix<double, 2, N> a = design<N>(samples[j], foe);
       const double w = weights[j];
-      residuals[2 * j] = w * (s.flow.x() - (p[0] * s.point.x() + p[1]));
-      residuals[2 * j + 1] = w * (s.flow.y() - (p[0] * s.point.y() + p[2]));
-      if (jacobian != nullptr) {  // column-major, rows × 3
-        jacobian[2 * j] = -w * s.point.x();
-        jacobian[2 * j + 1] = -w * s.point.y();
-        jacobian[rows + 2 * j] = -w;
-        jacobian[rows + 2 * j + 1] = 0.0;
-        jacobian[2 * rows + 2 * j] = 0.0;
-        jacobian[2 * rows + 2 * j + 1] = -w;
+      const Eigen::Vector2d r = w * (samples[j].flow - a * params);
+      residuals[2 * j] = r.x();
+      residuals[2 * j + 1] = r.y();
+      if (jacobian != nullptr) {  // column-major, rows × N
+        for (int k = 0; k < N; ++k) {
+          jacobian[static_cast<std::size_t>(k) * rows + 2 * j] = -w * a(0, k);
+          jacobian[static_cast<std::size_t>(k) * rows + 2 * j + 1] = -w * a(1, k);
+        }
       }
     }
     return true;
   }
 };
-
-Eigen::Vector2d predicted(const FlowSample& s, const Eigen::Vector3d& p) {
-  return p[0] * s.point + Eigen::Vector2d(p[1], p[2]);
-}
-
-double residual_norm(const FlowSample& s, const Eigen::Vector3d& p) {
-  return (s.flow - predicted(s, p)).norm();
-}
 
 // Robust standard deviation of scaled residuals from the median of their norms: for isotropic
 // Gaussian noise the norm is Rayleigh distributed with median σ·sqrt(2 ln 2).
@@ -88,39 +96,50 @@ double robust_weight(Loss loss, double e, double sigma) {
   return e < c ? 1.0 - (e / c) * (e / c) : 0.0;
 }
 
-}  // namespace
-
-RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options) {
-  RadialFit fit;
+// The robust fit shared by both forms of the model (see `design`): a least-squares start, then
+// iteratively reweighted rounds. Returns p; the fit's quality and the covariance of p go into
+// `fit`. Empty when the samples cannot identify p.
+template <int N>
+std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const FlowSample> samples,
+                                                            const Eigen::Vector2d& foe,
+                                                            const RadialFitOptions& options,
+                                                            RadialFit& fit) {
+  using Vector = Eigen::Matrix<double, N, 1>;
+  using Matrix = Eigen::Matrix<double, N, N>;
   if (samples.size() < 3) {
-    return fit;
-  }
-
-  // Least-squares start.
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  double flow_scale = 0.0;
-  for (const FlowSample& s : samples) {
-    const double x = s.point.x();
-    const double y = s.point.y();
-    normal(0, 0) += x * x + y * y;
-    normal(0, 1) += x;
-    normal(0, 2) += y;
-    rhs += Eigen::Vector3d(x * s.flow.x() + y * s.flow.y(), s.flow.x(), s.flow.y());
-    flow_scale += s.flow.norm();
+    return std::nullopt;
   }
   const auto n = static_cast<double>(samples.size());
-  normal(1, 1) = n;
-  normal(2, 2) = n;
-  normal(1, 0) = normal(0, 1);
-  normal(2, 0) = normal(0, 2);
-  flow_scale /= n;
-  Eigen::Vector3d p = normal.ldlt().solve(rhs);
-  const double spread =
-      normal(0, 0) - (normal(0, 1) * normal(0, 1) + normal(0, 2) * normal(0, 2)) / n;
-  if (!p.allFinite() || spread <= 1e-12 * n) {
-    return fit;  // all samples at one point: the model is not identifiable
+
+  // Least-squares start.
+  Matrix normal = Matrix::Zero();
+  Vector rhs = Vector::Zero();
+  double flow_scale = 0.0;
+  for (const FlowSample& s : samples) {
+    const Eigen::Matrix<double, 2, N> a = design<N>(s, foe);
+    normal.noalias() += a.transpose() * a;
+    rhs.noalias() += a.transpose() * s.flow;
+    flow_scale += s.flow.norm();
   }
+  flow_scale /= n;
+  Vector p;
+  if constexpr (N == 1) {
+    p = rhs / normal(0, 0);
+  } else {
+    p = normal.ldlt().solve(rhs);
+  }
+  // The spread of the points about their mean (N = 3) or about the FOE (N = 1).
+  double spread = normal(0, 0);
+  if constexpr (N == 3) {
+    spread -= (normal(0, 1) * normal(0, 1) + normal(0, 2) * normal(0, 2)) / n;
+  }
+  if (!p.allFinite() || spread <= 1e-12 * n) {
+    return std::nullopt;  // all samples at one point: the model is not identifiable
+  }
+  const auto predicted = [&](std::size_t j) -> Eigen::Vector2d {
+    return design<N>(samples[j], foe) * p;
+  };
+  const auto residual_norm = [&](std::size_t j) { return (samples[j].flow - predicted(j)).norm(); };
 
   // Flow noise grows with the flow (numerical flow errs in proportion to the displacement), so
   // after the first round a residual is measured relative to the flow the model predicts
@@ -131,7 +150,7 @@ RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOp
   std::vector<double> scratch;
   auto scaled_norms = [&] {
     for (std::size_t j = 0; j < samples.size(); ++j) {
-      norms[j] = scale[j] * residual_norm(samples[j], p);
+      norms[j] = scale[j] * residual_norm(j);
     }
   };
   scaled_norms();
@@ -139,29 +158,30 @@ RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOp
   // Flow comes in float32: residuals below this are rounding, not noise.
   const double exact = 1e-6 * flow_scale + 1e-12;
 
+  std::copy(scale.begin(), scale.end(), weights.begin());
   if (sigma > exact) {
     // Iteratively reweighted least squares: Cauchy rounds find the bulk of the inliers from any
     // start; Tukey rounds then give outliers no weight at all, which Cauchy's long tail still
     // does. Each round is solved by Ceres' TinySolver.
-    ceres::TinySolver<WeightedRadialResiduals> solver;
+    ceres::TinySolver<WeightedRadialResiduals<N>> solver;
     solver.options.max_num_iterations = options.max_iterations;
-    const WeightedRadialResiduals residuals{samples, weights};
+    const WeightedRadialResiduals<N> residuals{samples, weights, foe};
     const int rounds = options.max_rounds + 2;
     for (int round = 0; round < rounds; ++round) {
       const Loss loss = round < options.max_rounds ? Loss::cauchy : Loss::tukey;
       for (std::size_t j = 0; j < samples.size(); ++j) {
         weights[j] = scale[j] * robust_weight(loss, norms[j], sigma);
       }
-      const Eigen::Vector3d previous = p;
+      const Vector previous = p;
       fit.quality.iterations += solver.Solve(residuals, &p).iterations;
       if (round == 0) {
         double mean = 0.0;
-        for (const FlowSample& s : samples) {
-          mean += predicted(s, p).norm();
+        for (std::size_t j = 0; j < samples.size(); ++j) {
+          mean += predicted(j).norm();
         }
         const double floor = 0.25 * mean / n + 1e-12;
         for (std::size_t j = 0; j < samples.size(); ++j) {
-          scale[j] = 1.0 / (predicted(samples[j], p).norm() + floor);
+          scale[j] = 1.0 / (predicted(j).norm() + floor);
         }
       }
       scaled_norms();
@@ -178,27 +198,92 @@ RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOp
 
   int inliers = 0;
   double sum_squares = 0.0;
+  // The covariance of p, as for weighted least squares with the last round's weights: the
+  // residual variance over the weighted information. Float rounding sets its floor.
+  Matrix information = Matrix::Zero();
+  double weighted_squares = 0.0;
+  double weight_sum = 0.0;
   for (std::size_t j = 0; j < samples.size(); ++j) {
+    const double r = residual_norm(j);
     if (norms[j] <= options.inlier_threshold * std::max(sigma, exact * scale[j])) {
       ++inliers;
-      const double r = residual_norm(samples[j], p);
       sum_squares += r * r;
     }
+    const Eigen::Matrix<double, 2, N> a = design<N>(samples[j], foe);
+    const double w2 = weights[j] * weights[j];
+    information.noalias() += w2 * a.transpose() * a;
+    weighted_squares += w2 * std::max(r * r, exact * exact);
+    weight_sum += weights[j] > 0.0 ? 1.0 : 0.0;
   }
   fit.quality.samples = static_cast<int>(samples.size());
   fit.quality.inlier_fraction = inliers / n;
   fit.quality.residual_rms = inliers > 0 ? std::sqrt(sum_squares / inliers) : 0.0;
+  const double dof = std::max(2.0 * weight_sum - N, 1.0);
+  const Matrix covariance = (weighted_squares / dof) * information.inverse();
+  fit.parameter_covariance.setZero();
+  fit.parameters.setZero();
+  if constexpr (N == 3) {
+    fit.parameters = p;
+    fit.parameter_covariance = covariance;
+  } else {
+    // p1 = −f_x p0 and p2 = −f_y p0 follow p0, and so do their variances.
+    const Eigen::Vector3d map(1.0, -foe.x(), -foe.y());
+    fit.parameters = map * p[0];
+    fit.parameter_covariance = map * covariance(0, 0) * map.transpose();
+  }
+  return p;
+}
 
-  const double inverse_ttc = p[0];
+// Status, τ and FOE from a fitted 1/τ and FOE.
+void set_motion(RadialFit& fit, double inverse_ttc, const Eigen::Vector2d& foe,
+                const RadialFitOptions& options) {
   if (std::abs(inverse_ttc) < options.min_inverse_ttc) {
     fit.status = MotionStatus::lateral;
     fit.ttc_s = std::numeric_limits<double>::infinity();
-    return fit;
+    return;
   }
   fit.status = inverse_ttc > 0.0 ? MotionStatus::approaching : MotionStatus::receding;
   fit.ttc_s = 1.0 / inverse_ttc;
-  fit.foe = Eigen::Vector2d(-p[1], -p[2]) / inverse_ttc;
+  fit.foe = foe;
+}
+
+}  // namespace
+
+RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options) {
+  RadialFit fit;
+  const auto p = robust_radial_fit<3>(samples, Eigen::Vector2d::Zero(), options, fit);
+  if (p) {
+    const double inverse_ttc = (*p)[0];
+    set_motion(fit, inverse_ttc, Eigen::Vector2d(-(*p)[1], -(*p)[2]) / inverse_ttc, options);
+  }
   return fit;
+}
+
+RadialFit fit_radial_flow_about(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
+                                const RadialFitOptions& options) {
+  RadialFit fit;
+  const auto p = robust_radial_fit<1>(samples, foe, options, fit);
+  if (p) {
+    set_motion(fit, (*p)[0], foe, options);
+  }
+  return fit;
+}
+
+double foe_hypothesis_statistic(const RadialFit& fit, const Eigen::Vector2d& foe,
+                                double covariance_scale) {
+  // The hypothesis is linear in p: C p = 0 with C = [f | I].
+  Eigen::Matrix<double, 2, 3> c;
+  c << foe.x(), 1.0, 0.0, foe.y(), 0.0, 1.0;
+  const Eigen::Vector2d misfit = c * fit.parameters;
+  const Eigen::Matrix2d covariance = covariance_scale * c * fit.parameter_covariance * c.transpose();
+  if (!misfit.allFinite() || !covariance.allFinite()) {
+    return std::numeric_limits<double>::infinity();
+  }
+  const Eigen::LDLT<Eigen::Matrix2d> ldlt(covariance);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) {
+    return misfit.isZero(0.0) ? 0.0 : std::numeric_limits<double>::infinity();
+  }
+  return misfit.dot(ldlt.solve(misfit));
 }
 
 double ttc_from_foe(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
@@ -396,7 +481,19 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     if (region_samples.empty()) {
       continue;
     }
-    const RadialFit fit = fit_radial_flow(region_samples, options_.fit);
+    RadialFit fit = fit_radial_flow(region_samples, options_.fit);
+    if (options_.static_foe) {
+      const double area_px = options_.flow_noise_correlation_px * options_.flow_noise_correlation_px;
+      const double independent = std::min<double>(static_cast<double>(region_samples.size()),
+                                                  static_cast<double>(a.valid()) / area_px);
+      const double covariance_scale =
+          static_cast<double>(region_samples.size()) / std::max(independent, 1.0);
+      if (foe_hypothesis_statistic(fit, *options_.static_foe, covariance_scale) <=
+          options_.static_foe_chi2) {
+        fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit);
+        fit.quality.static_foe = true;
+      }
+    }
     f.status = fit.status;
     f.foe = fit.foe;
     // Displacement flow over an interval Δ fits τ + Δ (flow_field.hpp); the FOE is unchanged.

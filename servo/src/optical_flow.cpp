@@ -1,5 +1,6 @@
 #include "flowsteer/servo/optical_flow.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -39,6 +40,23 @@ cv::Ptr<cv::DenseOpticalFlow> create_estimator(FlowMethod method) {
 }
 
 }  // namespace
+
+double noise_correlation_px(FlowMethod method) {
+  if (method == FlowMethod::synthetic) {
+    return 1.0;
+  }
+  const cv::Ptr<cv::DenseOpticalFlow> estimator = create_estimator(method);
+  if (const auto dis = estimator.dynamicCast<cv::DISOpticalFlow>()) {
+    return std::ldexp(static_cast<double>(dis->getPatchSize()), dis->getFinestScale());
+  }
+  if (const auto farneback = estimator.dynamicCast<cv::FarnebackOpticalFlow>()) {
+    return farneback->getWinSize();
+  }
+  if (const auto tvl1 = estimator.dynamicCast<cv::optflow::DualTVL1OpticalFlow>()) {
+    return std::max(tvl1->getMedianFiltering(), 1);
+  }
+  return 1.0;
+}
 
 std::string_view to_string(FlowMethod method) {
   switch (method) {

@@ -39,6 +39,10 @@ struct CameraMount {
   // forward, y left, z up): its columns are the camera's axes in the body frame. Its transpose
   // takes a body vector into the camera frame.
   Eigen::Matrix3d camera_to_body() const;
+
+  // Where the image shows the direction the base drives in, normalised: the FOE of the derotated
+  // flow of every static point while the base moves forward.
+  Eigen::Vector2d forward_foe() const;
 };
 
 }  // namespace flowsteer::servo

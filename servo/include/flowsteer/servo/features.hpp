@@ -28,6 +28,9 @@ struct FitQuality {
   int iterations = 0;            // solver iterations, all rounds together
   double residual_rms = 0.0;     // over the inliers, normalised units per second
   double inlier_fraction = 0.0;  // share of samples within the inlier threshold
+  // The flow could not be told from a static object's (FeatureOptions::static_foe): the FOE is
+  // the static one and τ was fitted about it.
+  bool static_foe = false;
 };
 
 // Moments of the derotated flow over a region, for velocity alignment (CGF Eq. 11).
@@ -88,6 +91,12 @@ struct RadialFit {
   Eigen::Vector2d foe = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   double ttc_s = std::numeric_limits<double>::quiet_NaN();
   FitQuality quality;
+  // The fitted parameters p = (1/τ, −f_x/τ, −f_y/τ) of u = p0 x + (p1, p2), which stay finite
+  // when the motion is lateral, and their covariance: the weighted residual variance over the
+  // weighted information, each sample counted as an independent measurement.
+  Eigen::Vector3d parameters = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Matrix3d parameter_covariance =
+      Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 // Fits the radial model u_j = (x_j − f)/τ (CGF Eq. 2–3) to the samples: a robust M-estimate
@@ -96,6 +105,17 @@ struct RadialFit {
 // flow and outliers do not pull the FOE. Needs at least 3 samples; fewer give status no_flow.
 RadialFit fit_radial_flow(std::span<const FlowSample> samples,
                           const RadialFitOptions& options = {});
+
+// The same robust fit with the FOE given: only 1/τ is fitted, u_j = (x_j − foe)/τ.
+RadialFit fit_radial_flow_about(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
+                                const RadialFitOptions& options = {});
+
+// Wald statistic of the hypothesis that the flow fitted in `fit` expands about `foe`: χ² with 2
+// degrees of freedom, 0 for a perfect match. `covariance_scale` widens the fit's covariance where
+// its samples are not independent (an estimator's errors are correlated over its window). +∞
+// when the fit has no covariance.
+double foe_hypothesis_statistic(const RadialFit& fit, const Eigen::Vector2d& foe,
+                                double covariance_scale = 1.0);
 
 // CGF Eq. 5: τ = mean_j ‖x_j − f‖ / ‖u_j‖, over samples with a non-negligible flow, signed
 // like `sign_from`. NaN when no sample qualifies.
@@ -114,6 +134,18 @@ struct FeatureOptions {
   // that slanted and curved surfaces give the FOE and the TTC at that depth exactly.
   bool use_depth = true;
   RadialFitOptions fit;
+  // The FOE of every static object's derotated flow (CameraMount::forward_foe). When set, a
+  // region whose fitted FOE is consistent with it (Wald statistic below static_foe_chi2) gets
+  // it, and its τ is fitted about it. Flow noise scatters a static object's FOE, and without
+  // depth a slanted surface pulls it towards its near end; the avoidance term's acceleration
+  // gradient (CGF Eq. 10, (τ/Z) f) then takes the same sign for every obstacle beside the path,
+  // and the agent speeds up. Only a region whose flow shows that it moves keeps its own FOE.
+  std::optional<Eigen::Vector2d> static_foe;
+  double static_foe_chi2 = 9.21;  // 99% of a static object's FOEs pass
+  // Side in pixels of the window over which the flow's errors are correlated: 1 for exact flow,
+  // about an estimator's patch at its finest scale otherwise. Samples closer than this are not
+  // independent, which widens the fit's covariance for the test above.
+  double flow_noise_correlation_px = 1.0;
 };
 
 // Extracts per-region features from a derotated flow field. Keeps its scratch buffers between

@@ -26,6 +26,11 @@ std::string flow_method_names();
 // Every method that computes flow from images, in the order tables list them.
 std::span<const FlowMethod> numerical_flow_methods();
 
+// Side in pixels of the window over which a method's errors are correlated: the patch (DIS, at
+// its finest scale), the averaging window (Farneback) or the median filter (TV-L1); 1 for the
+// synthetic flow. Flow vectors closer than this are not independent measurements.
+double noise_correlation_px(FlowMethod method);
+
 // What became of one image given to OpticalFlow::update.
 enum class FlowStatus {
   ok,
