@@ -64,7 +64,7 @@ Perception::Perception(const servo::CameraIntrinsics& intrinsics, const Percepti
       field_(intrinsics, synthetic(options) && options.use_depth),
       dark_finder_(options.dark),
       extractor_(feature_options(options)),
-      turns_(static_cast<std::size_t>(options.optical_flow.max_kept_images) + 2) {
+      motions_(static_cast<std::size_t>(options.optical_flow.max_kept_images) + 2) {
   if (!synthetic(options))
     optical_flow_.emplace(options.flow, options.optical_flow);
   if (options.segmentation != servo::SegmentationMethod::semantic) {
@@ -86,7 +86,8 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   }
 
   auto stage = Clock::now();
-  remember_turn(frame.timestamp_s, turn_rate_cy);
+  const Motion measured{speed_mps, turn_rate_cy};
+  remember_motion(frame.timestamp_s, measured);
   const cv::Mat& image = frame.image;
   const bool frame_fits =
       !image.empty() && image.cols == field_.width() && image.rows == field_.height();
@@ -102,7 +103,7 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   if (optical_flow_) {
     const auto rotation = [&](double from_s, double to_s) {
       return servo::rotation_over(
-          servo::camera_angular_velocity(mean_turn_rate(from_s, to_s, turn_rate_cy),
+          servo::camera_angular_velocity(mean_motion(from_s, to_s, measured).turn_rate_cy,
                                          options_.mount.pitch_rad),
           to_s - from_s);
     };
@@ -129,6 +130,10 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   if (segmenter_) {
     ground_mask_.assign(field_.size(), 0);
     servo::GroundRemovalOptions ground = options_.ground;
+    // The ground's displacement flow follows the distance driven over the flow's interval: at
+    // the 1 m/s² an agent brakes or speeds up with, the speed at its end is 10% off that.
+    const double speed_mps =
+        mean_motion(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, measured).speed_mps;
     if (optical_flow_) {
       ground.flow_floor =
           std::max(ground.flow_floor, options_.numerical_flow_noise_px /
@@ -155,31 +160,37 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   return status_;
 }
 
-void Perception::remember_turn(double timestamp_s, double turn_rate_cy) {
-  if (turns_count_ == turns_.size()) {
-    turns_begin_ = (turns_begin_ + 1) % turns_.size();
-    --turns_count_;
+void Perception::remember_motion(double timestamp_s, const Motion& motion) {
+  if (motions_count_ == motions_.size()) {
+    motions_begin_ = (motions_begin_ + 1) % motions_.size();
+    --motions_count_;
   }
-  turns_[(turns_begin_ + turns_count_) % turns_.size()] = {timestamp_s, turn_rate_cy};
-  ++turns_count_;
+  motions_[(motions_begin_ + motions_count_) % motions_.size()] = {timestamp_s, motion};
+  ++motions_count_;
 }
 
-// The turn rate each frame reports held since the frame before: their time-weighted mean over
-// (from_s, to_s] is the rotation between two images divided by the time between them.
-double Perception::mean_turn_rate(double from_s, double to_s, double fallback) const {
-  double angle = 0.0;
+// The speed and turn rate each frame reports held since the frame before: their time-weighted
+// means over (from_s, to_s] are the distance driven and the rotation between two images divided
+// by the time between them.
+Perception::Motion Perception::mean_motion(double from_s, double to_s,
+                                           const Motion& fallback) const {
+  Motion sum{0.0, 0.0};
   double covered_s = 0.0;
-  for (std::size_t k = 1; k < turns_count_; ++k) {
-    const TurnSample& before = turns_[(turns_begin_ + k - 1) % turns_.size()];
-    const TurnSample& sample = turns_[(turns_begin_ + k) % turns_.size()];
+  for (std::size_t k = 1; k < motions_count_; ++k) {
+    const MotionSample& before = motions_[(motions_begin_ + k - 1) % motions_.size()];
+    const MotionSample& sample = motions_[(motions_begin_ + k) % motions_.size()];
     const double start = std::max(before.timestamp_s, from_s);
     const double end = std::min(sample.timestamp_s, to_s);
     if (end > start) {
-      angle += sample.turn_rate_cy * (end - start);
+      sum.speed_mps += sample.motion.speed_mps * (end - start);
+      sum.turn_rate_cy += sample.motion.turn_rate_cy * (end - start);
       covered_s += end - start;
     }
   }
-  return covered_s > 0.0 ? angle / covered_s : fallback;
+  if (!(covered_s > 0.0)) {
+    return fallback;
+  }
+  return {sum.speed_mps / covered_s, sum.turn_rate_cy / covered_s};
 }
 
 double goal_bearing_rad(double dx_m, double dy_m, double yaw_rad) {

@@ -101,9 +101,9 @@ double robust_weight(Loss loss, double e, double sigma) {
 // `fit`. Empty when the samples cannot identify p.
 template <int N>
 std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const FlowSample> samples,
-                                                            const Eigen::Vector2d& foe,
-                                                            const RadialFitOptions& options,
-                                                            RadialFit& fit) {
+                                                             const Eigen::Vector2d& foe,
+                                                             const RadialFitOptions& options,
+                                                             RadialFit& fit) {
   using Vector = Eigen::Matrix<double, N, 1>;
   using Matrix = Eigen::Matrix<double, N, N>;
   if (samples.size() < 3) {
@@ -198,28 +198,30 @@ std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const Flo
 
   int inliers = 0;
   double sum_squares = 0.0;
-  // The covariance of p, as for weighted least squares with the last round's weights: the
-  // residual variance over the weighted information. Float rounding sets its floor.
+  // The covariance of p by the sandwich H⁻¹ M H⁻¹ over the last round's weights: H the
+  // weighted information, M the spread of each sample's weighted score. Unlike the residual
+  // variance times H⁻¹ it stays honest where the noise is not alike over the region, or the model
+  // does not quite hold (a slanted surface without depth). Float rounding sets its floor.
   Matrix information = Matrix::Zero();
-  double weighted_squares = 0.0;
-  double weight_sum = 0.0;
+  Matrix score_spread = Matrix::Zero();
   for (std::size_t j = 0; j < samples.size(); ++j) {
-    const double r = residual_norm(j);
+    const Eigen::Vector2d r = samples[j].flow - predicted(j);
+    const double e = r.norm();
     if (norms[j] <= options.inlier_threshold * std::max(sigma, exact * scale[j])) {
       ++inliers;
-      sum_squares += r * r;
+      sum_squares += e * e;
     }
     const Eigen::Matrix<double, 2, N> a = design<N>(samples[j], foe);
     const double w2 = weights[j] * weights[j];
     information.noalias() += w2 * a.transpose() * a;
-    weighted_squares += w2 * std::max(r * r, exact * exact);
-    weight_sum += weights[j] > 0.0 ? 1.0 : 0.0;
+    const Eigen::Matrix2d spread2 = r * r.transpose() + exact * exact * Eigen::Matrix2d::Identity();
+    score_spread.noalias() += (w2 * w2) * a.transpose() * spread2 * a;
   }
   fit.quality.samples = static_cast<int>(samples.size());
   fit.quality.inlier_fraction = inliers / n;
   fit.quality.residual_rms = inliers > 0 ? std::sqrt(sum_squares / inliers) : 0.0;
-  const double dof = std::max(2.0 * weight_sum - N, 1.0);
-  const Matrix covariance = (weighted_squares / dof) * information.inverse();
+  const Matrix bread = information.inverse();
+  const Matrix covariance = bread * score_spread * bread;
   fit.parameter_covariance.setZero();
   fit.parameters.setZero();
   if constexpr (N == 3) {
@@ -275,7 +277,8 @@ double foe_hypothesis_statistic(const RadialFit& fit, const Eigen::Vector2d& foe
   Eigen::Matrix<double, 2, 3> c;
   c << foe.x(), 1.0, 0.0, foe.y(), 0.0, 1.0;
   const Eigen::Vector2d misfit = c * fit.parameters;
-  const Eigen::Matrix2d covariance = covariance_scale * c * fit.parameter_covariance * c.transpose();
+  const Eigen::Matrix2d covariance =
+      covariance_scale * c * fit.parameter_covariance * c.transpose();
   if (!misfit.allFinite() || !covariance.allFinite()) {
     return std::numeric_limits<double>::infinity();
   }
@@ -330,6 +333,15 @@ FeatureExtractor::FeatureExtractor(const FeatureOptions& options) : options_(opt
     throw std::invalid_argument(
         "FeatureOptions::max_fit_samples (" + std::to_string(options_.max_fit_samples) +
         ") must be at least min_pixels (" + std::to_string(options_.min_pixels) + ")");
+  }
+  if (!(options_.flow_noise_correlation_px >= 1.0)) {
+    throw std::invalid_argument(
+        "FeatureOptions::flow_noise_correlation_px must be at least 1, got " +
+        std::to_string(options_.flow_noise_correlation_px));
+  }
+  if (!(options_.static_foe_chi2 > 0.0)) {
+    throw std::invalid_argument("FeatureOptions::static_foe_chi2 must be positive, got " +
+                                std::to_string(options_.static_foe_chi2));
   }
 }
 
@@ -482,17 +494,16 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
       continue;
     }
     RadialFit fit = fit_radial_flow(region_samples, options_.fit);
-    if (options_.static_foe) {
-      const double area_px = options_.flow_noise_correlation_px * options_.flow_noise_correlation_px;
-      const double independent = std::min<double>(static_cast<double>(region_samples.size()),
-                                                  static_cast<double>(a.valid()) / area_px);
-      const double covariance_scale =
-          static_cast<double>(region_samples.size()) / std::max(independent, 1.0);
-      if (foe_hypothesis_statistic(fit, *options_.static_foe, covariance_scale) <=
-          options_.static_foe_chi2) {
-        fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit);
-        fit.quality.static_foe = true;
-      }
+    const double area_px = options_.flow_noise_correlation_px * options_.flow_noise_correlation_px;
+    const double independent = std::min<double>(static_cast<double>(region_samples.size()),
+                                                static_cast<double>(a.valid()) / area_px);
+    const double covariance_scale =
+        static_cast<double>(region_samples.size()) / std::max(independent, 1.0);
+    if (options_.static_foe &&
+        foe_hypothesis_statistic(fit, *options_.static_foe, covariance_scale) <=
+            options_.static_foe_chi2) {
+      fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit);
+      fit.quality.static_foe = true;
     }
     f.status = fit.status;
     f.foe = fit.foe;

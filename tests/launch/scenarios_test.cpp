@@ -52,19 +52,23 @@ INSTANTIATE_TEST_SUITE_P(Papers, GoalScenario,
 // What a real camera has: flow computed from the images (DIS) and objects found in that flow
 // alone, at the scenario's own resolution (128²): at 64² the room's far obstacles are a few
 // pixels of flow and the comparison would be with a coarser problem than the scenario poses.
-TEST(NumericalFlowScenario, CrossingWithDisFlowAndFlowSegmentation) {
+class NumericalFlowScenario : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(NumericalFlowScenario, DisFlowAndFlowSegmentationReachEveryGoalWithoutCollision) {
   SimOptions options;
   options.write_outputs = false;
   options.flow = servo::FlowMethod::dis_medium;
   options.segmentation = servo::SegmentationMethod::flow_graph_fast;
   std::ostringstream log;
-  const SimResult result = run_simulation(builtin_scenario("crossing"), options, log);
+  const SimResult result = run_simulation(builtin_scenario(GetParam()), options, log);
   EXPECT_EQ(result.collisions.size(), 0U);
   for (const AgentResult& a : result.agents) {
     EXPECT_TRUE(a.reached_goal) << a.name;
     EXPECT_EQ(a.collisions, 0) << a.name;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Papers, NumericalFlowScenario, ::testing::Values("room", "crossing"));
 
 TEST(Scenarios, StreetCarsHitAgentsThatDoNotAvoid) {
   sim_camera::WorldSpec street = builtin_scenario("street");

@@ -57,7 +57,7 @@ struct Extracted {
 
 // Renders, optionally corrupts, derotates and extracts the features of the case's object.
 template <typename Corrupt>
-Extracted extract(const Case& c, Corrupt corrupt) {
+Extracted extract(const Case& c, Corrupt corrupt, const FeatureOptions& options = {}) {
   AnalyticScene scene = base_scene(c.pitch_rad);
   scene.objects = {c.object};
   SceneRender render = render_scene(scene);
@@ -65,7 +65,7 @@ Extracted extract(const Case& c, Corrupt corrupt) {
   corrupt(render);
   Segmentation segmentation;
   segment_by_ids(render.ids, render.flow.width(), render.flow.height(), {}, segmentation);
-  FeatureExtractor extractor;
+  FeatureExtractor extractor(options);
   const auto objects = extractor.extract(render.flow, segmentation);
   for (const ObjectFeatures& f : objects) {
     if (f.source_id == c.object.id) {
@@ -168,6 +168,91 @@ TEST(RadialFit, TooFewSamplesGiveNoFlow) {
   const std::vector<FlowSample> same_point(5, FlowSample{{0.1, 0.1}, {0.1, 0.1}});
   EXPECT_EQ(fit_radial_flow(same_point).status, MotionStatus::no_flow);
   EXPECT_EQ(fit_radial_flow({}).status, MotionStatus::no_flow);
+}
+
+// Exact radial flow about `foe` with 1/τ = 0.5 over a patch of points.
+std::vector<FlowSample> radial_samples(const Eigen::Vector2d& foe) {
+  std::vector<FlowSample> samples;
+  for (int i = 0; i < 10; ++i) {
+    for (int j = 0; j < 10; ++j) {
+      const Eigen::Vector2d x(0.2 + 0.02 * i, -0.1 + 0.03 * j);
+      samples.push_back({x, 0.5 * (x - foe)});
+    }
+  }
+  return samples;
+}
+
+TEST(RadialFit, FoeHypothesisHoldsOnlyForTheFlowsOwnFoe) {
+  const Eigen::Vector2d foe(0.05, -0.02);
+  std::vector<FlowSample> samples = radial_samples(foe);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  for (FlowSample& s : samples) {
+    s.flow += Eigen::Vector2d(noise(rng), noise(rng));
+  }
+  const RadialFit fit = fit_radial_flow(samples);
+  ASSERT_EQ(fit.status, MotionStatus::approaching);
+  EXPECT_LT(foe_hypothesis_statistic(fit, foe), 9.21);
+  EXPECT_GT(foe_hypothesis_statistic(fit, foe + Eigen::Vector2d(0.05, 0.0)), 100.0);
+  // Correlated samples widen the covariance: the same offset no longer stands out.
+  EXPECT_LT(foe_hypothesis_statistic(fit, foe + Eigen::Vector2d(0.05, 0.0), 1e4), 9.21);
+
+  // Flow of an object keeping its distance has no FOE in the image at all.
+  std::vector<FlowSample> lateral = samples;
+  for (FlowSample& s : lateral) {
+    s.flow = Eigen::Vector2d(0.3, 0.0);
+  }
+  EXPECT_GT(foe_hypothesis_statistic(fit_radial_flow(lateral), Eigen::Vector2d::Zero()), 100.0);
+}
+
+TEST(RadialFit, FitAboutAGivenFoeFindsTtc) {
+  const Eigen::Vector2d foe(0.05, -0.02);
+  const RadialFit fit = fit_radial_flow_about(radial_samples(foe), foe);
+  ASSERT_EQ(fit.status, MotionStatus::approaching);
+  EXPECT_NEAR(fit.ttc_s, 2.0, 1e-9);
+  EXPECT_EQ(fit.foe, foe);
+  const RadialFit receding = fit_radial_flow_about(radial_samples(foe), Eigen::Vector2d(0.9, 0.0));
+  EXPECT_EQ(receding.status, MotionStatus::receding);
+}
+
+FeatureOptions with_static_foe(const Case& c) {
+  FeatureOptions options;
+  options.static_foe = CameraMount{1.0, c.pitch_rad}.forward_foe();
+  return options;
+}
+
+// The test behind it accepts 99% of static objects' flows: over 20 noisy frames a few may keep
+// their own FOE, which is then close to the static one.
+TEST(FeatureExtractor, NoisyStaticObjectGetsTheStaticFoe) {
+  for (const Case& c : {approaching_cases()[0], approaching_cases()[3]}) {
+    int accepted = 0;
+    for (unsigned seed = 1; seed <= 20; ++seed) {
+      const auto corrupt = [&](SceneRender& r) { corrupt_region(r, c.object.id, seed); };
+      const Extracted e = extract(c, corrupt, with_static_foe(c));
+      ASSERT_EQ(e.features.status, MotionStatus::approaching) << c.name << " seed " << seed;
+      const double foe_error = (e.features.foe - e.truth.foe).norm();
+      if (e.features.fit.static_foe) {
+        ++accepted;
+        EXPECT_LT(foe_error, 1e-9) << c.name << " seed " << seed;
+      } else {
+        EXPECT_LT(foe_error, 0.02) << c.name << " seed " << seed;
+      }
+      EXPECT_NEAR(e.features.ttc_s, e.truth.ttc_s, 0.05 * e.truth.ttc_s)
+          << c.name << " seed " << seed;
+    }
+    EXPECT_GE(accepted, 17) << c.name;
+  }
+}
+
+TEST(FeatureExtractor, MovingObjectKeepsItsOwnFoe) {
+  const Case c = approaching_cases()[1];  // crossing from the left
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const auto corrupt = [&](SceneRender& r) { corrupt_region(r, c.object.id, seed); };
+    const Extracted e = extract(c, corrupt, with_static_foe(c));
+    ASSERT_EQ(e.features.status, MotionStatus::approaching) << "seed " << seed;
+    EXPECT_FALSE(e.features.fit.static_foe) << "seed " << seed;
+    EXPECT_LT((e.features.foe - e.truth.foe).norm(), 0.02) << "seed " << seed;
+  }
 }
 
 TEST(FeatureExtractor, NonFiniteVectorsAreIgnoredAndCounted) {
@@ -298,6 +383,12 @@ TEST(FeatureExtractor, MismatchedSegmentationIsRejected) {
 TEST(FeatureExtractor, RejectsOptionsThatCannotFit) {
   FeatureOptions options;
   options.min_pixels = 1;
+  EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
+  options = {};
+  options.flow_noise_correlation_px = 0.5;
+  EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
+  options = {};
+  options.static_foe_chi2 = 0.0;
   EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
 }
 

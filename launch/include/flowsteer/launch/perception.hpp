@@ -84,15 +84,20 @@ class Perception {
   servo::FeatureExtractor extractor_;
   servo::Segmentation segmentation_;
   std::vector<std::uint8_t> ground_mask_;
-  struct TurnSample {
-    double timestamp_s;
+  // What the base measured, each held since the frame before.
+  struct Motion {
+    double speed_mps;
     double turn_rate_cy;
   };
-  std::vector<TurnSample> turns_;  // ring of the newest, oldest at turns_begin_
-  std::size_t turns_begin_ = 0;
-  std::size_t turns_count_ = 0;
-  void remember_turn(double timestamp_s, double turn_rate_cy);
-  double mean_turn_rate(double from_s, double to_s, double fallback) const;
+  struct MotionSample {
+    double timestamp_s;
+    Motion motion;
+  };
+  std::vector<MotionSample> motions_;  // ring of the newest, oldest at motions_begin_
+  std::size_t motions_begin_ = 0;
+  std::size_t motions_count_ = 0;
+  void remember_motion(double timestamp_s, const Motion& motion);
+  Motion mean_motion(double from_s, double to_s, const Motion& fallback) const;
   cv::Mat grey_;
   std::span<const servo::ObjectFeatures> objects_;
   servo::FlowStatus status_ = servo::FlowStatus::no_previous_frame;
