@@ -146,7 +146,7 @@ std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const Flo
   // there, floored near the FOE where that vanishes.
   std::vector<double> scale(samples.size(), 1.0);
   std::vector<double> norms(samples.size());
-  std::vector<double> weights(samples.size());
+  std::vector<double> weights(samples.size(), 1.0);  // as the rounds leave them
   std::vector<double> scratch;
   auto scaled_norms = [&] {
     for (std::size_t j = 0; j < samples.size(); ++j) {
@@ -158,7 +158,6 @@ std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const Flo
   // Flow comes in float32: residuals below this are rounding, not noise.
   const double exact = 1e-6 * flow_scale + 1e-12;
 
-  std::copy(scale.begin(), scale.end(), weights.begin());
   if (sigma > exact) {
     // Iteratively reweighted least squares: Cauchy rounds find the bulk of the inliers from any
     // start; Tukey rounds then give outliers no weight at all, which Cauchy's long tail still
@@ -222,8 +221,6 @@ std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const Flo
   fit.quality.residual_rms = inliers > 0 ? std::sqrt(sum_squares / inliers) : 0.0;
   const Matrix bread = information.inverse();
   const Matrix covariance = bread * score_spread * bread;
-  fit.parameter_covariance.setZero();
-  fit.parameters.setZero();
   if constexpr (N == 3) {
     fit.parameters = p;
     fit.parameter_covariance = covariance;
@@ -494,16 +491,18 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
       continue;
     }
     RadialFit fit = fit_radial_flow(region_samples, options_.fit);
-    const double area_px = options_.flow_noise_correlation_px * options_.flow_noise_correlation_px;
-    const double independent = std::min<double>(static_cast<double>(region_samples.size()),
-                                                static_cast<double>(a.valid()) / area_px);
-    const double covariance_scale =
-        static_cast<double>(region_samples.size()) / std::max(independent, 1.0);
-    if (options_.static_foe &&
-        foe_hypothesis_statistic(fit, *options_.static_foe, covariance_scale) <=
-            options_.static_foe_chi2) {
-      fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit);
-      fit.quality.static_foe = true;
+    if (options_.static_foe) {
+      const double area_px =
+          options_.flow_noise_correlation_px * options_.flow_noise_correlation_px;
+      const double independent = std::min<double>(static_cast<double>(region_samples.size()),
+                                                  static_cast<double>(a.valid()) / area_px);
+      const double covariance_scale =
+          static_cast<double>(region_samples.size()) / std::max(independent, 1.0);
+      if (foe_hypothesis_statistic(fit, *options_.static_foe, covariance_scale) <=
+          options_.static_foe_chi2) {
+        fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit);
+        fit.quality.static_foe = true;
+      }
     }
     f.status = fit.status;
     f.foe = fit.foe;

@@ -92,8 +92,8 @@ struct RadialFit {
   double ttc_s = std::numeric_limits<double>::quiet_NaN();
   FitQuality quality;
   // The fitted parameters p = (1/τ, −f_x/τ, −f_y/τ) of u = p0 x + (p1, p2), which stay finite
-  // when the motion is lateral, and their covariance: the weighted residual variance over the
-  // weighted information, each sample counted as an independent measurement.
+  // when the motion is lateral, and their covariance: the sandwich over the last robust round's
+  // weights, each sample counted as an independent measurement.
   Eigen::Vector3d parameters = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Matrix3d parameter_covariance =
       Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
