@@ -16,6 +16,10 @@ namespace flowsteer::servo {
 
 namespace {
 
+// A 5-tap mean, applied along rows and columns: a separable 5×5 mean. cv::blur sums floats in
+// double, 4× slower.
+const cv::Matx<float, 5, 1> kMeanOf5 = cv::Matx<float, 5, 1>::all(0.2F);
+
 constexpr std::array kNumericalMethods{FlowMethod::dis_ultrafast, FlowMethod::dis_fast,
                                        FlowMethod::dis_medium, FlowMethod::farneback,
                                        FlowMethod::tvl1};
@@ -218,23 +222,31 @@ FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowFie
   // segmentation and depth are; its negation is the motion that brought each pixel there.
   estimator_->algorithm->calc(grey_, *older, flow_px_);
 
-  // Local texture: mean gradient magnitude over a 5×5 window (a 3×3 Sobel is 8× the gradient).
-  // The mean as a separable filter of two 5-tap means: cv::blur sums floats in double, 4× slower.
+  // Local texture: √λ_min of the structure tensor over a 5×5 window, the RMS gradient along the
+  // image's least textured direction (a 3×3 Sobel is 8× the gradient). On a straight edge (the
+  // horizon, an outline) only the flow across the edge is seen, the aperture problem: the
+  // estimators fill in the flow along it by smoothing, as they do on blank areas.
   cv::Sobel(grey_, gradient_x_, CV_32F, 1, 0, 3, 1.0 / 8.0);
   cv::Sobel(grey_, gradient_y_, CV_32F, 0, 1, 3, 1.0 / 8.0);
-  cv::magnitude(gradient_x_, gradient_y_, gradient_magnitude_);
-  const cv::Matx<float, 5, 1> mean_of_5 = cv::Matx<float, 5, 1>::all(0.2F);
-  cv::sepFilter2D(gradient_magnitude_, texture_, CV_32F, mean_of_5, mean_of_5);
+  cv::multiply(gradient_x_, gradient_x_, gradient_product_);
+  cv::sepFilter2D(gradient_product_, tensor_xx_, CV_32F, kMeanOf5, kMeanOf5);
+  cv::multiply(gradient_x_, gradient_y_, gradient_product_);
+  cv::sepFilter2D(gradient_product_, tensor_xy_, CV_32F, kMeanOf5, kMeanOf5);
+  cv::multiply(gradient_y_, gradient_y_, gradient_product_);
+  cv::sepFilter2D(gradient_product_, tensor_yy_, CV_32F, kMeanOf5, kMeanOf5);
 
   field.set_interval_s(dt_s);
   const auto to_x = static_cast<float>(-1.0 / (field.intrinsics().fx_px * dt_s));
   const auto to_y = static_cast<float>(-1.0 / (field.intrinsics().fy_px * dt_s));
-  const auto min_gradient = static_cast<float>(options_.min_gradient);
+  const auto min_gradient_squared =
+      static_cast<float>(options_.min_gradient * options_.min_gradient);
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   auto flow = field.flow();
   for (int row = 0; row < grey_.rows; ++row) {
     const auto* d = flow_px_.ptr<cv::Vec2f>(row);
-    const auto* t = texture_.ptr<float>(row);
+    const auto* xx = tensor_xx_.ptr<float>(row);
+    const auto* xy = tensor_xy_.ptr<float>(row);
+    const auto* yy = tensor_yy_.ptr<float>(row);
     for (int col = 0; col < grey_.cols; ++col) {
       bool seen_before = true;
       if (rotation) {
@@ -242,7 +254,11 @@ FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowFie
         seen_before = at.z() > 0.0 && at.x() >= 0.0 && at.x() <= at.z() * (grey_.cols - 1) &&
                       at.y() >= 0.0 && at.y() <= at.z() * (grey_.rows - 1);
       }
-      flow[field.index(col, row)] = t[col] < min_gradient || !seen_before
+      const float half_trace = 0.5F * (xx[col] + yy[col]);
+      const float half_difference = 0.5F * (xx[col] - yy[col]);
+      const float min_eigenvalue =
+          half_trace - std::sqrt(half_difference * half_difference + xy[col] * xy[col]);
+      flow[field.index(col, row)] = min_eigenvalue < min_gradient_squared || !seen_before
                                         ? Eigen::Vector2f(kNaN, kNaN)
                                         : Eigen::Vector2f(d[col][0] * to_x, d[col][1] * to_y);
     }

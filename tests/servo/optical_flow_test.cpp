@@ -91,6 +91,40 @@ TEST(OpticalFlow, BadFramesGiveAStatusNotACrash) {
   EXPECT_THROW(OpticalFlow(FlowMethod::synthetic), std::invalid_argument);
 }
 
+// Along a straight edge only the motion across it can be seen (the aperture problem): such pixels
+// get no flow, though their gradient is strong, while textured pixels beside them keep theirs.
+TEST(OpticalFlow, AStraightEdgeGivesNoFlowWhereTextureDoes) {
+  const int width = 96;
+  const int height = 64;
+  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
+  const cv::Mat texture = textured_image(width, height, 5);
+  // Left half: texture; right half: dark above a bright floor, a horizon-like edge at row 32.
+  const auto scene = [&](int dx) {
+    cv::Mat image = shifted(texture, width, height, dx, 0);
+    image(cv::Rect(width / 2, 0, width / 2, height / 2)).setTo(60);
+    image(cv::Rect(width / 2, height / 2, width / 2, height / 2)).setTo(180);
+    return image;
+  };
+  OpticalFlow flow(FlowMethod::dis_medium);
+  FlowField field(intrinsics);
+  ASSERT_EQ(flow.update(scene(0), 0.0, field), FlowStatus::no_previous_frame);
+  ASSERT_EQ(flow.update(scene(2), 0.2, field), FlowStatus::ok);
+  int edge_valid = 0;
+  for (int row = height / 2 - 2; row <= height / 2 + 1; ++row) {
+    for (int col = width / 2 + 8; col < width - 8; ++col) {
+      edge_valid += field.at(col, row).allFinite();
+    }
+  }
+  int texture_valid = 0;
+  for (int row = 8; row < height - 8; ++row) {
+    for (int col = 8; col < width / 2 - 8; ++col) {
+      texture_valid += field.at(col, row).allFinite();
+    }
+  }
+  EXPECT_EQ(edge_valid, 0);
+  EXPECT_GT(texture_valid, (width / 2 - 16) * (height - 16) * 9 / 10);
+}
+
 TEST(OpticalFlow, MethodNamesRoundTrip) {
   for (FlowMethod method : numerical_flow_methods()) {
     EXPECT_EQ(parse_flow_method(to_string(method)), method);

@@ -44,10 +44,10 @@ enum class FlowStatus {
 const char* to_string(FlowStatus status);
 
 struct OpticalFlowOptions {
-  // Pixels whose neighbourhood has less image gradient than this (mean |∇I| over a 5×5 window,
-  // grey levels per pixel) get no flow: estimators fill such areas by smoothing, which invents
-  // motion there (sky, blank walls).
-  double min_gradient = 1.0;
+  // Pixels whose neighbourhood has less image gradient than this in its least textured
+  // direction (RMS over a 5×5 window, grey levels per pixel) get no flow: estimators fill such
+  // areas by smoothing, which invents motion there (sky, blank walls, along straight edges).
+  double min_gradient = 0.5;
   // An image whose grey levels span less than this is single-coloured.
   double min_contrast = 2.0;
   // The flow compares each image with the newest kept image at least this much older (or the
@@ -115,8 +115,10 @@ class OpticalFlow {
   cv::Mat flow_px_;
   cv::Mat gradient_x_;
   cv::Mat gradient_y_;
-  cv::Mat gradient_magnitude_;
-  cv::Mat texture_;
+  cv::Mat gradient_product_;
+  cv::Mat tensor_xx_;
+  cv::Mat tensor_xy_;
+  cv::Mat tensor_yy_;
   cv::Mat warped_;
 };
 
