@@ -125,6 +125,17 @@ TEST(OpticalFlow, AStraightEdgeGivesNoFlowWhereTextureDoes) {
   EXPECT_GT(texture_valid, (width / 2 - 16) * (height - 16) * 9 / 10);
 }
 
+// OpenCV's presets and defaults: DIS matches 8 px patches, at half resolution (medium) or a
+// quarter (fast, ultrafast); Farneback averages over 13 px, TV-L1's median filter is 5 px wide.
+TEST(OpticalFlow, NoiseCorrelationIsTheEstimatorsWindow) {
+  EXPECT_EQ(noise_correlation_px(FlowMethod::synthetic), 1.0);
+  EXPECT_EQ(noise_correlation_px(FlowMethod::dis_medium), 16.0);
+  EXPECT_EQ(noise_correlation_px(FlowMethod::dis_fast), 32.0);
+  EXPECT_EQ(noise_correlation_px(FlowMethod::dis_ultrafast), 32.0);
+  EXPECT_EQ(noise_correlation_px(FlowMethod::farneback), 13.0);
+  EXPECT_EQ(noise_correlation_px(FlowMethod::tvl1), 5.0);
+}
+
 TEST(OpticalFlow, MethodNamesRoundTrip) {
   for (FlowMethod method : numerical_flow_methods()) {
     EXPECT_EQ(parse_flow_method(to_string(method)), method);
