@@ -22,10 +22,7 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 void check_controllers(const std::vector<std::string>& controllers) {
   const std::vector<std::string> known = controller_types();
-  std::string list;
-  for (const std::string& k : known) {
-    list += list.empty() ? k : ", " + k;
-  }
+  const std::string list = controller_type_names();
   if (controllers.empty()) {
     throw ConfigError("--controllers", "no controller given (known ones: " + list + ")");
   }
@@ -103,7 +100,15 @@ cv::Mat draw_histogram(const std::vector<int>& counts, const std::vector<double>
 }  // namespace
 
 std::vector<std::string> controller_types() {
-  return {"vision", "geometric", "motion_energy"};
+  return {sim_camera::kControllerTypes.begin(), sim_camera::kControllerTypes.end()};
+}
+
+std::string controller_type_names() {
+  std::string names;
+  for (const char* type : sim_camera::kControllerTypes) {
+    names += names.empty() ? type : std::string(", ") + type;
+  }
+  return names;
 }
 
 CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptions& options,

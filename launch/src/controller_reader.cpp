@@ -47,7 +47,7 @@ sim_camera::ControllerSpec read_controller(const YamlReader& r, const YAML::Node
   if (!node) {
     return c;
   }
-  c.type = r.word(node, field, "type", {"vision", "geometric", "motion_energy"}, c.type.c_str());
+  c.type = r.word(node, field, "type", sim_camera::kControllerTypes, c.type.c_str());
   c.kind = r.word(node, field, "kind", {"goal_reaching", "following"}, c.kind.c_str());
   c.alpha = r.non_negative(node, field, "alpha", c.alpha);
   c.beta = r.non_negative(node, field, "beta", c.beta);

@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
   compare->add_option("--scenario", compare_name, "a built-in scenario (flowsteer scenarios)");
   compare
       ->add_option("--controllers", controllers,
-                   "comma-separated steering models: vision, geometric, motion_energy")
+                   "comma-separated steering models: " + flowsteer::launch::controller_type_names())
       ->delimiter(',')
       ->required();
   compare->add_option("--out", compare_out, "folder for the outputs")->capture_default_str();

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <set>
+#include <span>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -108,6 +109,11 @@ class YamlReader {
 
   std::string word(const YAML::Node& map, const std::string& field, const char* key,
                    std::initializer_list<const char*> allowed, const char* fallback) const {
+    return word(map, field, key, std::span<const char* const>(allowed.begin(), allowed.size()),
+                fallback);
+  }
+  std::string word(const YAML::Node& map, const std::string& field, const char* key,
+                   std::span<const char* const> allowed, const char* fallback) const {
     const YAML::Node node = map[key];
     if (!node) {
       return fallback;

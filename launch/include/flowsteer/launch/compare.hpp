@@ -11,8 +11,10 @@
 
 namespace flowsteer::launch {
 
-// The steering models `flowsteer compare` can run (ControllerSpec::type).
+// The steering models `flowsteer compare` can run (ControllerSpec::type), and the same as one
+// comma-separated list for messages.
 std::vector<std::string> controller_types();
+std::string controller_type_names();
 
 struct CompareOptions {
   std::vector<std::string> controllers;  // types, in the order of the outputs

@@ -76,6 +76,10 @@ struct CameraSpec {
   double pitch_rad = 0.0;
 };
 
+// Every ControllerSpec::type, in the order messages list them.
+inline constexpr std::array<const char*, 3> kControllerTypes{"vision", "geometric",
+                                                             "motion_energy"};
+
 // Controller settings as the scenario gives them; launch turns them into a servo controller.
 struct ControllerSpec {
   // The steering model: vision (the navigation function on features from the flow), geometric
