@@ -1,8 +1,9 @@
-// MIG 2019 §7.3-7.4 with numerical flow (DIS fast; objects from the renderer's ids, as in MIG's
-// semantic images, so that the comparison is of the light and not of a flow segmentation): an
-// agent aware of dark regions keeps away from a hard shadow (Fig. 4) and takes the lit branch of
-// a fork (Fig. 5), where an unaware one walks through the shadow and takes the nearer, dark
-// branch; with a carried light it reacts to an obstacle later than in daylight (Fig. 6).
+// MIG 2019 §7.3-7.4 with numerical flow (DIS fast, and DIS medium at the fork; objects from the
+// renderer's ids, as in MIG's semantic images, so that the comparison is of the light and not of a
+// flow segmentation): an agent aware of dark regions keeps away from a hard shadow (Fig. 4) and
+// takes the lit branch of a fork (Fig. 5), where an unaware one walks through the shadow and takes
+// the nearer, dark branch; with a carried light it reacts to an obstacle later than in daylight
+// (Fig. 6).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -22,10 +23,11 @@
 namespace flowsteer::launch {
 namespace {
 
-SimResult run_with_delta(sim_camera::WorldSpec spec, double delta) {
+SimResult run_with_delta(sim_camera::WorldSpec spec, double delta,
+                         servo::FlowMethod flow = servo::FlowMethod::dis_fast) {
   for (auto& a : spec.agents) {
     a.controller.delta = delta;
-    a.perception.flow = servo::FlowMethod::dis_fast;
+    a.perception.flow = flow;
     a.perception.segmentation = servo::SegmentationMethod::semantic;
   }
   SimOptions options;
@@ -129,8 +131,11 @@ Passage passage(const AgentResult& agent, double from_x_m, double to_x_m) {
 }
 
 // MIG §7.3, Fig. 5: at a fork into a lit and a dark branch, the aware agent (blue) takes the lit
-// one; the unaware one (red) takes the dark one, which is the nearer.
-TEST(DarkRegions, LitForkAwareAgentTakesTheLitBranch) {
+// one; the unaware one (red) takes the dark one, which is the nearer. With DIS fast and with DIS
+// medium, whose finer flow changes what the dark term competes with.
+class LitFork : public ::testing::TestWithParam<servo::FlowMethod> {};
+
+TEST_P(LitFork, AwareAgentTakesTheLitBranch) {
   const sim_camera::WorldSpec spec = builtin_scenario("lit_fork");
   const sim_camera::Solid& block = spec.obstacles.at(0);
   const double block_left_m = block.centre_m.y() + 0.5 * block.size_m.y();
@@ -143,14 +148,14 @@ TEST(DarkRegions, LitForkAwareAgentTakesTheLitBranch) {
   ASSERT_LT(block_right_m, line_y);
   ASSERT_LT(line_y - block_right_m, block_left_m - line_y);
 
-  const SimResult aware = run_with_delta(spec, 1.0);
-  const SimResult unaware = run_with_delta(spec, 0.0);
+  const SimResult aware = run_with_delta(spec, 1.0, GetParam());
+  const SimResult unaware = run_with_delta(spec, 0.0, GetParam());
   const Passage a = passage(aware.agents.at(0), from_x_m, to_x_m);
   const Passage u = passage(unaware.agents.at(0), from_x_m, to_x_m);
-  std::cout << "lit_fork, y beside the block (" << block_right_m << " .. " << block_left_m
-            << "): aware " << a.min_y_m << " .. " << a.max_y_m << " m; unaware " << u.min_y_m
-            << " .. " << u.max_y_m << " m; min clearance aware "
-            << aware.agents.at(0).min_clearance_m << " m, unaware "
+  std::cout << "lit_fork with " << servo::to_string(GetParam()) << ", y beside the block ("
+            << block_right_m << " .. " << block_left_m << "): aware " << a.min_y_m << " .. "
+            << a.max_y_m << " m; unaware " << u.min_y_m << " .. " << u.max_y_m
+            << " m; min clearance aware " << aware.agents.at(0).min_clearance_m << " m, unaware "
             << unaware.agents.at(0).min_clearance_m << " m\n";
   ASSERT_GT(a.steps, 0);
   ASSERT_GT(u.steps, 0);
@@ -163,6 +168,13 @@ TEST(DarkRegions, LitForkAwareAgentTakesTheLitBranch) {
   EXPECT_EQ(aware.agents.at(0).collisions, 0);
   EXPECT_EQ(unaware.agents.at(0).collisions, 0);
 }
+
+INSTANTIATE_TEST_SUITE_P(DarkRegions, LitFork,
+                         ::testing::Values(servo::FlowMethod::dis_fast,
+                                           servo::FlowMethod::dis_medium),
+                         [](const auto& info) {
+                           return std::string(servo::to_string(info.param));
+                         });
 
 // One agent's walk, step by step, with what avoidance asked for and whether the first obstacle
 // was a visible object (lit, with a flow fit) to the agent.
