@@ -305,6 +305,19 @@ void FlowSegmenter::segment(const FlowField& derotated, std::span<const std::uin
     segments =
         static_cast<std::size_t>(graph_->own.segment(features_, k, min_region_px, graph_labels_));
   }
+  // The merge test never joins pixels with and without flow (kInvalidMark, which excluded pixels
+  // get too), but the merge of small segments does: an island of flow under min_region_px joins
+  // the pixels without flow around it. Such islands (a striped agent's stripes fail the texture
+  // test between them) are scattered over the image and would add up to one region whose fit
+  // mixes every motion in view. A segment is kept only when most of its graph pixels have flow.
+  flow_balance_.assign(segments, 0);
+  for (int row = 0; row < graph_labels_.rows; ++row) {
+    const auto* label = graph_labels_.ptr<std::int32_t>(row);
+    const auto* f = features_.ptr<cv::Vec3f>(row);
+    for (int col = 0; col < graph_labels_.cols; ++col) {
+      flow_balance_[static_cast<std::size_t>(label[col])] += f[col][2] == 0.0F ? 1 : -1;
+    }
+  }
 
   // Labels at full resolution (nearest graph pixel), kept only for valid pixels. Counts sit one
   // slot up, slot 0 counting the pixels without a label, so that no pixel takes a branch.
@@ -339,7 +352,7 @@ void FlowSegmenter::segment(const FlowField& derotated, std::span<const std::uin
   region_of_label_.assign(segments + 1, Segmentation::kNoRegion);
   region_sizes_.clear();
   for (std::size_t s = 1; s <= segments; ++s) {
-    if (valid_counts_[s] > 0 && valid_counts_[s] >= min_full_px) {
+    if (valid_counts_[s] > 0 && valid_counts_[s] >= min_full_px && flow_balance_[s - 1] > 0) {
       region_of_label_[s] = static_cast<std::int32_t>(region_sizes_.size());
       region_sizes_.push_back(valid_counts_[s]);
     }

@@ -256,6 +256,38 @@ TEST(FlowSegmenter, FastGraphLabelsEveryPixelOfAReducedField) {
   EXPECT_NE(out.labels[0], out.labels[255]);
 }
 
+// Islands of flow too small to be regions, scattered over pixels without flow (what a striped
+// agent or the far ground leaves after the texture test), beside one object. The merge of small
+// segments joins each island to the pixels without flow around it; together the islands must not
+// come out as one region spanning the image.
+TEST(FlowSegmenter, ScatteredIslandsOfFlowAreNoRegion) {
+  FlowField field(CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int row = 0; row < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      const bool object = col >= 40 && row >= 10 && row < 34;
+      const bool island = col < 36 && col % 6 < 2 && row % 6 < 2;  // 2 x 2 pixels each
+      field.at(col, row) = object   ? Eigen::Vector2f(-0.5F, 0.1F)
+                           : island ? Eigen::Vector2f(0.3F, 0.0F)
+                                    : Eigen::Vector2f(nan, nan);
+    }
+  }
+  for (SegmentationMethod method :
+       {SegmentationMethod::flow_graph, SegmentationMethod::flow_graph_fast}) {
+    FlowSegmenter segmenter(method);
+    Segmentation out;
+    segmenter.segment(field, {}, out);
+    ASSERT_EQ(out.region_count(), 1) << to_string(method);
+    for (int row = 0; row < field.height(); ++row) {
+      for (int col = 0; col < 36; ++col) {
+        EXPECT_EQ(out.labels[field.index(col, row)], Segmentation::kNoRegion)
+            << to_string(method) << " " << col << ", " << row;
+      }
+    }
+    EXPECT_EQ(out.labels[field.index(50, 20)], 0);
+  }
+}
+
 // flow_graph_fast runs its own Felzenszwalb–Huttenlocher segmentation, flow_graph OpenCV's. On a
 // field no wider than fast_max_side_px neither reduces the flow, and they must agree to the pixel,
 // numbers and ids included. Noisy flow over four differently moving quarters, with pixels without

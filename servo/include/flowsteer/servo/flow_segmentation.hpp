@@ -65,7 +65,8 @@ class FlowSegmenter {
   std::unique_ptr<Graph> graph_;
   cv::Mat features_;  // one per pixel of the graph
   cv::Mat graph_labels_;
-  std::vector<int> graph_cols_;  // the graph's column of each column
+  std::vector<int> graph_cols_;             // the graph's column of each column
+  std::vector<std::int32_t> flow_balance_;  // per segment: graph pixels with flow − without
   std::vector<std::int32_t> valid_counts_;
   std::vector<std::int32_t> region_of_label_;
 
