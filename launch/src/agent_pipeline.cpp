@@ -71,7 +71,10 @@ const servo::ControlOutput& AgentPipeline::step(StageTimes& times) {
   camera_.read(frame_, 0.0);
   times.render = ms_since(start);
 
-  perception_.process(frame_, state.speed_mps, state.turn_rate, times);
+  // The geometric reference perceives by exact geometry: flow would only cost it time.
+  if (!geometric_) {
+    perception_.process(frame_, state.speed_mps, state.turn_rate, times);
+  }
 
   auto stage = Clock::now();
   objects_ = geometric_ ? geometric_->perceive() : perception_.objects();

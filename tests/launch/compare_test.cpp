@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "flowsteer/launch/agent_pipeline.hpp"
 #include "flowsteer/launch/compare.hpp"
 #include "flowsteer/launch/config_error.hpp"
 #include "flowsteer/launch/scenario_file.hpp"
@@ -57,6 +58,34 @@ TEST(MotionEnergy, TurnsAwayFromAWallHeadOn) {
   EXPECT_NE(std::find_if(walker.turn_rates.begin(), walker.turn_rates.end(),
                          [&](double w) { return std::abs(w) >= max_turn - 1e-9; }),
             walker.turn_rates.end());
+}
+
+// The geometric reference takes its features from the world, not from the frames: with numerical
+// flow asked for, it computes none, where a vision agent has flow from its second frame.
+TEST(GeometricReference, ComputesNoFlow) {
+  sim_camera::WorldSpec spec = builtin_scenario("room");
+  for (auto& a : spec.agents) {
+    a.camera.width_px = a.camera.height_px = 64;
+    a.perception.flow = servo::FlowMethod::dis_fast;
+    a.perception.segmentation = servo::SegmentationMethod::flow_graph_fast;
+  }
+  spec.agents.at(0).controller.type = "geometric";
+  sim_camera::World world(spec);
+  const auto renderer = sim_camera::Renderer::create();
+  AgentPipeline geometric(world, *renderer, 0);
+  AgentPipeline vision(world, *renderer, 1);
+  for (int step = 0; step < 2; ++step) {
+    StageTimes geometric_times;
+    StageTimes vision_times;
+    geometric.step(geometric_times);
+    vision.step(vision_times);
+    EXPECT_EQ(geometric_times.flow, 0.0);
+    EXPECT_GT(vision_times.flow, 0.0);
+    world.step(std::vector<std::pair<double, double>>(spec.agents.size(), {0.0, 0.0}));
+  }
+  EXPECT_EQ(geometric.perception().status(), servo::FlowStatus::no_previous_frame);
+  EXPECT_EQ(vision.perception().status(), servo::FlowStatus::ok);
+  EXPECT_FALSE(geometric.objects().empty());  // the walls and the other agents, from geometry
 }
 
 class VisionAgainstReference : public ::testing::TestWithParam<const char*> {};

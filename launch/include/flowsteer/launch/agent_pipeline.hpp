@@ -19,8 +19,9 @@ namespace flowsteer::launch {
 // turns the frame into features the way the agent's PerceptionSpec asks (synthetic or numerical
 // flow derotated with the agent's turn rate, segmented by object id or by flow, dark regions
 // when its controller weighs them), and its controller turns them into a command. The agent's
-// controller type swaps the last stages: geometric takes the features from exact geometry,
-// motion_energy steers by Blumberg's motion energy instead of by the navigation function.
+// controller type swaps the last stages: geometric takes the features from exact geometry (and
+// computes no flow), motion_energy steers by Blumberg's motion energy instead of by the
+// navigation function.
 class AgentPipeline {
  public:
   // The world and the renderer must outlive the pipeline.
@@ -31,7 +32,7 @@ class AgentPipeline {
 
   const camera_io::Frame& frame() const { return frame_; }
   const Perception& perception() const { return perception_; }
-  const servo::FlowField& flow() const { return perception_.flow(); }
+  const servo::FlowField& flow() const { return perception_.flow(); }  // zero for geometric
   // The features the controller saw: from the flow, or from exact geometry (type geometric).
   std::span<const servo::ObjectFeatures> objects() const { return objects_; }
   const servo::Percept& percept() const { return percept_; }
