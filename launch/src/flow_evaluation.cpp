@@ -22,6 +22,43 @@ double median(std::vector<double> values) {
   return *middle;
 }
 
+// The renderer object a region covers most (the most frequent id among its pixels, ground and
+// sky included) and how many of the region's pixels are that object's.
+struct RegionCover {
+  std::int32_t id = -1;
+  int object_px = 0;
+  int region_px = 0;
+};
+
+// Fills `covers` with one entry per region of `segmentation`; `pairs` is scratch.
+void cover_regions(const servo::Segmentation& segmentation, const cv::Mat& object_ids,
+                   std::vector<std::pair<std::int32_t, std::int32_t>>& pairs,
+                   std::vector<RegionCover>& covers) {
+  pairs.clear();
+  const auto* ids = object_ids.ptr<std::int32_t>();
+  for (std::size_t i = 0; i < segmentation.labels.size(); ++i) {
+    if (segmentation.labels[i] != servo::Segmentation::kNoRegion) {
+      pairs.emplace_back(segmentation.labels[i], ids[i]);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  covers.assign(static_cast<std::size_t>(segmentation.region_count()), {});
+  for (std::size_t begin = 0; begin < pairs.size();) {
+    std::size_t end = begin;
+    while (end < pairs.size() && pairs[end] == pairs[begin]) {
+      ++end;
+    }
+    RegionCover& cover = covers[static_cast<std::size_t>(pairs[begin].first)];
+    const auto count = static_cast<int>(end - begin);
+    cover.region_px += count;
+    if (count > cover.object_px) {
+      cover.id = pairs[begin].second;
+      cover.object_px = count;
+    }
+    begin = end;
+  }
+}
+
 struct MethodRun {
   std::unique_ptr<Perception> perception;
   FlowEvalRow row;
@@ -29,8 +66,12 @@ struct MethodRun {
   double valid_count = 0.0;
   double total_count = 0.0;
   double ms_sum = 0.0;
+  double recall_sum = 0.0;
+  double purity_sum = 0.0;
   std::vector<double> foe_errors;
   std::vector<double> ttc_errors;
+  std::vector<std::pair<std::int32_t, std::int32_t>> region_id_pairs;
+  std::vector<RegionCover> covers;
 };
 
 }  // namespace
@@ -72,9 +113,11 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
       PerceptionOptions o = truth_options;
       o.flow = method;
       o.use_depth = false;
+      o.segmentation = options.segmentation;
       MethodRun run;
       run.perception = std::make_unique<Perception>(agents[0]->intrinsics(), o);
       run.row.method = method;
+      run.row.segmentation = options.segmentation;
       run.row.resolution = resolution;
       runs.push_back(std::move(run));
     }
@@ -116,25 +159,42 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
           run.valid_count += 1.0;
           run.epe_sum += (estimated[p] - exact[p]).cast<double>().norm() * to_px;
         }
-        for (const servo::ObjectFeatures& o : run.perception->objects()) {
-          const auto t = std::find_if(truth_objects.begin(), truth_objects.end(),
-                                      [&](const servo::ObjectFeatures& exact) {
-                                        return exact.source_id == o.source_id &&
-                                               exact.status == servo::MotionStatus::approaching;
-                                      });
-          if (t == truth_objects.end())
+        cover_regions(run.perception->segmentation(), view.sim->object_ids, run.region_id_pairs,
+                      run.covers);
+        const auto estimated_objects = run.perception->objects();
+        for (const servo::ObjectFeatures& t : truth_objects) {
+          if (t.kind != servo::RegionKind::visible ||
+              t.status != servo::MotionStatus::approaching) {
             continue;
-          if (t->pixel_count < options.min_object_px) {
+          }
+          if (t.pixel_count < options.min_object_px) {
             ++run.row.small_objects;
             continue;
           }
-          if (o.status != servo::MotionStatus::approaching) {
+          int region = servo::Segmentation::kNoRegion;
+          for (std::size_t r = 0; r < run.covers.size(); ++r) {
+            if (run.covers[r].id == t.source_id &&
+                (region == servo::Segmentation::kNoRegion ||
+                 run.covers[r].object_px >
+                     run.covers[static_cast<std::size_t>(region)].object_px)) {
+              region = static_cast<int>(r);
+            }
+          }
+          const auto o = std::find_if(
+              estimated_objects.begin(), estimated_objects.end(),
+              [&](const servo::ObjectFeatures& object) { return object.label == region; });
+          if (region == servo::Segmentation::kNoRegion || o == estimated_objects.end() ||
+              o->kind != servo::RegionKind::visible ||
+              o->status != servo::MotionStatus::approaching) {
             ++run.row.missed_objects;
             continue;
           }
+          const RegionCover& cover = run.covers[static_cast<std::size_t>(region)];
           ++run.row.approaching_objects;
-          run.foe_errors.push_back(std::abs(o.foe.x() - t->foe.x()));
-          run.ttc_errors.push_back(std::abs(o.ttc_s - t->ttc_s) / t->ttc_s);
+          run.recall_sum += static_cast<double>(cover.object_px) / t.pixel_count;
+          run.purity_sum += static_cast<double>(cover.object_px) / cover.region_px;
+          run.foe_errors.push_back(std::abs(o->foe.x() - t.foe.x()));
+          run.ttc_errors.push_back(std::abs(o->ttc_s - t.ttc_s) / t.ttc_s);
         }
       }
       world.step(commands);
@@ -143,6 +203,10 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
       FlowEvalRow& row = run.row;
       row.endpoint_error_px = run.valid_count > 0 ? run.epe_sum / run.valid_count : 0.0;
       row.valid_fraction = run.total_count > 0 ? run.valid_count / run.total_count : 0.0;
+      if (row.approaching_objects > 0) {
+        row.object_recall_mean = run.recall_sum / row.approaching_objects;
+        row.region_purity_mean = run.purity_sum / row.approaching_objects;
+      }
       row.foe_error_median = median(run.foe_errors);
       row.ttc_relative_error_median = median(run.ttc_errors);
       row.ms_per_frame = row.frames > 0 ? run.ms_sum / row.frames : 0.0;
@@ -153,35 +217,40 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
 }
 
 void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
-  out << std::left << std::setw(15) << "method" << std::right << std::setw(6) << "res"
-      << std::setw(8) << "frames" << std::setw(10) << "EPE px" << std::setw(8) << "valid"
-      << std::setw(9) << "objects" << std::setw(8) << "missed" << std::setw(7) << "small"
+  out << std::left << std::setw(15) << "method" << std::setw(16) << "segmentation" << std::right
+      << std::setw(6) << "res" << std::setw(8) << "frames" << std::setw(10) << "EPE px"
+      << std::setw(8) << "valid" << std::setw(9) << "objects" << std::setw(8) << "missed"
+      << std::setw(7) << "small" << std::setw(8) << "recall" << std::setw(8) << "purity"
       << std::setw(10) << "FOE err" << std::setw(10) << "TTC err" << std::setw(12) << "ms/frame"
       << "\n";
   for (const FlowEvalRow& r : rows) {
-    out << std::left << std::setw(15) << servo::to_string(r.method) << std::right << std::fixed
-        << std::setw(6) << r.resolution << std::setw(8) << r.frames << std::setw(10)
-        << std::setprecision(3) << r.endpoint_error_px << std::setw(8) << std::setprecision(2)
-        << r.valid_fraction << std::setw(9) << r.approaching_objects << std::setw(8)
-        << r.missed_objects << std::setw(7) << r.small_objects << std::setw(10)
-        << std::setprecision(4) << r.foe_error_median << std::setw(9) << std::setprecision(1)
-        << 100.0 * r.ttc_relative_error_median << "%" << std::setw(12) << std::setprecision(2)
-        << r.ms_per_frame << "\n";
+    out << std::left << std::setw(15) << servo::to_string(r.method) << std::setw(16)
+        << servo::to_string(r.segmentation) << std::right << std::fixed << std::setw(6)
+        << r.resolution << std::setw(8) << r.frames << std::setw(10) << std::setprecision(3)
+        << r.endpoint_error_px << std::setw(8) << std::setprecision(2) << r.valid_fraction
+        << std::setw(9) << r.approaching_objects << std::setw(8) << r.missed_objects << std::setw(7)
+        << r.small_objects << std::setw(8) << r.object_recall_mean << std::setw(8)
+        << r.region_purity_mean << std::setw(10) << std::setprecision(4) << r.foe_error_median
+        << std::setw(9) << std::setprecision(1) << 100.0 * r.ttc_relative_error_median << "%"
+        << std::setw(12) << std::setprecision(2) << r.ms_per_frame << "\n";
   }
 }
 
 void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
                            const std::filesystem::path& out_dir) {
   OutputDir out(out_dir);
-  CsvTable csv({"method", "resolution", "frames", "endpoint_error_px", "valid_fraction",
-                "approaching_objects", "missed_objects", "small_objects", "foe_error_median",
+  CsvTable csv({"method", "segmentation", "resolution", "frames", "endpoint_error_px",
+                "valid_fraction", "approaching_objects", "missed_objects", "small_objects",
+                "object_recall_mean", "region_purity_mean", "foe_error_median",
                 "ttc_relative_error_median", "ms_per_frame"});
   for (const FlowEvalRow& r : rows) {
-    csv.add({std::string(servo::to_string(r.method))},
-            {static_cast<double>(r.resolution), static_cast<double>(r.frames), r.endpoint_error_px,
-             r.valid_fraction, static_cast<double>(r.approaching_objects),
-             static_cast<double>(r.missed_objects), static_cast<double>(r.small_objects),
-             r.foe_error_median, r.ttc_relative_error_median, r.ms_per_frame});
+    csv.add(
+        {std::string(servo::to_string(r.method)), std::string(servo::to_string(r.segmentation))},
+        {static_cast<double>(r.resolution), static_cast<double>(r.frames), r.endpoint_error_px,
+         r.valid_fraction, static_cast<double>(r.approaching_objects),
+         static_cast<double>(r.missed_objects), static_cast<double>(r.small_objects),
+         r.object_recall_mean, r.region_purity_mean, r.foe_error_median,
+         r.ttc_relative_error_median, r.ms_per_frame});
   }
   csv.write(out.staging_path("flow_eval.csv"));
   std::ostringstream table;

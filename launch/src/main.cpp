@@ -55,6 +55,16 @@ flowsteer::servo::FlowMethod flow_method_option(const std::string& option, const
   return *method;
 }
 
+flowsteer::servo::SegmentationMethod segmentation_method_option(const std::string& option,
+                                                                const std::string& name) {
+  const auto method = flowsteer::servo::parse_segmentation_method(name);
+  if (!method) {
+    throw CLI::ValidationError(option, "unknown method '" + name + "' (known: " +
+                                           flowsteer::servo::segmentation_method_names() + ")");
+  }
+  return *method;
+}
+
 // The scenario a command runs: a scenario file, a built-in scenario by name or, where the command
 // has --steersuite, a SteerSuite test case; at most one of them, the built-in "room" when none.
 flowsteer::sim_camera::WorldSpec load_world(const std::string& command, const std::string& file,
@@ -190,6 +200,7 @@ int main(int argc, char** argv) {
   std::vector<int> eval_resolutions{256};
   int eval_frames = 40;
   std::vector<std::string> eval_methods;
+  std::string eval_segmentation = "semantic";
   std::string eval_out = "flowsteer_eval";
   eval_flow->add_option("--scenario", eval_scenario, "a built-in scenario or a scenario file")
       ->capture_default_str();
@@ -202,6 +213,11 @@ int main(int argc, char** argv) {
   eval_flow->add_option(
       "--method", eval_methods,
       "an estimator (default: all); repeat for several: " + flowsteer::servo::flow_method_names());
+  eval_flow
+      ->add_option("--segmentation", eval_segmentation,
+                   "how objects are found: " + flowsteer::servo::segmentation_method_names() +
+                       " (semantic measures the flow alone)")
+      ->capture_default_str();
   eval_flow->add_option("--out", eval_out, "folder for flow_eval.csv and flow_eval.txt")
       ->capture_default_str();
 
@@ -380,12 +396,7 @@ int main(int argc, char** argv) {
                                           flowsteer::servo::flow_method_names());
       }
       if (!segmentation_method.empty()) {
-        options.segmentation = flowsteer::servo::parse_segmentation_method(segmentation_method);
-        if (!options.segmentation) {
-          throw CLI::ValidationError("--segmentation",
-                                     "unknown method '" + segmentation_method + "' (known: " +
-                                         flowsteer::servo::segmentation_method_names() + ")");
-        }
+        options.segmentation = segmentation_method_option("--segmentation", segmentation_method);
       }
       options.video = video;
       options.progress_bar = isatty(STDERR_FILENO) != 0;
@@ -425,6 +436,7 @@ int main(int argc, char** argv) {
             "--method", name, "estimator",
             flowsteer::servo::flow_method_names() + "; synthetic is the truth", true));
       }
+      options.segmentation = segmentation_method_option("--segmentation", eval_segmentation);
       // --scenario takes a file name (it has a dot) or a built-in scenario's name.
       const bool is_file = eval_scenario.find('.') != std::string::npos;
       const flowsteer::sim_camera::WorldSpec world =
