@@ -99,7 +99,8 @@ void DerotateAndGround(benchmark::State& state) {
 }
 BENCHMARK(DerotateAndGround)->Arg(256)->Unit(benchmark::kMillisecond);
 
-// One robust radial fit of 256 samples.
+// One robust radial fit of 256 samples, with the workspace FeatureExtractor keeps (argument 1)
+// or a fresh one per fit (0).
 void RadialFit256(benchmark::State& state) {
   std::vector<FlowSample> samples;
   for (int i = 0; i < 256; ++i) {
@@ -111,11 +112,16 @@ void RadialFit256(benchmark::State& state) {
     u *= 1.0 + 0.05 * ((i * 37) % 11 - 5) / 5.0;
     samples.push_back({x, u});
   }
+  RadialFitWorkspace workspace;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(fit_radial_flow(samples));
+    if (state.range(0) != 0) {
+      benchmark::DoNotOptimize(fit_radial_flow(samples, {}, workspace));
+    } else {
+      benchmark::DoNotOptimize(fit_radial_flow(samples));
+    }
   }
 }
-BENCHMARK(RadialFit256)->Unit(benchmark::kMicrosecond);
+BENCHMARK(RadialFit256)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -100,9 +100,31 @@ double robust_weight(Loss loss, double e, double sigma) {
 // iteratively reweighted rounds. Returns p; the fit's quality and the covariance of p go into
 // `fit`. Empty when the samples cannot identify p.
 template <int N>
+using RadialSolver = ceres::TinySolver<WeightedRadialResiduals<N>>;
+
+}  // namespace
+
+struct RadialFitWorkspace::Buffers {
+  std::vector<double> scale;
+  std::vector<double> norms;
+  std::vector<double> weights;
+  std::vector<double> sorted;
+  RadialSolver<1> solver_about;
+  RadialSolver<3> solver;
+};
+
+RadialFitWorkspace::RadialFitWorkspace() : buffers_(std::make_unique<Buffers>()) {}
+RadialFitWorkspace::~RadialFitWorkspace() = default;
+RadialFitWorkspace::RadialFitWorkspace(RadialFitWorkspace&&) noexcept = default;
+RadialFitWorkspace& RadialFitWorkspace::operator=(RadialFitWorkspace&&) noexcept = default;
+
+namespace {
+
+template <int N>
 std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const FlowSample> samples,
                                                              const Eigen::Vector2d& foe,
                                                              const RadialFitOptions& options,
+                                                             RadialFitWorkspace::Buffers& buffers,
                                                              RadialFit& fit) {
   using Vector = Eigen::Matrix<double, N, 1>;
   using Matrix = Eigen::Matrix<double, N, N>;
@@ -144,10 +166,13 @@ std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const Flo
   // Flow noise grows with the flow (numerical flow errs in proportion to the displacement), so
   // after the first round a residual is measured relative to the flow the model predicts
   // there, floored near the FOE where that vanishes.
-  std::vector<double> scale(samples.size(), 1.0);
-  std::vector<double> norms(samples.size());
-  std::vector<double> weights(samples.size(), 1.0);  // as the rounds leave them
-  std::vector<double> scratch;
+  std::vector<double>& scale = buffers.scale;
+  std::vector<double>& norms = buffers.norms;
+  std::vector<double>& weights = buffers.weights;  // as the rounds leave them
+  std::vector<double>& scratch = buffers.sorted;
+  scale.assign(samples.size(), 1.0);
+  norms.resize(samples.size());
+  weights.assign(samples.size(), 1.0);
   auto scaled_norms = [&] {
     for (std::size_t j = 0; j < samples.size(); ++j) {
       norms[j] = scale[j] * residual_norm(j);
@@ -162,7 +187,13 @@ std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const Flo
     // Iteratively reweighted least squares: Cauchy rounds find the bulk of the inliers from any
     // start; Tukey rounds then give outliers no weight at all, which Cauchy's long tail still
     // does. Each round is solved by Ceres' TinySolver.
-    ceres::TinySolver<WeightedRadialResiduals<N>> solver;
+    RadialSolver<N>& solver = [&]() -> RadialSolver<N>& {
+      if constexpr (N == 1) {
+        return buffers.solver_about;
+      } else {
+        return buffers.solver;
+      }
+    }();
     solver.options.max_num_iterations = options.max_iterations;
     const WeightedRadialResiduals<N> residuals{samples, weights, foe};
     const int rounds = options.max_rounds + 2;
@@ -248,9 +279,11 @@ void set_motion(RadialFit& fit, double inverse_ttc, const Eigen::Vector2d& foe,
 
 }  // namespace
 
-RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options) {
+RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options,
+                          RadialFitWorkspace& workspace) {
   RadialFit fit;
-  const auto p = robust_radial_fit<3>(samples, Eigen::Vector2d::Zero(), options, fit);
+  const auto p =
+      robust_radial_fit<3>(samples, Eigen::Vector2d::Zero(), options, workspace.buffers(), fit);
   if (p) {
     const double inverse_ttc = (*p)[0];
     set_motion(fit, inverse_ttc, Eigen::Vector2d(-(*p)[1], -(*p)[2]) / inverse_ttc, options);
@@ -258,14 +291,25 @@ RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOp
   return fit;
 }
 
+RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options) {
+  RadialFitWorkspace workspace;
+  return fit_radial_flow(samples, options, workspace);
+}
+
 RadialFit fit_radial_flow_about(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
-                                const RadialFitOptions& options) {
+                                const RadialFitOptions& options, RadialFitWorkspace& workspace) {
   RadialFit fit;
-  const auto p = robust_radial_fit<1>(samples, foe, options, fit);
+  const auto p = robust_radial_fit<1>(samples, foe, options, workspace.buffers(), fit);
   if (p) {
     set_motion(fit, (*p)[0], foe, options);
   }
   return fit;
+}
+
+RadialFit fit_radial_flow_about(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
+                                const RadialFitOptions& options) {
+  RadialFitWorkspace workspace;
+  return fit_radial_flow_about(samples, foe, options, workspace);
 }
 
 double foe_hypothesis_statistic(const RadialFit& fit, const Eigen::Vector2d& foe,
@@ -490,7 +534,7 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     if (region_samples.empty()) {
       continue;
     }
-    RadialFit fit = fit_radial_flow(region_samples, options_.fit);
+    RadialFit fit = fit_radial_flow(region_samples, options_.fit, fit_workspace_);
     if (options_.static_foe) {
       const double area_px =
           options_.flow_noise_correlation_px * options_.flow_noise_correlation_px;
@@ -500,7 +544,8 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
           static_cast<double>(region_samples.size()) / std::max(independent, 1.0);
       if (foe_hypothesis_statistic(fit, *options_.static_foe, covariance_scale) <=
           options_.static_foe_chi2) {
-        fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit);
+        fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit,
+                                    fit_workspace_);
         fit.quality.static_foe = true;
       }
     }

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -99,14 +100,35 @@ struct RadialFit {
       Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
+// The buffers and solvers of the robust radial fit, kept from fit to fit (FeatureExtractor keeps
+// one): with them a fit allocates only when Ceres' solver meets another sample count than the
+// last fit's, where it resizes its own matrices. One per thread.
+class RadialFitWorkspace {
+ public:
+  RadialFitWorkspace();
+  ~RadialFitWorkspace();
+  RadialFitWorkspace(RadialFitWorkspace&&) noexcept;
+  RadialFitWorkspace& operator=(RadialFitWorkspace&&) noexcept;
+
+  struct Buffers;  // defined where the fit is
+  Buffers& buffers() { return *buffers_; }
+
+ private:
+  std::unique_ptr<Buffers> buffers_;
+};
+
 // Fits the radial model u_j = (x_j − f)/τ (CGF Eq. 2–3) to the samples: a robust M-estimate
 // (Cauchy, then Tukey) by iteratively reweighted least squares with Ceres' TinySolver, the noise
 // scale re-estimated each round and relative to the flow's magnitude, so that noisy numerical
 // flow and outliers do not pull the FOE. Needs at least 3 samples; fewer give status no_flow.
+RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options,
+                          RadialFitWorkspace& workspace);
 RadialFit fit_radial_flow(std::span<const FlowSample> samples,
                           const RadialFitOptions& options = {});
 
 // The same robust fit with the FOE given: only 1/τ is fitted, u_j = (x_j − foe)/τ.
+RadialFit fit_radial_flow_about(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
+                                const RadialFitOptions& options, RadialFitWorkspace& workspace);
 RadialFit fit_radial_flow_about(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
                                 const RadialFitOptions& options = {});
 
@@ -171,6 +193,7 @@ class FeatureExtractor {
   std::vector<FlowSample> samples_;
   std::vector<int> sample_offsets_;
   std::vector<ObjectFeatures> features_;
+  RadialFitWorkspace fit_workspace_;
 };
 
 }  // namespace flowsteer::servo
