@@ -142,7 +142,7 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     servo::mark_ground(field_, options_.mount, speed_mps, ground, ground_mask_);
     segmenter_->segment(field_, ground_mask_, segmentation_);
     if (optical_flow_) {
-      servo::mark_ground_regions(field_, options_.mount, speed_mps, ground, segmentation_);
+      ground_regions_.mark(field_, options_.mount, speed_mps, ground, segmentation_);
     }
   } else {
     // The renderer's ground id already marks the ground.

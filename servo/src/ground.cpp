@@ -125,10 +125,10 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& m
   return result;
 }
 
-int mark_ground_regions(const FlowField& derotated, const CameraMount& mount, double speed_mps,
-                        const GroundRemovalOptions& options, Segmentation& segmentation) {
+int GroundRegionMarker::mark(const FlowField& derotated, const CameraMount& mount, double speed_mps,
+                             const GroundRemovalOptions& options, Segmentation& segmentation) {
   if (segmentation.labels.size() != derotated.size()) {
-    throw std::invalid_argument("mark_ground_regions: segmentation has " +
+    throw std::invalid_argument("GroundRegionMarker::mark: segmentation has " +
                                 std::to_string(segmentation.labels.size()) +
                                 " pixels for a field of " + std::to_string(derotated.size()));
   }
@@ -139,12 +139,7 @@ int mark_ground_regions(const FlowField& derotated, const CameraMount& mount, do
   // The median of a region's errors is within region_tolerance exactly when more than half of
   // them (the middle one among them) are: counts serve, no error needs keeping. Counted by runs
   // of one label, which neighbouring pixels mostly share.
-  struct Tally {
-    int errors = 0;
-    int within = 0;
-    bool above_horizon = false;
-  };
-  std::vector<Tally> tallies(static_cast<std::size_t>(segmentation.region_count()));
+  tallies_.assign(static_cast<std::size_t>(segmentation.region_count()), Tally{});
   const auto flow = derotated.flow();
   const double interval_s = derotated.interval_s();
   const double approach_mps = speed_mps * std::cos(mount.pitch_rad);
@@ -155,7 +150,7 @@ int mark_ground_regions(const FlowField& derotated, const CameraMount& mount, do
     Tally run;
     const auto flush = [&] {
       if (label != Segmentation::kNoRegion) {
-        Tally& tally = tallies[static_cast<std::size_t>(label)];
+        Tally& tally = tallies_[static_cast<std::size_t>(label)];
         tally.errors += run.errors;
         tally.within += run.within;
         tally.above_horizon = tally.above_horizon || run.above_horizon;
@@ -185,8 +180,8 @@ int mark_ground_regions(const FlowField& derotated, const CameraMount& mount, do
     flush();
   }
   int marked = 0;
-  for (std::size_t r = 0; r < tallies.size(); ++r) {
-    const Tally& tally = tallies[r];
+  for (std::size_t r = 0; r < tallies_.size(); ++r) {
+    const Tally& tally = tallies_[r];
     if (segmentation.kinds[r] != RegionKind::visible || tally.above_horizon || tally.errors == 0) {
       continue;
     }

@@ -1,5 +1,6 @@
 #include "flowsteer/servo/flow_field.hpp"
 
+#include <algorithm>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -114,6 +115,49 @@ TEST_P(GroundRemoval, DepthAndFlowTestsFindTheGround) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Pitch, GroundRemoval, ::testing::Values(0.0, 8.0 * kDeg));
+
+// The region-level test on exact flow without depth: the ground as one region is ground, the
+// moving box and the static post standing on it are not, whatever was marked before. The same
+// marker serves frames with other region counts.
+TEST(GroundRegions, OnlyTheRegionOfTheGroundIsMarked) {
+  const AnalyticScene scene = scene_with(0.0, 0.0);
+  const SceneRender render = render_scene(scene);
+  FlowField field(render.flow.intrinsics());
+  std::copy(render.flow.flow().begin(), render.flow.flow().end(), field.flow().begin());
+  // Regions 0, 1, 2: the ground, the box, the post.
+  Segmentation segmentation;
+  segmentation.width = field.width();
+  segmentation.height = field.height();
+  segmentation.labels.assign(field.size(), Segmentation::kNoRegion);
+  for (std::size_t i = 0; i < field.size(); ++i) {
+    if (render.ids[i] == kGroundId) {
+      segmentation.labels[i] = 0;
+    } else if (render.ids[i] >= 0) {
+      segmentation.labels[i] = render.ids[i];
+    }
+  }
+  segmentation.kinds.assign(3, RegionKind::visible);
+  segmentation.source_ids = {kGroundId, 1, 2};
+  GroundRegionMarker marker;
+  EXPECT_EQ(marker.mark(field, scene.mount, scene.agent_speed_mps, {}, segmentation), 1);
+  EXPECT_EQ(segmentation.kinds[0], RegionKind::ground);
+  EXPECT_EQ(segmentation.kinds[1], RegionKind::visible);
+  EXPECT_EQ(segmentation.kinds[2], RegionKind::visible);
+
+  // The ground alone, in another frame: the counts start afresh.
+  std::replace_if(
+      segmentation.labels.begin(), segmentation.labels.end(), [](auto l) { return l > 0; },
+      Segmentation::kNoRegion);
+  segmentation.kinds.assign(1, RegionKind::visible);
+  segmentation.source_ids = {kGroundId};
+  EXPECT_EQ(marker.mark(field, scene.mount, scene.agent_speed_mps, {}, segmentation), 1);
+  EXPECT_EQ(segmentation.kinds[0], RegionKind::ground);
+  // Standing still, the ground has no flow to tell it by.
+  segmentation.kinds.assign(1, RegionKind::visible);
+  EXPECT_EQ(marker.mark(field, scene.mount, 0.0, {}, segmentation), 0);
+  segmentation.labels.resize(3);
+  EXPECT_THROW(marker.mark(field, scene.mount, 1.0, {}, segmentation), std::invalid_argument);
+}
 
 TEST(GroundRemovalInput, ZeroSpeedFlowTestIsSkipped) {
   FlowField field(CameraIntrinsics::from_horizontal_fov(16, 12, 60.0 * kDeg));

@@ -8,6 +8,7 @@
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/servo/dark_regions.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
+#include "flowsteer/servo/ground.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/servo.hpp"
 
@@ -80,6 +81,7 @@ class Perception {
   servo::FlowField field_;
   std::optional<servo::OpticalFlow> optical_flow_;
   std::optional<servo::FlowSegmenter> segmenter_;
+  servo::GroundRegionMarker ground_regions_;
   servo::DarkRegionFinder dark_finder_;
   servo::FeatureExtractor extractor_;
   servo::Segmentation segmentation_;

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -62,10 +63,23 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& m
                                 double speed_mps, const GroundRemovalOptions& options,
                                 std::span<std::uint8_t> ground_mask);
 
-// Marks as RegionKind::ground every visible region of `segmentation` whose flow as a whole
-// matches the flat ground (region_tolerance above), for flow segmentation of numerical flow.
-// A region with any pixel at or above the horizon is never ground. Returns how many it marked.
-int mark_ground_regions(const FlowField& derotated, const CameraMount& mount, double speed_mps,
-                        const GroundRemovalOptions& options, Segmentation& segmentation);
+// The region-level ground test, for flow segmentation of numerical flow. Keeps its per-region
+// counts from call to call, so that a stream of frames does not allocate; one per thread.
+class GroundRegionMarker {
+ public:
+  // Marks as RegionKind::ground every visible region of `segmentation` whose flow as a whole
+  // matches the flat ground (region_tolerance above). A region with any pixel at or above the
+  // horizon is never ground. Returns how many it marked.
+  int mark(const FlowField& derotated, const CameraMount& mount, double speed_mps,
+           const GroundRemovalOptions& options, Segmentation& segmentation);
+
+ private:
+  struct Tally {
+    int errors = 0;
+    int within = 0;
+    bool above_horizon = false;
+  };
+  std::vector<Tally> tallies_;
+};
 
 }  // namespace flowsteer::servo
