@@ -8,6 +8,7 @@
 
 #include "flowsteer/launch/agent_pipeline.hpp"
 #include "flowsteer/launch/perception.hpp"
+#include "flowsteer/servo/analytic_scene.hpp"
 #include "output_files.hpp"
 
 namespace flowsteer::launch {
@@ -162,6 +163,15 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
         cover_regions(run.perception->segmentation(), view.sim->object_ids, run.region_id_pairs,
                       run.covers);
         const auto estimated_objects = run.perception->objects();
+        for (const servo::ObjectFeatures& o : estimated_objects) {
+          const auto label = static_cast<std::size_t>(o.label);
+          if (o.kind == servo::RegionKind::visible &&
+              o.status == servo::MotionStatus::approaching &&
+              o.ttc_s <= options.phantom_horizon_s && label < run.covers.size() &&
+              (run.covers[label].id == servo::kGroundId || run.covers[label].id == servo::kSkyId)) {
+            ++run.row.phantom_objects;
+          }
+        }
         for (const servo::ObjectFeatures& t : truth_objects) {
           if (t.kind != servo::RegionKind::visible ||
               t.status != servo::MotionStatus::approaching) {
@@ -221,7 +231,8 @@ void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
       << std::setw(6) << "res" << std::setw(8) << "frames" << std::setw(10) << "EPE px"
       << std::setw(8) << "valid" << std::setw(9) << "objects" << std::setw(8) << "missed"
       << std::setw(7) << "small" << std::setw(8) << "recall" << std::setw(8) << "purity"
-      << std::setw(10) << "FOE err" << std::setw(10) << "TTC err" << std::setw(12) << "ms/frame"
+      << std::setw(9) << "phantoms" << std::setw(10) << "FOE err" << std::setw(10) << "TTC err"
+      << std::setw(12) << "ms/frame"
       << "\n";
   for (const FlowEvalRow& r : rows) {
     out << std::left << std::setw(15) << servo::to_string(r.method) << std::setw(16)
@@ -230,9 +241,10 @@ void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
         << r.endpoint_error_px << std::setw(8) << std::setprecision(2) << r.valid_fraction
         << std::setw(9) << r.approaching_objects << std::setw(8) << r.missed_objects << std::setw(7)
         << r.small_objects << std::setw(8) << r.object_recall_mean << std::setw(8)
-        << r.region_purity_mean << std::setw(10) << std::setprecision(4) << r.foe_error_median
-        << std::setw(9) << std::setprecision(1) << 100.0 * r.ttc_relative_error_median << "%"
-        << std::setw(12) << std::setprecision(2) << r.ms_per_frame << "\n";
+        << r.region_purity_mean << std::setw(9) << r.phantom_objects << std::setw(10)
+        << std::setprecision(4) << r.foe_error_median << std::setw(9) << std::setprecision(1)
+        << 100.0 * r.ttc_relative_error_median << "%" << std::setw(12) << std::setprecision(2)
+        << r.ms_per_frame << "\n";
   }
 }
 
@@ -241,7 +253,7 @@ void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
   OutputDir out(out_dir);
   CsvTable csv({"method", "segmentation", "resolution", "frames", "endpoint_error_px",
                 "valid_fraction", "approaching_objects", "missed_objects", "small_objects",
-                "object_recall_mean", "region_purity_mean", "foe_error_median",
+                "object_recall_mean", "region_purity_mean", "phantom_objects", "foe_error_median",
                 "ttc_relative_error_median", "ms_per_frame"});
   for (const FlowEvalRow& r : rows) {
     csv.add(

@@ -61,6 +61,7 @@ TEST(FlowEvaluation, FlowSegmentationIsMatchedToTheObjectsByTheirPixels) {
   EXPECT_EQ(exact.missed_objects, 0);
   EXPECT_GT(exact.object_recall_mean, 0.8);
   EXPECT_GT(exact.region_purity_mean, 0.95);
+  EXPECT_EQ(exact.phantom_objects, 0);  // exact ground flow leaves no ground region
   EXPECT_LT(exact.ttc_relative_error_median, 1e-3);
   const FlowEvalRow& dis = rows[1];
   EXPECT_GE(3 * dis.approaching_objects, 2 * (dis.approaching_objects + dis.missed_objects));

@@ -20,6 +20,9 @@ struct FlowEvalOptions {
   // Objects smaller than this in the image are counted apart: a few of the estimators' patches
   // (8 px for DIS) across, where their flow is mostly the background's smoothed in.
   int min_object_px = 256;
+  // Regions approaching sooner than this (the avoidance horizon) count as phantoms when most of
+  // their pixels are the ground or the sky.
+  double phantom_horizon_s = 5.0;
 };
 
 // One estimator at one resolution, over every frame after the first.
@@ -39,6 +42,9 @@ struct FlowEvalRow {
   // share of its region that is the object (both 1 with semantic segmentation and exact flow).
   double object_recall_mean = 0.0;
   double region_purity_mean = 0.0;
+  // Region-frames approaching within phantom_horizon_s that are mostly ground or sky: what the
+  // agent would avoid that is not there.
+  int phantom_objects = 0;
   double foe_error_median = 0.0;           // |f − f_true|, normalised
   double ttc_relative_error_median = 0.0;  // |τ − τ_true| / τ_true
   double ms_per_frame = 0.0;               // flow computation alone
