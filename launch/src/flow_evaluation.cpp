@@ -190,11 +190,12 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
               region = static_cast<int>(r);
             }
           }
-          const auto o = std::find_if(
-              estimated_objects.begin(), estimated_objects.end(),
-              [&](const servo::ObjectFeatures& object) { return object.label == region; });
-          if (region == servo::Segmentation::kNoRegion || o == estimated_objects.end() ||
-              o->kind != servo::RegionKind::visible ||
+          // extract() gives one object per region, in label order.
+          const servo::ObjectFeatures* o =
+              region == servo::Segmentation::kNoRegion
+                  ? nullptr
+                  : &estimated_objects[static_cast<std::size_t>(region)];
+          if (o == nullptr || o->kind != servo::RegionKind::visible ||
               o->status != servo::MotionStatus::approaching) {
             ++run.row.missed_objects;
             continue;

@@ -96,9 +96,6 @@ double robust_weight(Loss loss, double e, double sigma) {
   return e < c ? 1.0 - (e / c) * (e / c) : 0.0;
 }
 
-// The robust fit shared by both forms of the model (see `design`): a least-squares start, then
-// iteratively reweighted rounds. Returns p; the fit's quality and the covariance of p go into
-// `fit`. Empty when the samples cannot identify p.
 template <int N>
 using RadialSolver = ceres::TinySolver<WeightedRadialResiduals<N>>;
 
@@ -109,7 +106,7 @@ struct RadialFitWorkspace::Buffers {
   std::vector<double> norms;
   std::vector<double> weights;
   std::vector<double> sorted;
-  RadialSolver<1> solver_about;
+  RadialSolver<1> solver_about;  // the FOE given: 1/τ alone
   RadialSolver<3> solver;
 };
 
@@ -120,6 +117,9 @@ RadialFitWorkspace& RadialFitWorkspace::operator=(RadialFitWorkspace&&) noexcept
 
 namespace {
 
+// The robust fit shared by both forms of the model (see `design`): a least-squares start, then
+// iteratively reweighted rounds. Returns p; the fit's quality and the covariance of p go into
+// `fit`. Empty when the samples cannot identify p.
 template <int N>
 std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const FlowSample> samples,
                                                              const Eigen::Vector2d& foe,
