@@ -262,8 +262,8 @@ void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
         {static_cast<double>(r.resolution), static_cast<double>(r.frames), r.endpoint_error_px,
          r.valid_fraction, static_cast<double>(r.approaching_objects),
          static_cast<double>(r.missed_objects), static_cast<double>(r.small_objects),
-         r.object_recall_mean, r.region_purity_mean, r.foe_error_median,
-         r.ttc_relative_error_median, r.ms_per_frame});
+         r.object_recall_mean, r.region_purity_mean, static_cast<double>(r.phantom_objects),
+         r.foe_error_median, r.ttc_relative_error_median, r.ms_per_frame});
   }
   csv.write(out.staging_path("flow_eval.csv"));
   std::ostringstream table;

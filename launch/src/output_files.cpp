@@ -116,6 +116,15 @@ void write_image(const std::filesystem::path& path, const cv::Mat& image) {
   }
 }
 
+void CsvTable::add(std::vector<std::string> labels, std::vector<double> values) {
+  if (labels.size() + values.size() != header_.size()) {
+    throw std::logic_error("CsvTable: a row of " + std::to_string(labels.size() + values.size()) +
+                           " cells under a header of " + std::to_string(header_.size()) +
+                           " columns (" + (header_.empty() ? "" : header_.front()) + ", ...)");
+  }
+  rows_.push_back({std::move(labels), std::move(values)});
+}
+
 void CsvTable::write(const std::filesystem::path& path) const {
   std::ostringstream out;
   for (std::size_t k = 0; k < header_.size(); ++k) {

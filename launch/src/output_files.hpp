@@ -36,10 +36,10 @@ class OutputDir {
 class CsvTable {
  public:
   explicit CsvTable(std::vector<std::string> header) : header_(std::move(header)) {}
-  void add(std::vector<double> row) { rows_.push_back({{}, std::move(row)}); }
-  void add(std::vector<std::string> labels, std::vector<double> values) {
-    rows_.push_back({std::move(labels), std::move(values)});
-  }
+  // Each row has one cell per header column; a row of another width is a programming error
+  // (std::logic_error), caught before a column shifts under its header.
+  void add(std::vector<double> row) { add({}, std::move(row)); }
+  void add(std::vector<std::string> labels, std::vector<double> values);
   // Throws std::runtime_error naming the file when it cannot be written.
   void write(const std::filesystem::path& path) const;
 
