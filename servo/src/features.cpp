@@ -330,6 +330,49 @@ double foe_hypothesis_statistic(const RadialFit& fit, const Eigen::Vector2d& foe
   return misfit.dot(ldlt.solve(misfit));
 }
 
+SurfaceResiduals static_surface_residuals(std::span<const FlowSample> samples,
+                                          const Eigen::Vector2d& static_foe) {
+  // Each sample gives one equation per flow component, u_k = J_k · θ, for both models.
+  const auto plane_row = [&](const FlowSample& s, int k) {
+    return ((s.point[k] - static_foe[k]) * Eigen::Vector3d(s.point.x(), s.point.y(), 1.0)).eval();
+  };
+  const auto radial_row = [](const FlowSample& s, int k) {
+    return Eigen::Vector3d(s.point[k], k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0);
+  };
+  Eigen::Matrix3d plane_normal = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d radial_normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d plane_rhs = Eigen::Vector3d::Zero();
+  Eigen::Vector3d radial_rhs = Eigen::Vector3d::Zero();
+  for (const FlowSample& s : samples) {
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector3d p = plane_row(s, k);
+      const Eigen::Vector3d r = radial_row(s, k);
+      plane_normal.noalias() += p * p.transpose();
+      radial_normal.noalias() += r * r.transpose();
+      plane_rhs += p * s.flow[k];
+      radial_rhs += r * s.flow[k];
+    }
+  }
+  SurfaceResiduals out;
+  const Eigen::FullPivLU<Eigen::Matrix3d> plane_lu(plane_normal);
+  const Eigen::FullPivLU<Eigen::Matrix3d> radial_lu(radial_normal);
+  if (samples.size() < 3 || !plane_lu.isInvertible() || !radial_lu.isInvertible()) {
+    return out;
+  }
+  const Eigen::Vector3d plane = plane_lu.solve(plane_rhs);
+  const Eigen::Vector3d radial = radial_lu.solve(radial_rhs);
+  out.static_plane = 0.0;
+  out.radial = 0.0;
+  // Summed from the residuals themselves: uᵀu − θᵀb cancels badly when the fit is close.
+  for (const FlowSample& s : samples) {
+    for (int k = 0; k < 2; ++k) {
+      out.static_plane += std::pow(s.flow[k] - plane_row(s, k).dot(plane), 2);
+      out.radial += std::pow(s.flow[k] - radial_row(s, k).dot(radial), 2);
+    }
+  }
+  return out;
+}
+
 double ttc_from_foe(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
                     double sign_from) {
   double sum = 0.0;
@@ -363,6 +406,10 @@ struct FeatureExtractor::Accumulator {
   double sum_x_inv_depth = 0.0;
 
   int valid() const { return pixels - invalid; }
+  // Every pixel has a depth, so the fit's samples are scaled by it (FeatureOptions::use_depth).
+  bool scales_by_depth(bool use_depth) const {
+    return use_depth && depth_count == pixels && pixels > 0;
+  }
 };
 
 FeatureExtractor::FeatureExtractor(const FeatureOptions& options) : options_(options) {
@@ -379,6 +426,11 @@ FeatureExtractor::FeatureExtractor(const FeatureOptions& options) : options_(opt
     throw std::invalid_argument(
         "FeatureOptions::flow_noise_correlation_px must be at least 1, got " +
         std::to_string(options_.flow_noise_correlation_px));
+  }
+  if (!(options_.static_surface_rss_ratio >= 0.0)) {
+    throw std::invalid_argument(
+        "FeatureOptions::static_surface_rss_ratio must be 0 (off) or positive, got " +
+        std::to_string(options_.static_surface_rss_ratio));
   }
   if (!(options_.static_foe_chi2 > 0.0)) {
     throw std::invalid_argument("FeatureOptions::static_foe_chi2 must be positive, got " +
@@ -485,7 +537,7 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     // slanted or curved surface τ_j = −Z_j / v_z varies, and u_j Z_j / Z̄ = (x_j − f) / τ̄ holds
     // exactly where the shared-τ model of CGF §5 holds only for a surface facing the camera.
     const Accumulator& a = accumulators_[r];
-    const bool scale_by_depth = options_.use_depth && a.depth_count == a.pixels && a.pixels > 0;
+    const bool scale_by_depth = a.scales_by_depth(options_.use_depth);
     const double inverse_mean_depth = scale_by_depth ? a.pixels / a.sum_depth : 0.0;
     for (int k = 0; k < take; ++k) {
       const std::uint32_t i = pixels[static_cast<std::size_t>(k * stride)];
@@ -542,8 +594,18 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
                                                   static_cast<double>(a.valid()) / area_px);
       const double covariance_scale =
           static_cast<double>(region_samples.size()) / std::max(independent, 1.0);
+      // Samples scaled by depth have the static FOE's radial flow exactly on any surface.
+      const auto looks_like_static_surface = [&] {
+        if (!(options_.static_surface_rss_ratio > 0.0) || a.scales_by_depth(options_.use_depth)) {
+          return false;
+        }
+        const SurfaceResiduals residuals =
+            static_surface_residuals(region_samples, *options_.static_foe);
+        return residuals.static_plane <= options_.static_surface_rss_ratio * residuals.radial;
+      };
       if (foe_hypothesis_statistic(fit, *options_.static_foe, covariance_scale) <=
-          options_.static_foe_chi2) {
+              options_.static_foe_chi2 ||
+          looks_like_static_surface()) {
         fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit,
                                     fit_workspace_);
         fit.quality.static_foe = true;

@@ -215,6 +215,36 @@ TEST(RadialFit, FitAboutAGivenFoeFindsTtc) {
   EXPECT_EQ(receding.status, MotionStatus::receding);
 }
 
+TEST(RadialFit, StaticSurfaceResidualsTellAWallFromAMovingPanel) {
+  const Eigen::Vector2d static_foe(0.0, 0.0);
+  // A wall 2 m to the left seen while walking at 1 m/s: Z = −2 / x, u = (x − f) / Z.
+  std::vector<FlowSample> wall;
+  for (int i = 0; i < 12; ++i) {
+    for (int j = 0; j < 8; ++j) {
+      const Eigen::Vector2d x(-1.5 + 0.1 * i, -0.3 + 0.08 * j);
+      wall.push_back({x, (x - static_foe) * (-x.x() / 2.0)});
+    }
+  }
+  const SurfaceResiduals of_wall = static_surface_residuals(wall, static_foe);
+  EXPECT_LT(of_wall.static_plane, 1e-20);
+  EXPECT_GT(of_wall.radial, 1e-4);
+
+  const SurfaceResiduals of_panel =
+      static_surface_residuals(radial_samples({0.3, 0.1}), static_foe);
+  EXPECT_LT(of_panel.radial, 1e-20);
+  EXPECT_GT(of_panel.static_plane, 1e-4);
+
+  const std::vector<FlowSample> two(wall.begin(), wall.begin() + 2);
+  EXPECT_TRUE(std::isnan(static_surface_residuals(two, static_foe).static_plane));
+  // On one line through the FOE the plane's parameters cannot be told apart.
+  std::vector<FlowSample> on_a_ray;
+  for (int i = 1; i <= 10; ++i) {
+    const Eigen::Vector2d x(0.1 * i, 0.05 * i);
+    on_a_ray.push_back({x, 0.5 * x});
+  }
+  EXPECT_TRUE(std::isnan(static_surface_residuals(on_a_ray, static_foe).static_plane));
+}
+
 FeatureOptions with_static_foe(const Case& c) {
   FeatureOptions options;
   options.static_foe = CameraMount{1.0, c.pitch_rad}.forward_foe();
@@ -253,6 +283,51 @@ TEST(FeatureExtractor, MovingObjectKeepsItsOwnFoe) {
     EXPECT_FALSE(e.features.fit.static_foe) << "seed " << seed;
     EXPECT_LT((e.features.foe - e.truth.foe).norm(), 0.02) << "seed " << seed;
   }
+}
+
+// Numerical flow has no depth: the static test then also asks whether a static plane explains
+// the flow (static_surface_residuals), which must not take a moving object for one. The
+// oncoming agent moves along the line of sight, so its FOE is the static one either way.
+TEST(FeatureExtractor, MovingObjectWithoutDepthKeepsItsOwnFoe) {
+  for (const Case& c : {approaching_cases()[1], approaching_cases()[2]}) {
+    FeatureOptions options = with_static_foe(c);
+    options.use_depth = false;
+    for (unsigned seed = 1; seed <= 5; ++seed) {
+      const auto corrupt = [&](SceneRender& r) { corrupt_region(r, c.object.id, seed); };
+      const Extracted e = extract(c, corrupt, options);
+      ASSERT_EQ(e.features.status, MotionStatus::approaching) << c.name << " seed " << seed;
+      EXPECT_LT((e.features.foe - e.truth.foe).norm(), 0.02) << c.name << " seed " << seed;
+      if (c.object.velocity_mps.y() != 0.0) {
+        EXPECT_FALSE(e.features.fit.static_foe) << c.name << " seed " << seed;
+      }
+    }
+  }
+}
+
+// A wall beside the path, 8 m long: its near end expands faster than its far end, which the
+// radial model can only read as an FOE moved towards the near end.
+TEST(FeatureExtractor, WallAlongThePathWithoutDepthGetsTheStaticFoe) {
+  SceneObject wall;
+  wall.id = 7;
+  wall.position_m = {5.0, 1.6};
+  wall.length_m = 8.0;
+  wall.width_m = 0.1;
+  const Case c{"wall on the left", 0.0, wall};
+  FeatureOptions options = with_static_foe(c);
+  options.use_depth = false;
+  const Eigen::Vector2d static_foe = *options.static_foe;
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const auto corrupt = [&](SceneRender& r) { corrupt_region(r, c.object.id, seed); };
+    const Extracted e = extract(c, corrupt, options);
+    ASSERT_EQ(e.features.status, MotionStatus::approaching) << "seed " << seed;
+    EXPECT_TRUE(e.features.fit.static_foe) << "seed " << seed;
+    EXPECT_EQ(e.features.foe, static_foe) << "seed " << seed;
+  }
+  options.static_surface_rss_ratio = 0.0;
+  const Extracted radial_only = extract(
+      c, [](SceneRender&) {}, options);
+  EXPECT_FALSE(radial_only.features.fit.static_foe);
+  EXPECT_GT((radial_only.features.foe - static_foe).norm(), 0.1);
 }
 
 TEST(FeatureExtractor, NonFiniteVectorsAreIgnoredAndCounted) {
@@ -389,6 +464,9 @@ TEST(FeatureExtractor, RejectsOptionsThatCannotFit) {
   EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
   options = {};
   options.static_foe_chi2 = 0.0;
+  EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
+  options = {};
+  options.static_surface_rss_ratio = -1.0;
   EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
 }
 

@@ -29,8 +29,8 @@ struct FitQuality {
   int iterations = 0;            // solver iterations, all rounds together
   double residual_rms = 0.0;     // over the inliers, normalised units per second
   double inlier_fraction = 0.0;  // share of samples within the inlier threshold
-  // The flow could not be told from a static object's (FeatureOptions::static_foe): the FOE is
-  // the static one and τ was fitted about it.
+  // The flow could not be told from a static object's (FeatureOptions::static_foe and
+  // static_surface_rss_ratio): the FOE is the static one and τ was fitted about it.
   bool static_foe = false;
 };
 
@@ -139,6 +139,20 @@ RadialFit fit_radial_flow_about(std::span<const FlowSample> samples, const Eigen
 double foe_hypothesis_statistic(const RadialFit& fit, const Eigen::Vector2d& foe,
                                 double covariance_scale = 1.0);
 
+// Two readings of the same flow, each fitted by linear least squares with three parameters:
+// a static plane while the camera translates towards `static_foe` (u_j = (x_j − f)(a x_j + b y_j
+// + c): a static point's flow points away from the FOE, scaled by the inverse depth, which is
+// linear in the image point on a plane), and the radial model of CGF Eq. 2–3 with a free FOE
+// (u_j = (x_j − f')/τ, fronto-parallel: one depth). The residual sums of squares over both
+// components of every sample; NaN when either system is singular (fewer than three samples, or
+// samples on a line through the FOE).
+struct SurfaceResiduals {
+  double static_plane = std::numeric_limits<double>::quiet_NaN();
+  double radial = std::numeric_limits<double>::quiet_NaN();
+};
+SurfaceResiduals static_surface_residuals(std::span<const FlowSample> samples,
+                                          const Eigen::Vector2d& static_foe);
+
 // CGF Eq. 5: τ = mean_j ‖x_j − f‖ / ‖u_j‖, over samples with a non-negligible flow, signed
 // like `sign_from`. NaN when no sample qualifies.
 double ttc_from_foe(std::span<const FlowSample> samples, const Eigen::Vector2d& foe,
@@ -164,6 +178,14 @@ struct FeatureOptions {
   // and the agent speeds up. Only a region whose flow shows that it moves keeps its own FOE.
   std::optional<Eigen::Vector2d> static_foe;
   double static_foe_chi2 = 9.21;  // 99% of a static object's FOEs pass
+  // Without depth (numerical flow), a region is also static when a static plane explains its
+  // flow nearly as well as the radial model with a free FOE: residual sums of squares (of
+  // static_surface_residuals) plane <= this × radial; 0 turns it off. The radial model is a
+  // surface facing the camera; a wall along the path, whose near end expands faster, fits it only
+  // with the FOE moved towards that end, a misfit no noise model of the Wald test covers. The
+  // margin above 1 leans towards the static reading, which most of what a moving camera sees is;
+  // it was chosen by sweeps of `room` and `crossing` with DIS flow over camera resolutions.
+  double static_surface_rss_ratio = 1.5;
   // Side in pixels of the window over which the flow's errors are correlated: 1 for exact flow,
   // about an estimator's patch at its finest scale otherwise. Samples closer than this are not
   // independent, which widens the fit's covariance for the test above.
