@@ -354,9 +354,12 @@ SurfaceResiduals static_surface_residuals(std::span<const FlowSample> samples,
     }
   }
   SurfaceResiduals out;
+  if (samples.size() < 3) {
+    return out;
+  }
   const Eigen::FullPivLU<Eigen::Matrix3d> plane_lu(plane_normal);
   const Eigen::FullPivLU<Eigen::Matrix3d> radial_lu(radial_normal);
-  if (samples.size() < 3 || !plane_lu.isInvertible() || !radial_lu.isInvertible()) {
+  if (!plane_lu.isInvertible() || !radial_lu.isInvertible()) {
     return out;
   }
   const Eigen::Vector3d plane = plane_lu.solve(plane_rhs);
