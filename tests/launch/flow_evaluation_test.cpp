@@ -2,6 +2,7 @@
 
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -10,15 +11,23 @@
 namespace flowsteer::launch {
 namespace {
 
-// The bounds for DIS (medium) on textured rendered scenes at 256²: median TTC relative
-// error within 10% and FOE error within 0.03 (normalised) on approaching objects.
-TEST(FlowEvaluation, DisMediumMeetsTheTtcAndFoeBoundsOnTexturedTargets) {
+// The exact flow's row, then DIS (medium)'s, over 40 frames of a built-in scenario at 256².
+std::vector<FlowEvalRow> evaluate_dis_medium(
+    const char* scenario,
+    servo::SegmentationMethod segmentation = servo::SegmentationMethod::semantic) {
   FlowEvalOptions options;
   options.resolutions = {256};
   options.methods = {servo::FlowMethod::dis_medium};
+  options.segmentation = segmentation;
   options.frames = 40;
   std::ostringstream log;
-  const auto rows = evaluate_flow(builtin_scenario("flow_targets"), options, log);
+  return evaluate_flow(builtin_scenario(scenario), options, log);
+}
+
+// The bounds for DIS (medium) on textured rendered scenes at 256²: median TTC relative
+// error within 10% and FOE error within 0.03 (normalised) on approaching objects.
+TEST(FlowEvaluation, DisMediumMeetsTheTtcAndFoeBoundsOnTexturedTargets) {
+  const auto rows = evaluate_dis_medium("flow_targets");
   ASSERT_EQ(rows.size(), 2U);  // the synthetic reference, then DIS
   const FlowEvalRow& reference = rows[0];
   EXPECT_EQ(reference.method, servo::FlowMethod::synthetic);
@@ -46,13 +55,7 @@ TEST(FlowEvaluation, DisMediumMeetsTheTtcAndFoeBoundsOnTexturedTargets) {
 // within the bound on those it finds. The DIS floors guard what was measured when this
 // was written (73% found, recall 0.52, purity 0.79).
 TEST(FlowEvaluation, FlowSegmentationIsMatchedToTheObjectsByTheirPixels) {
-  FlowEvalOptions options;
-  options.resolutions = {256};
-  options.methods = {servo::FlowMethod::dis_medium};
-  options.segmentation = servo::SegmentationMethod::flow_graph_fast;
-  options.frames = 40;
-  std::ostringstream log;
-  const auto rows = evaluate_flow(builtin_scenario("flow_targets"), options, log);
+  const auto rows = evaluate_dis_medium("flow_targets", servo::SegmentationMethod::flow_graph_fast);
   ASSERT_EQ(rows.size(), 2U);
   print_flow_table(rows, std::cout);
   const FlowEvalRow& exact = rows[0];
@@ -75,12 +78,7 @@ TEST(FlowEvaluation, FlowSegmentationIsMatchedToTheObjectsByTheirPixels) {
 // static surface gives them the heading as FOE and their TTC about it; without it the exact
 // flow's own fit erred by 0.19 in FOE and 23% in TTC here, and DIS by 25% in TTC.
 TEST(FlowEvaluation, StaticSurfacesWithoutDepthKeepTheHeadingAsFoe) {
-  FlowEvalOptions options;
-  options.resolutions = {256};
-  options.methods = {servo::FlowMethod::dis_medium};
-  options.frames = 40;
-  std::ostringstream log;
-  const auto rows = evaluate_flow(builtin_scenario("room"), options, log);
+  const auto rows = evaluate_dis_medium("room");
   ASSERT_EQ(rows.size(), 2U);
   const FlowEvalRow& exact = rows[0];
   EXPECT_GE(exact.approaching_objects, 100);
