@@ -178,6 +178,10 @@ struct FeatureOptions {
   // and the agent speeds up. Only a region whose flow shows that it moves keeps its own FOE.
   std::optional<Eigen::Vector2d> static_foe;
   double static_foe_chi2 = 9.21;  // 99% of a static object's FOEs pass
+  // Side in pixels of the window over which the flow's errors are correlated: 1 for exact flow,
+  // about an estimator's patch at its finest scale otherwise. Samples closer than this are not
+  // independent, which widens the fit's covariance for the test above.
+  double flow_noise_correlation_px = 1.0;
   // Without depth (numerical flow), a region is also static when a static plane explains its
   // flow nearly as well as the radial model with a free FOE: residual sums of squares (of
   // static_surface_residuals) plane <= this × radial; 0 turns it off. The radial model is a
@@ -186,10 +190,6 @@ struct FeatureOptions {
   // margin above 1 leans towards the static reading, which most of what a moving camera sees is;
   // it was chosen by sweeps of `room` and `crossing` with DIS flow over camera resolutions.
   double static_surface_rss_ratio = 1.5;
-  // Side in pixels of the window over which the flow's errors are correlated: 1 for exact flow,
-  // about an estimator's patch at its finest scale otherwise. Samples closer than this are not
-  // independent, which widens the fit's covariance for the test above.
-  double flow_noise_correlation_px = 1.0;
 };
 
 // Extracts per-region features from a derotated flow field. Keeps its scratch buffers between
