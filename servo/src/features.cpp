@@ -332,6 +332,10 @@ double foe_hypothesis_statistic(const RadialFit& fit, const Eigen::Vector2d& foe
 
 SurfaceResiduals static_surface_residuals(std::span<const FlowSample> samples,
                                           const Eigen::Vector2d& static_foe) {
+  SurfaceResiduals out;
+  if (samples.size() < 3) {
+    return out;
+  }
   // Each sample gives one equation per flow component, u_k = J_k · θ, for both models.
   const auto plane_row = [&](const FlowSample& s, int k) {
     return ((s.point[k] - static_foe[k]) * Eigen::Vector3d(s.point.x(), s.point.y(), 1.0)).eval();
@@ -352,10 +356,6 @@ SurfaceResiduals static_surface_residuals(std::span<const FlowSample> samples,
       plane_rhs += p * s.flow[k];
       radial_rhs += r * s.flow[k];
     }
-  }
-  SurfaceResiduals out;
-  if (samples.size() < 3) {
-    return out;
   }
   const Eigen::FullPivLU<Eigen::Matrix3d> plane_lu(plane_normal);
   const Eigen::FullPivLU<Eigen::Matrix3d> radial_lu(radial_normal);
