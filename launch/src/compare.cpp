@@ -161,10 +161,11 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
                     "mean_path_length_m", "min_clearance_m", "path_length_vs_geometric",
                     "min_clearance_vs_geometric_m"});
     for (const CompareRow& r : rows) {
+      const RunSummary& s = r.summary;
       table.add({r.controller},
-                {static_cast<double>(r.collisions), static_cast<double>(r.goals_reached),
-                 static_cast<double>(r.agents), r.mean_time_to_goal_s, r.mean_path_length_m,
-                 r.min_clearance_m, r.path_length_vs_reference, r.min_clearance_vs_reference_m});
+                {static_cast<double>(s.collisions), static_cast<double>(s.goals_reached),
+                 static_cast<double>(s.agents), s.mean_time_to_goal_s, s.mean_path_length_m,
+                 s.min_clearance_m, r.path_length_vs_reference, r.min_clearance_vs_reference_m});
     }
     table.write(out->staging_path("compare.csv"));
 
@@ -216,33 +217,18 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
 std::vector<CompareRow> compare_table(const CompareResult& result) {
   std::vector<CompareRow> rows;
   for (const ControllerRun& run : result.runs) {
-    CompareRow row;
-    row.controller = run.controller;
-    row.collisions = static_cast<int>(run.result.collisions.size());
-    row.agents = static_cast<int>(run.result.agents.size());
-    row.min_clearance_m = std::numeric_limits<double>::infinity();
-    double time_sum = 0.0;
-    double path_sum = 0.0;
-    for (const AgentResult& a : run.result.agents) {
-      if (a.reached_goal) {
-        ++row.goals_reached;
-        time_sum += a.time_to_goal_s;
-      }
-      path_sum += a.path_length_m;
-      row.min_clearance_m = std::min(row.min_clearance_m, a.min_clearance_m);
-    }
-    row.mean_time_to_goal_s = row.goals_reached > 0 ? time_sum / row.goals_reached : kNaN;
-    row.mean_path_length_m = row.agents > 0 ? path_sum / row.agents : kNaN;
-    rows.push_back(row);
+    rows.push_back({run.controller, summarize(run.result), 0.0, 0.0});
   }
   const auto reference = std::find_if(
       rows.begin(), rows.end(), [](const CompareRow& r) { return r.controller == kReference; });
   for (CompareRow& row : rows) {
     row.path_length_vs_reference =
-        reference != rows.end() ? row.mean_path_length_m / reference->mean_path_length_m - 1.0
-                                : kNaN;
+        reference != rows.end()
+            ? row.summary.mean_path_length_m / reference->summary.mean_path_length_m - 1.0
+            : kNaN;
     row.min_clearance_vs_reference_m =
-        reference != rows.end() ? row.min_clearance_m - reference->min_clearance_m : kNaN;
+        reference != rows.end() ? row.summary.min_clearance_m - reference->summary.min_clearance_m
+                                : kNaN;
   }
   return rows;
 }
@@ -265,11 +251,12 @@ void print_compare_table(const std::vector<CompareRow>& rows, std::ostream& out)
     out << std::setw(width) << text.str();
   };
   for (const CompareRow& r : rows) {
-    out << std::left << std::setw(15) << r.controller << std::right << std::setw(11) << r.collisions
-        << std::setw(8) << (std::to_string(r.goals_reached) + "/" + std::to_string(r.agents));
-    cell(r.mean_time_to_goal_s, " s", 14);
-    cell(r.mean_path_length_m, " m", 13);
-    cell(r.min_clearance_m, " m", 15);
+    const RunSummary& s = r.summary;
+    out << std::left << std::setw(15) << r.controller << std::right << std::setw(11) << s.collisions
+        << std::setw(8) << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents));
+    cell(s.mean_time_to_goal_s, " s", 14);
+    cell(s.mean_path_length_m, " m", 13);
+    cell(s.min_clearance_m, " m", 15);
     cell(100.0 * r.path_length_vs_reference, "%", 16);
     cell(r.min_clearance_vs_reference_m, " m", 18);
     out << "\n";

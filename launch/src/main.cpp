@@ -19,6 +19,7 @@
 #include "flowsteer/launch/flow_evaluation.hpp"
 #include "flowsteer/launch/robot_commands.hpp"
 #include "flowsteer/launch/robot_launch.hpp"
+#include "flowsteer/launch/robustness.hpp"
 #include "flowsteer/launch/scenario_file.hpp"
 #include "flowsteer/launch/simulation.hpp"
 
@@ -219,6 +220,36 @@ int main(int argc, char** argv) {
                        " (semantic measures the flow alone)")
       ->capture_default_str();
   eval_flow->add_option("--out", eval_out, "folder for flow_eval.csv and flow_eval.txt")
+      ->capture_default_str();
+
+  CLI::App* eval_robustness = eval->add_subcommand(
+      "robustness",
+      "Run a scenario at several camera resolutions, with each flow and segmentation given, and "
+      "count the runs with no collision and every goal reached");
+  std::string robustness_file;
+  std::string robustness_name;
+  std::vector<int> robustness_resolutions;
+  std::vector<std::string> robustness_flows;
+  std::vector<std::string> robustness_segmentations;
+  int robustness_steps = 0;
+  std::string robustness_out = "flowsteer_robustness";
+  eval_robustness->add_option("scenario_file", robustness_file, "scenario YAML");
+  eval_robustness->add_option("--scenario", robustness_name,
+                              "a built-in scenario (flowsteer scenarios)");
+  eval_robustness->add_option("--resolution", robustness_resolutions,
+                              "N x N pixels; repeat for several (default: the scenario's own "
+                              "and 8, 16, 24, 32 pixels either side)");
+  eval_robustness->add_option("--flow", robustness_flows,
+                              "every agent's flow (default: the scenario's); repeat for several: " +
+                                  flowsteer::servo::flow_method_names());
+  eval_robustness->add_option("--segmentation", robustness_segmentations,
+                              "every agent's segmentation (default: the scenario's); repeat for "
+                              "several: " +
+                                  flowsteer::servo::segmentation_method_names());
+  eval_robustness->add_option("--steps", robustness_steps, "stop each run after N control steps")
+      ->check(CLI::PositiveNumber);
+  eval_robustness
+      ->add_option("--out", robustness_out, "folder for robustness.csv and robustness.txt")
       ->capture_default_str();
 
   CLI::App* calibrate =
@@ -444,6 +475,25 @@ int main(int argc, char** argv) {
       const auto rows = flowsteer::launch::evaluate_flow(world, options, std::cerr);
       flowsteer::launch::print_flow_table(rows, std::cout);
       flowsteer::launch::write_flow_evaluation(rows, eval_out);
+    }
+    if (*eval_robustness) {
+      const flowsteer::sim_camera::WorldSpec world =
+          load_world("eval robustness", robustness_file, robustness_name);
+      flowsteer::launch::RobustnessOptions options;
+      options.resolutions = robustness_resolutions;
+      for (const std::string& name : robustness_flows) {
+        options.flows.push_back(
+            flow_method_option("--flow", name, "method", flowsteer::servo::flow_method_names()));
+      }
+      for (const std::string& name : robustness_segmentations) {
+        options.segmentations.push_back(segmentation_method_option("--segmentation", name));
+      }
+      if (robustness_steps > 0) {
+        options.steps = robustness_steps;
+      }
+      const auto runs = flowsteer::launch::evaluate_robustness(world, options, std::cerr);
+      flowsteer::launch::print_robustness_table(runs, std::cout);
+      flowsteer::launch::write_robustness(runs, robustness_out);
     }
     if (*compare) {
       const flowsteer::sim_camera::WorldSpec world =

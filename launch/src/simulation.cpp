@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -217,6 +218,30 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
     out->commit();
   }
   return result;
+}
+
+RunSummary summarize(const SimResult& result) {
+  RunSummary summary;
+  summary.collisions = static_cast<int>(result.collisions.size());
+  summary.agents = static_cast<int>(result.agents.size());
+  summary.min_clearance_m = std::numeric_limits<double>::infinity();
+  double time_sum = 0.0;
+  double path_sum = 0.0;
+  for (const AgentResult& a : result.agents) {
+    if (a.reached_goal) {
+      ++summary.goals_reached;
+      time_sum += a.time_to_goal_s;
+    }
+    if (a.final_distance_to_leader_m >= 0.0) {
+      ++summary.followers;
+    }
+    path_sum += a.path_length_m;
+    summary.min_clearance_m = std::min(summary.min_clearance_m, a.min_clearance_m);
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  summary.mean_time_to_goal_s = summary.goals_reached > 0 ? time_sum / summary.goals_reached : nan;
+  summary.mean_path_length_m = summary.agents > 0 ? path_sum / summary.agents : nan;
+  return summary;
 }
 
 }  // namespace flowsteer::launch

@@ -107,8 +107,8 @@ TEST_P(VisionAgainstReference, BothAvoidAndVisionStaysNearTheReference) {
   const std::vector<CompareRow> rows = compare_table(result);
   ASSERT_EQ(rows.size(), 2U);
   for (const CompareRow& r : rows) {
-    EXPECT_EQ(r.collisions, 0) << r.controller;
-    EXPECT_EQ(r.goals_reached, r.agents) << r.controller;
+    EXPECT_EQ(r.summary.collisions, 0) << r.controller;
+    EXPECT_EQ(r.summary.goals_reached, r.summary.agents) << r.controller;
   }
   EXPECT_EQ(rows[1].controller, "geometric");
   EXPECT_LT(std::abs(rows[0].path_length_vs_reference), 0.10);

@@ -53,12 +53,7 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
 // among the controllers (NaN otherwise): they separate what perception adds from the control law.
 struct CompareRow {
   std::string controller;
-  int collisions = 0;
-  int goals_reached = 0;
-  int agents = 0;
-  double mean_time_to_goal_s = 0.0;  // over the agents that reached their goal (NaN if none)
-  double mean_path_length_m = 0.0;
-  double min_clearance_m = 0.0;           // over all agents and steps
+  RunSummary summary;
   double path_length_vs_reference = 0.0;  // mean path length / the reference's − 1
   double min_clearance_vs_reference_m = 0.0;
 };

@@ -49,6 +49,20 @@ struct SimResult {
   cv::Mat topview;               // the run from above, as topview.png (draw_topview)
 };
 
+// What one run came to, over its agents.
+struct RunSummary {
+  int collisions = 0;
+  int goals_reached = 0;
+  int agents = 0;
+  int followers = 0;                 // agents following a leader: they have no goal to reach
+  double mean_time_to_goal_s = 0.0;  // over the agents that reached their goal (NaN if none)
+  double mean_path_length_m = 0.0;
+  double min_clearance_m = 0.0;  // over all agents and steps
+  // No collision, and every agent that has a goal reached it.
+  bool clean() const { return collisions == 0 && goals_reached == agents - followers; }
+};
+RunSummary summarize(const SimResult& result);
+
 // Runs the world to its end: each agent renders its view, the servo core turns it into a
 // command, the world moves. Writes trajectories.csv, costs.csv, topview.png and summary.json
 // (and agent_N.mp4 with --video) into out_dir, each file complete or not at all. Progress goes
