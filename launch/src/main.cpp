@@ -491,9 +491,9 @@ int main(int argc, char** argv) {
       if (robustness_steps > 0) {
         options.steps = robustness_steps;
       }
+      options.out_dir = robustness_out;
       const auto runs = flowsteer::launch::evaluate_robustness(world, options, std::cerr);
       flowsteer::launch::print_robustness_table(runs, std::cout);
-      flowsteer::launch::write_robustness(runs, robustness_out);
     }
     if (*compare) {
       const flowsteer::sim_camera::WorldSpec world =

@@ -23,6 +23,25 @@ std::string method_name(const std::optional<Method>& method) {
   return method ? std::string(servo::to_string(*method)) : std::string("scenario");
 }
 
+void write_tables(const std::vector<RobustnessRun>& runs, OutputDir& out) {
+  CsvTable csv({"flow", "segmentation", "resolution", "collisions", "goals_reached",
+                "agents_with_goal", "mean_time_to_goal_s", "mean_path_length_m", "min_clearance_m",
+                "clean"});
+  for (const RobustnessRun& r : runs) {
+    const RunSummary& s = r.summary;
+    csv.add(
+        {method_name(r.flow), method_name(r.segmentation)},
+        {static_cast<double>(r.resolution), static_cast<double>(s.collisions),
+         static_cast<double>(s.goals_reached), static_cast<double>(s.agents - s.followers),
+         s.mean_time_to_goal_s, s.mean_path_length_m, s.min_clearance_m, s.clean() ? 1.0 : 0.0});
+  }
+  csv.write(out.staging_path("robustness.csv"));
+  std::ostringstream table;
+  print_robustness_table(runs, table);
+  write_text(out.staging_path("robustness.txt"), table.str());
+  out.commit();
+}
+
 }  // namespace
 
 std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
@@ -60,6 +79,10 @@ std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& worl
                                                const RobustnessOptions& options,
                                                std::ostream& log) {
   const std::vector<int> resolutions = robustness_resolutions(world, options);
+  std::optional<OutputDir> out;
+  if (options.write_outputs) {
+    out.emplace(options.out_dir);
+  }
   std::vector<std::optional<servo::FlowMethod>> flows(options.flows.begin(), options.flows.end());
   if (flows.empty()) {
     flows.emplace_back();
@@ -90,6 +113,9 @@ std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& worl
         runs.push_back({flow, segmentation, resolution, summary});
       }
     }
+  }
+  if (out) {
+    write_tables(runs, *out);
   }
   return runs;
 }
@@ -125,27 +151,6 @@ void print_robustness_table(const std::vector<RobustnessRun>& runs, std::ostream
     begin = end;
   }
   out.flags(flags);
-}
-
-void write_robustness(const std::vector<RobustnessRun>& runs,
-                      const std::filesystem::path& out_dir) {
-  OutputDir out(out_dir);
-  CsvTable csv({"flow", "segmentation", "resolution", "collisions", "goals_reached",
-                "agents_with_goal", "mean_time_to_goal_s", "mean_path_length_m", "min_clearance_m",
-                "clean"});
-  for (const RobustnessRun& r : runs) {
-    const RunSummary& s = r.summary;
-    csv.add(
-        {method_name(r.flow), method_name(r.segmentation)},
-        {static_cast<double>(r.resolution), static_cast<double>(s.collisions),
-         static_cast<double>(s.goals_reached), static_cast<double>(s.agents - s.followers),
-         s.mean_time_to_goal_s, s.mean_path_length_m, s.min_clearance_m, s.clean() ? 1.0 : 0.0});
-  }
-  csv.write(out.staging_path("robustness.csv"));
-  std::ostringstream table;
-  print_robustness_table(runs, table);
-  write_text(out.staging_path("robustness.txt"), table.str());
-  out.commit();
 }
 
 }  // namespace flowsteer::launch

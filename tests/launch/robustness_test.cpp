@@ -54,6 +54,7 @@ TEST(Robustness, RunsEveryFlowAndResolutionAndCountsTheCleanOnes) {
   RobustnessOptions options;
   options.resolutions = {32, 40};
   options.flows = {servo::FlowMethod::synthetic, servo::FlowMethod::dis_ultrafast};
+  options.write_outputs = false;
   std::ostringstream log;
   // Both goals within reach: every run is clean.
   const std::vector<RobustnessRun> reachable = evaluate_robustness(open_ground(4.0), options, log);
@@ -68,6 +69,11 @@ TEST(Robustness, RunsEveryFlowAndResolutionAndCountsTheCleanOnes) {
     EXPECT_TRUE(r.summary.clean()) << r.resolution;
   }
   // A goal 20 m away is not reached in 4 s: no run is clean.
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "flowsteer_robustness_test";
+  std::filesystem::remove_all(dir);
+  options.write_outputs = true;
+  options.out_dir = dir;
   const std::vector<RobustnessRun> unreachable =
       evaluate_robustness(open_ground(20.0), options, log);
   ASSERT_EQ(unreachable.size(), 4U);
@@ -84,10 +90,6 @@ TEST(Robustness, RunsEveryFlowAndResolutionAndCountsTheCleanOnes) {
             std::string::npos)
       << table.str();
 
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / "flowsteer_robustness_test";
-  std::filesystem::remove_all(dir);
-  write_robustness(unreachable, dir);
   std::ifstream csv(dir / "robustness.csv");
   std::string header;
   std::string first;
@@ -98,6 +100,15 @@ TEST(Robustness, RunsEveryFlowAndResolutionAndCountsTheCleanOnes) {
   EXPECT_EQ(first.substr(first.size() - 2), ",0") << first;
   EXPECT_TRUE(std::filesystem::exists(dir / "robustness.txt"));
   std::filesystem::remove_all(dir);
+}
+
+TEST(Robustness, AFolderThatCannotBeWrittenFailsBeforeTheFirstRun) {
+  RobustnessOptions options;
+  options.resolutions = {32};
+  options.out_dir = "/dev/null/flowsteer_robustness";
+  std::ostringstream log;
+  EXPECT_THROW(evaluate_robustness(open_ground(4.0), options, log), std::runtime_error);
+  EXPECT_EQ(log.str(), "");
 }
 
 TEST(Robustness, FollowersHaveNoGoalToReach) {

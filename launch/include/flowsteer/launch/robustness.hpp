@@ -23,6 +23,8 @@ struct RobustnessOptions {
   std::vector<servo::FlowMethod> flows;
   std::vector<servo::SegmentationMethod> segmentations;
   std::optional<int> steps;  // stop each run after this many control steps
+  std::filesystem::path out_dir = "flowsteer_robustness";
+  bool write_outputs = true;
 };
 
 struct RobustnessRun {
@@ -38,14 +40,13 @@ std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
                                         const RobustnessOptions& options);
 
 // Every flow × segmentation × resolution, in that order, each run as `flowsteer sim` with those
-// overrides and no files written. Progress goes to `log`.
+// overrides and without its files. Then, with write_outputs, robustness.csv and robustness.txt
+// (the printed table) in out_dir, each written whole or not at all; out_dir is created before the
+// first run, so a folder that cannot be written fails at once. Progress goes to `log`.
 std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& world,
                                                const RobustnessOptions& options, std::ostream& log);
 
 // One line per run, then per flow and segmentation how many runs were clean.
 void print_robustness_table(const std::vector<RobustnessRun>& runs, std::ostream& out);
-// robustness.csv and robustness.txt (the printed table) in out_dir, each written whole or not at
-// all.
-void write_robustness(const std::vector<RobustnessRun>& runs, const std::filesystem::path& out_dir);
 
 }  // namespace flowsteer::launch
