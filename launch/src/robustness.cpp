@@ -32,7 +32,7 @@ void write_tables(const std::vector<RobustnessRun>& runs, OutputDir& out) {
     csv.add(
         {method_name(r.flow), method_name(r.segmentation)},
         {static_cast<double>(r.resolution), static_cast<double>(s.collisions),
-         static_cast<double>(s.goals_reached), static_cast<double>(s.agents - s.followers),
+         static_cast<double>(s.goals_reached), static_cast<double>(s.agents_with_goal()),
          s.mean_time_to_goal_s, s.mean_path_length_m, s.min_clearance_m, s.clean() ? 1.0 : 0.0});
   }
   csv.write(out.staging_path("robustness.csv"));
@@ -109,7 +109,7 @@ std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& worl
         log << "flowsteer eval robustness: " << world.name << ", flow " << method_name(flow)
             << ", segmentation " << method_name(segmentation) << ", " << resolution
             << " px: " << summary.collisions << " collisions, " << summary.goals_reached << "/"
-            << summary.agents - summary.followers << " goals\n";
+            << summary.agents_with_goal() << " goals\n";
         runs.push_back({flow, segmentation, resolution, summary});
       }
     }
@@ -133,7 +133,7 @@ void print_robustness_table(const std::vector<RobustnessRun>& runs, std::ostream
     out << std::left << std::setw(15) << method_name(r.flow) << std::setw(17)
         << method_name(r.segmentation) << std::right << std::setw(11) << r.resolution
         << std::setw(11) << s.collisions << std::setw(8)
-        << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents - s.followers))
+        << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents_with_goal()))
         << std::setw(15) << clearance.str() << std::setw(7) << (s.clean() ? "yes" : "no") << "\n";
   }
   // Runs come grouped by flow and segmentation (evaluate_robustness's order).

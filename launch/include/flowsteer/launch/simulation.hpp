@@ -58,8 +58,9 @@ struct RunSummary {
   double mean_time_to_goal_s = 0.0;  // over the agents that reached their goal (NaN if none)
   double mean_path_length_m = 0.0;
   double min_clearance_m = 0.0;  // over all agents and steps
+  int agents_with_goal() const { return agents - followers; }
   // No collision, and every agent that has a goal reached it.
-  bool clean() const { return collisions == 0 && goals_reached == agents - followers; }
+  bool clean() const { return collisions == 0 && goals_reached == agents_with_goal(); }
 };
 RunSummary summarize(const SimResult& result);
 
