@@ -142,7 +142,7 @@ void BM_CaptureToCommand640x480(benchmark::State& state) {
       source->read(frame, 0.1);
       state.ResumeTiming();
     }
-    const flowsteer::servo::Command command = brain->step({frame, {0.3, 0.0}, 0.1, 5.0});
+    const flowsteer::base::Command command = brain->step({frame, {0.3, 0.0}, 0.1, 5.0});
     benchmark::DoNotOptimize(command);
     sum += brain->times();
   }

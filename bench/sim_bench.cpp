@@ -123,7 +123,7 @@ struct RecordedStep {
 };
 
 struct Recording {
-  servo::CameraIntrinsics intrinsics;
+  base::CameraIntrinsics intrinsics;
   std::vector<RecordedStep> steps;
 };
 
@@ -158,7 +158,7 @@ void RobotStepNumerical(benchmark::State& state) {
   launch::PerceptionSection perception_section;
   perception_section.flow = perception.flow;
   perception_section.segmentation = perception.segmentation;
-  perception_section.mount = servo::CameraMount{agent.camera.height_m, agent.camera.pitch_rad};
+  perception_section.mount = base::CameraMount{agent.camera.height_m, agent.camera.pitch_rad};
   launch::ControllerSection controller;
   controller.spec = agent.controller;
   controller.preferred_speed_mps = agent.preferred_speed_mps;

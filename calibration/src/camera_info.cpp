@@ -4,8 +4,8 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "flowsteer/calibration/atomic_file.hpp"
-#include "flowsteer/calibration/yaml_reader.hpp"
+#include "flowsteer/base/atomic_file.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 #include "number_text.hpp"
 
 namespace flowsteer::calibration {
@@ -20,7 +20,7 @@ constexpr const char* kKeys[] = {"image_width",          "image_height",
                                  "distortion_model",     "distortion_coefficients",
                                  "rectification_matrix", "projection_matrix"};
 
-YAML::Node required(const YamlReader& reader, const YAML::Node& root, const char* key) {
+YAML::Node required(const base::YamlReader& reader, const YAML::Node& root, const char* key) {
   const YAML::Node node = root[key];
   if (!node) {
     reader.fail(root, key, "missing (a camera_info file needs it)");
@@ -30,26 +30,26 @@ YAML::Node required(const YamlReader& reader, const YAML::Node& root, const char
 
 // A matrix as camera_calibration_parsers writes it: {rows: R, cols: C, data: [R*C numbers]}.
 // cols < 0 takes any number of columns (the distortion coefficients).
-std::vector<double> matrix(const YamlReader& reader, const YAML::Node& root, const char* key,
+std::vector<double> matrix(const base::YamlReader& reader, const YAML::Node& root, const char* key,
                            int rows, int cols) {
   const YAML::Node node = required(reader, root, key);
   if (!node.IsMap()) {
     reader.fail(node, key, "expected a mapping with rows, cols and data");
   }
   const int got_rows =
-      reader.integer(required(reader, node, "rows"), YamlReader::join(key, "rows"), 0);
+      reader.integer(required(reader, node, "rows"), base::YamlReader::join(key, "rows"), 0);
   const int got_cols =
-      reader.integer(required(reader, node, "cols"), YamlReader::join(key, "cols"), 0);
+      reader.integer(required(reader, node, "cols"), base::YamlReader::join(key, "cols"), 0);
   if (got_rows != rows) {
-    reader.fail(node["rows"], YamlReader::join(key, "rows"),
+    reader.fail(node["rows"], base::YamlReader::join(key, "rows"),
                 "expected " + std::to_string(rows) + ", got " + std::to_string(got_rows));
   }
   if (cols >= 0 && got_cols != cols) {
-    reader.fail(node["cols"], YamlReader::join(key, "cols"),
+    reader.fail(node["cols"], base::YamlReader::join(key, "cols"),
                 "expected " + std::to_string(cols) + ", got " + std::to_string(got_cols));
   }
   const YAML::Node data = node["data"];
-  const std::string field = YamlReader::join(key, "data");
+  const std::string field = base::YamlReader::join(key, "data");
   if (!data) {
     reader.fail(node, field, "missing");
   }
@@ -88,8 +88,8 @@ CameraInfo CameraInfo::monocular(std::string camera_name, camera_io::CameraModel
 
 CameraInfo read_camera_info(const std::filesystem::path& path, std::vector<std::string>& warnings) {
   const std::string source = path.string();
-  const YAML::Node root = load_yaml(read_text_file(source, "camera_info file"), source);
-  const YamlReader reader(source);
+  const YAML::Node root = base::load_yaml(base::read_text_file(source, "camera_info file"), source);
+  const base::YamlReader reader(source);
   if (!root.IsMap()) {
     reader.fail(root, "", "expected a camera_info mapping (image_width, camera_matrix, ...)");
   }
@@ -184,7 +184,7 @@ std::string camera_info_yaml(const CameraInfo& info) {
 }
 
 void write_camera_info(const std::filesystem::path& path, const CameraInfo& info) {
-  write_file_atomically(path, camera_info_yaml(info));
+  base::write_file_atomically(path, camera_info_yaml(info));
 }
 
 }  // namespace flowsteer::calibration

@@ -5,8 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "flowsteer/calibration/atomic_file.hpp"
-#include "flowsteer/calibration/yaml_reader.hpp"
+#include "flowsteer/base/atomic_file.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 #include "number_text.hpp"
 
 namespace flowsteer::calibration {
@@ -21,8 +21,8 @@ double degrees(double rad) {
 
 MountCalibration read_camera_mount(const std::filesystem::path& path) {
   const std::string source = path.string();
-  const YAML::Node root = load_yaml(read_text_file(source, "camera mount file"), source);
-  const YamlReader reader(source);
+  const YAML::Node root = base::load_yaml(base::read_text_file(source, "camera mount file"), source);
+  const base::YamlReader reader(source);
   if (!root.IsMap()) {
     reader.fail(root, "", "expected a camera mount mapping (height_m, pitch_rad, roll_rad)");
   }
@@ -67,7 +67,7 @@ std::string camera_mount_yaml(const MountCalibration& m) {
 }
 
 void write_camera_mount(const std::filesystem::path& path, const MountCalibration& mount) {
-  write_file_atomically(path, camera_mount_yaml(mount));
+  base::write_file_atomically(path, camera_mount_yaml(mount));
 }
 
 }  // namespace flowsteer::calibration

@@ -56,8 +56,8 @@ std::size_t distortion_coefficient_count(DistortionModel model) {
                               std::to_string(static_cast<int>(model)));
 }
 
-servo::CameraIntrinsics CameraModel::pinhole() const {
-  servo::CameraIntrinsics k;
+base::CameraIntrinsics CameraModel::pinhole() const {
+  base::CameraIntrinsics k;
   k.width_px = width_px;
   k.height_px = height_px;
   k.fx_px = fx;

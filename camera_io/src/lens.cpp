@@ -27,7 +27,7 @@ Lens::Lens(const LensOptions& options, int width_px, int height_px, const std::s
                                 std::to_string(options.horizontal_fov_rad));
   }
   intrinsics_ =
-      servo::CameraIntrinsics::from_horizontal_fov(width_px, height_px, options.horizontal_fov_rad);
+      base::CameraIntrinsics::from_horizontal_fov(width_px, height_px, options.horizontal_fov_rad);
 }
 
 const cv::Mat& Lens::apply(const cv::Mat& image) {

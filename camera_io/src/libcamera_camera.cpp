@@ -15,7 +15,7 @@
 #include <libcamera/libcamera.h>
 #include <opencv2/imgproc.hpp>
 
-#include "flowsteer/servo/clock.hpp"
+#include "flowsteer/base/clock.hpp"
 #include "sequence_gaps.hpp"
 
 namespace flowsteer::camera_io {
@@ -220,7 +220,7 @@ LibcameraCamera::LibcameraCamera(const LibcameraOptions& options)
 
 LibcameraCamera::~LibcameraCamera() = default;
 
-const servo::CameraIntrinsics& LibcameraCamera::intrinsics() const {
+const base::CameraIntrinsics& LibcameraCamera::intrinsics() const {
   return impl_->lens->intrinsics();
 }
 
@@ -290,7 +290,7 @@ ReadStatus LibcameraCamera::read(Frame& frame, double timeout_s) {
     }
     // libcamera stamps frames with the sensor's (monotonic) start-of-exposure time.
     frame.timestamp_s =
-        timestamp_ns != 0 ? 1e-9 * static_cast<double>(timestamp_ns) : servo::monotonic_now_s();
+        timestamp_ns != 0 ? 1e-9 * static_cast<double>(timestamp_ns) : base::monotonic_now_s();
     frame.image = c.lens->apply(c.converted);
     frame.sequence = c.sequence++;
     frame.sim.reset();

@@ -20,7 +20,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "flowsteer/servo/clock.hpp"
+#include "flowsteer/base/clock.hpp"
 #include "sequence_gaps.hpp"
 
 namespace flowsteer::camera_io {
@@ -442,7 +442,7 @@ ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
       // POLLERR with ENODEV or EIO: the camera was unplugged or the driver gave up.
       throw_errno(device_, "VIDIOC_DQBUF", errno);
     }
-    const double dequeued_s = servo::monotonic_now_s();
+    const double dequeued_s = base::monotonic_now_s();
     if (buffer.index >= buffers_.size()) {
       throw std::runtime_error(device_ + ": VIDIOC_DQBUF returned buffer " +
                                std::to_string(buffer.index) + " of " +

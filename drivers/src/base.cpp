@@ -97,7 +97,7 @@ void Base::deactivate() {
   lifecycle_ = Lifecycle::inactive;
 }
 
-std::optional<std::string> Base::command(const servo::Command& command, double now_s) {
+std::optional<std::string> Base::command(const base::Command& command, double now_s) {
   return stage_.command(command, now_s);
 }
 

@@ -58,7 +58,7 @@ CommandStage::CommandStage(const CommandStageConfig& config) : config_(config) {
   }
 }
 
-std::optional<std::string> CommandStage::command(const servo::Command& command, double now_s) {
+std::optional<std::string> CommandStage::command(const base::Command& command, double now_s) {
   if (estopped_) {
     last_rejection_ = "command rejected: emergency stop holds until cleared";
   } else if (!std::isfinite(command.accel_mps2) || !std::isfinite(command.turn_rate)) {

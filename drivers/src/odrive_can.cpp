@@ -15,7 +15,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "flowsteer/servo/clock.hpp"
+#include "flowsteer/base/clock.hpp"
 
 namespace flowsteer::drivers {
 
@@ -45,9 +45,9 @@ T get(const can_frame& frame, std::size_t offset) {
 
 // Waits for `events` until the deadline; false on timeout.
 bool wait_fd(int fd, short events, double timeout_s, const std::string& what) {
-  const double deadline_s = servo::monotonic_now_s() + timeout_s;
+  const double deadline_s = base::monotonic_now_s() + timeout_s;
   for (;;) {
-    const double left_s = deadline_s - servo::monotonic_now_s();
+    const double left_s = deadline_s - base::monotonic_now_s();
     pollfd pfd{fd, events, 0};
     const int ready = ::poll(&pfd, 1, left_s > 0.0 ? static_cast<int>(left_s * 1000.0) + 1 : 0);
     if (ready < 0) {
@@ -219,7 +219,7 @@ void CanSocket::set_filters(const can_filter* filters, std::size_t count) {
 }
 
 void CanSocket::send(const can_frame& frame, double timeout_s) {
-  const double deadline_s = servo::monotonic_now_s() + timeout_s;
+  const double deadline_s = base::monotonic_now_s() + timeout_s;
   for (;;) {
     const ssize_t n = ::write(fd_.get(), &frame, sizeof frame);
     if (n == static_cast<ssize_t>(sizeof frame)) {
@@ -238,7 +238,7 @@ void CanSocket::send(const can_frame& frame, double timeout_s) {
           what + ": " + std::strerror(errno) +
           (errno == ENETDOWN ? " (bring it up: ip link set " + interface_ + " up)" : ""));
     }
-    const double left_s = deadline_s - servo::monotonic_now_s();
+    const double left_s = deadline_s - base::monotonic_now_s();
     if (left_s <= 0.0) {
       throw DriveError(what + ": timed out after " + std::to_string(timeout_s) +
                        " s (bus off or nobody acknowledging?)");
@@ -328,12 +328,12 @@ void OdriveCanDrive::drain(double wait_s) {
       if (cmd == odrive::kHeartbeat) {
         if (const auto heartbeat = odrive::parse_heartbeat(*frame)) {
           axis.heartbeat = *heartbeat;
-          axis.heartbeat_s = servo::monotonic_now_s();
+          axis.heartbeat_s = base::monotonic_now_s();
         }
       } else if (cmd == odrive::kGetEncoderEstimates) {
         if (const auto estimates = odrive::parse_encoder_estimates(*frame)) {
           axis.estimates = *estimates;
-          axis.estimates_s = servo::monotonic_now_s();
+          axis.estimates_s = base::monotonic_now_s();
         }
       }
     }
@@ -374,7 +374,7 @@ void OdriveCanDrive::check_axis_error(const Axis& axis) {
 }
 
 void OdriveCanDrive::check_errors(bool need_closed_loop) {
-  const double now_s = servo::monotonic_now_s();
+  const double now_s = base::monotonic_now_s();
   for (const Axis& axis : axes_) {
     if (!axis.heartbeat_s || now_s - *axis.heartbeat_s > config_.timeout_s) {
       fail("no heartbeat from " + axis_name(axis) + " for " + std::to_string(config_.timeout_s) +
@@ -390,7 +390,7 @@ void OdriveCanDrive::check_errors(bool need_closed_loop) {
 
 template <typename Done>
 void OdriveCanDrive::wait_for(Done done, const std::string& what) {
-  const double deadline_s = servo::monotonic_now_s() + config_.timeout_s;
+  const double deadline_s = base::monotonic_now_s() + config_.timeout_s;
   for (;;) {
     bool all = true;
     for (const Axis& axis : axes_) {
@@ -402,7 +402,7 @@ void OdriveCanDrive::wait_for(Done done, const std::string& what) {
     if (all) {
       return;
     }
-    const double left_s = deadline_s - servo::monotonic_now_s();
+    const double left_s = deadline_s - base::monotonic_now_s();
     if (left_s <= 0.0) {
       for (const Axis& axis : axes_) {
         if (!done(axis)) {
@@ -456,7 +456,7 @@ void OdriveCanDrive::activate() {
   }
   // The heartbeat that confirms the state change comes after the request; one sent before it
   // may still say idle.
-  const double requested_s = servo::monotonic_now_s();
+  const double requested_s = base::monotonic_now_s();
   wait_for(
       [&](const Axis& axis) {
         return axis.heartbeat_s && *axis.heartbeat_s > requested_s &&
@@ -502,7 +502,7 @@ DriveState OdriveCanDrive::read() {
   check_errors(active_);
   DriveState state;
   const double rad_per_turn = 2.0 * std::numbers::pi / config_.motor_turns_per_wheel_turn;
-  const double now_s = servo::monotonic_now_s();
+  const double now_s = base::monotonic_now_s();
   double* speeds[2] = {&state.measured.left_radps, &state.measured.right_radps};
   double* positions[2] = {&state.odometry.left_rad, &state.odometry.right_rad};
   for (std::size_t i = 0; i < axes_.size(); ++i) {

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "flowsteer/servo/clock.hpp"
+#include "flowsteer/base/clock.hpp"
 
 namespace flowsteer::drivers {
 
@@ -96,7 +96,7 @@ void ArduinoBridgeDrive::configure() {
   }
   // The encoder read doubles as the check that a ros_arduino_bridge board is listening.
   const auto [left, right] = read_encoders();
-  odometry_.reset(left, right, servo::monotonic_now_s());
+  odometry_.reset(left, right, base::monotonic_now_s());
 }
 
 void ArduinoBridgeDrive::activate() {
@@ -114,7 +114,7 @@ void ArduinoBridgeDrive::write(const WheelSpeeds& wheels) {
 
 DriveState ArduinoBridgeDrive::read() {
   const auto [left, right] = read_encoders();
-  odometry_.update(left, right, servo::monotonic_now_s());
+  odometry_.update(left, right, base::monotonic_now_s());
   return {odometry_.speeds(), odometry_.odometry(), {}};
 }
 
@@ -247,7 +247,7 @@ void RoboClawDrive::configure() {
       static_cast<std::uint8_t>(std::lround(config_.board_timeout_s * 10.0));
   send_acked(roboclaw::kSetSerialTimeout, std::span(&tenths, 1));
   const auto [left, right] = read_encoders();
-  odometry_.reset(left, right, servo::monotonic_now_s());
+  odometry_.reset(left, right, base::monotonic_now_s());
 }
 
 void RoboClawDrive::activate() {
@@ -269,7 +269,7 @@ void RoboClawDrive::write(const WheelSpeeds& wheels) {
 
 DriveState RoboClawDrive::read() {
   const auto [left, right] = read_encoders();
-  odometry_.update(left, right, servo::monotonic_now_s());
+  odometry_.update(left, right, base::monotonic_now_s());
   return {odometry_.speeds(), odometry_.odometry(), {}};
 }
 

@@ -10,7 +10,7 @@
 #include <cstring>
 
 #include "flowsteer/drivers/drive.hpp"
-#include "flowsteer/servo/clock.hpp"
+#include "flowsteer/base/clock.hpp"
 
 namespace flowsteer::drivers {
 
@@ -102,7 +102,7 @@ SerialPort::SerialPort(const SerialConfig& config) : config_(config) {
 
 bool SerialPort::wait(short events, double deadline_s, const char* operation) {
   for (;;) {
-    const double left_s = deadline_s - servo::monotonic_now_s();
+    const double left_s = deadline_s - base::monotonic_now_s();
     if (left_s <= 0.0) {
       return false;
     }
@@ -126,7 +126,7 @@ bool SerialPort::wait(short events, double deadline_s, const char* operation) {
 }
 
 void SerialPort::write_all(std::span<const std::uint8_t> bytes) {
-  const double deadline_s = servo::monotonic_now_s() + config_.timeout_s;
+  const double deadline_s = base::monotonic_now_s() + config_.timeout_s;
   std::size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd_.get(), bytes.data() + done, bytes.size() - done);
@@ -150,7 +150,7 @@ void SerialPort::write_all(const std::string& text) {
 }
 
 std::vector<std::uint8_t> SerialPort::read_exact(std::size_t n) {
-  const double deadline_s = servo::monotonic_now_s() + config_.timeout_s;
+  const double deadline_s = base::monotonic_now_s() + config_.timeout_s;
   std::vector<std::uint8_t> out(n);
   std::size_t done = 0;
   while (done < n) {
@@ -178,7 +178,7 @@ std::vector<std::uint8_t> SerialPort::read_exact(std::size_t n) {
 }
 
 std::string SerialPort::read_line(char terminator, std::size_t max_bytes) {
-  const double deadline_s = servo::monotonic_now_s() + config_.timeout_s;
+  const double deadline_s = base::monotonic_now_s() + config_.timeout_s;
   std::string line;
   // One byte at a time: the reply is short and whatever follows the terminator must stay in
   // the buffer for the next reply.

@@ -6,7 +6,7 @@
 #include <string>
 #include <utility>
 
-#include "flowsteer/servo/clock.hpp"
+#include "flowsteer/base/clock.hpp"
 
 namespace flowsteer::drivers {
 
@@ -18,7 +18,7 @@ SimBase::SimBase(SimBaseConfig config) : config_(std::move(config)), pose_(confi
     throw std::invalid_argument("sim_base: wheel_time_constant_s must be >= 0");
   }
   if (!config_.clock) {
-    config_.clock = servo::monotonic_now_s;
+    config_.clock = base::monotonic_now_s;
   }
 }
 

@@ -9,7 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "output_files.hpp"
 
 namespace flowsteer::launch {
@@ -24,16 +24,16 @@ void check_controllers(const std::vector<std::string>& controllers) {
   const std::vector<std::string> known = controller_types();
   const std::string list = controller_type_names();
   if (controllers.empty()) {
-    throw ConfigError("--controllers", "no controller given (known ones: " + list + ")");
+    throw base::ConfigError("--controllers", "no controller given (known ones: " + list + ")");
   }
   for (std::size_t i = 0; i < controllers.size(); ++i) {
     const std::string& c = controllers[i];
     if (std::find(known.begin(), known.end(), c) == known.end()) {
-      throw ConfigError("--controllers " + c, "unknown controller (known ones: " + list + ")");
+      throw base::ConfigError("--controllers " + c, "unknown controller (known ones: " + list + ")");
     }
     if (std::find(controllers.begin(), controllers.begin() + static_cast<long>(i), c) !=
         controllers.begin() + static_cast<long>(i)) {
-      throw ConfigError("--controllers " + c, "given twice");
+      throw base::ConfigError("--controllers " + c, "given twice");
     }
   }
 }

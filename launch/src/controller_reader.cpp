@@ -5,14 +5,14 @@ namespace flowsteer::launch {
 namespace {
 
 // The settings of type motion_energy; given with another type, they are a mistake.
-void read_motion_energy(const YamlReader& r, const YAML::Node& node, const std::string& field,
+void read_motion_energy(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
                         sim_camera::ControllerSpec& c) {
   if (c.type != "motion_energy") {
     for (const char* key : {"mass_from", "flow_weight", "steer_gain", "goal_gain", "head_on_energy",
                             "head_on_balance", "danger_distance_m", "danger_fraction",
                             "corner_step", "corner_rise", "free_path_range_m"}) {
       if (node[key]) {
-        r.fail(node[key], YamlReader::join(field, key),
+        r.fail(node[key], base::YamlReader::join(field, key),
                "only for type: motion_energy (this controller's type is " + c.type + ")");
       }
     }
@@ -21,7 +21,7 @@ void read_motion_energy(const YamlReader& r, const YAML::Node& node, const std::
   auto fraction = [&](const char* key, double value, bool zero_allowed) {
     value = r.number(node, field, key, value);
     if (!((zero_allowed ? value >= 0.0 : value > 0.0) && value <= 1.0)) {
-      r.fail(node[key], YamlReader::join(field, key),
+      r.fail(node[key], base::YamlReader::join(field, key),
              std::string("must be in ") + (zero_allowed ? "[0, 1]" : "(0, 1]"));
     }
     return value;
@@ -42,7 +42,7 @@ void read_motion_energy(const YamlReader& r, const YAML::Node& node, const std::
 
 }  // namespace
 
-sim_camera::ControllerSpec read_controller(const YamlReader& r, const YAML::Node& node,
+sim_camera::ControllerSpec read_controller(const base::YamlReader& r, const YAML::Node& node,
                                            const std::string& field, sim_camera::ControllerSpec c) {
   if (!node) {
     return c;
@@ -66,7 +66,7 @@ sim_camera::ControllerSpec read_controller(const YamlReader& r, const YAML::Node
   return c;
 }
 
-sim_camera::PerceptionSpec read_perception(const YamlReader& r, const YAML::Node& node,
+sim_camera::PerceptionSpec read_perception(const base::YamlReader& r, const YAML::Node& node,
                                            const std::string& field,
                                            sim_camera::PerceptionSpec perception) {
   if (!node) {

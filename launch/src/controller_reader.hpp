@@ -3,7 +3,7 @@
 #include <string>
 
 #include "flowsteer/sim_camera/world.hpp"
-#include "yaml_reader.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 
 namespace flowsteer::launch {
 
@@ -13,11 +13,11 @@ namespace flowsteer::launch {
 
 // Weights (alpha..delta, delta <= gamma), lambda, limits, use_depth, clearance margin, the
 // steering model's type and kind, and type motion_energy's settings.
-sim_camera::ControllerSpec read_controller(const YamlReader& r, const YAML::Node& node,
+sim_camera::ControllerSpec read_controller(const base::YamlReader& r, const YAML::Node& node,
                                            const std::string& field, sim_camera::ControllerSpec c);
 
 // The flow method and the segmentation method, by name.
-sim_camera::PerceptionSpec read_perception(const YamlReader& r, const YAML::Node& node,
+sim_camera::PerceptionSpec read_perception(const base::YamlReader& r, const YAML::Node& node,
                                            const std::string& field,
                                            sim_camera::PerceptionSpec perception);
 

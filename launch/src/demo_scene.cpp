@@ -7,8 +7,8 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "flowsteer/launch/config_error.hpp"
-#include "yaml_reader.hpp"
+#include "flowsteer/base/config_error.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 
 namespace flowsteer::launch {
 
@@ -16,7 +16,7 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-void read_camera(const YamlReader& r, const YAML::Node& node, servo::AnalyticScene& scene) {
+void read_camera(const base::YamlReader& r, const YAML::Node& node, servo::AnalyticScene& scene) {
   r.only_keys(node, "camera", {"resolution", "hfov_deg", "height_m", "pitch_deg"});
   int width = scene.intrinsics.width_px;
   int height = scene.intrinsics.height_px;
@@ -32,7 +32,7 @@ void read_camera(const YamlReader& r, const YAML::Node& node, servo::AnalyticSce
   if (!(hfov_deg > 0.0 && hfov_deg < 180.0)) {
     r.fail(node["hfov_deg"], "camera.hfov_deg", "must be in (0, 180)");
   }
-  scene.intrinsics = servo::CameraIntrinsics::from_horizontal_fov(width, height, hfov_deg * kDeg);
+  scene.intrinsics = base::CameraIntrinsics::from_horizontal_fov(width, height, hfov_deg * kDeg);
   scene.mount.height_m = r.positive(node, "camera", "height_m", scene.mount.height_m);
   const double pitch_deg = r.number(node, "camera", "pitch_deg", 0.0);
   if (std::abs(pitch_deg) >= 89.0) {
@@ -41,7 +41,7 @@ void read_camera(const YamlReader& r, const YAML::Node& node, servo::AnalyticSce
   scene.mount.pitch_rad = pitch_deg * kDeg;
 }
 
-servo::SceneObject read_object(const YamlReader& r, const YAML::Node& node,
+servo::SceneObject read_object(const base::YamlReader& r, const YAML::Node& node,
                                const std::string& field, std::int32_t default_id) {
   r.only_keys(node, field, {"shape", "id", "position", "size", "radius_m", "height_m", "velocity"});
   servo::SceneObject o;
@@ -75,7 +75,7 @@ servo::SceneObject read_object(const YamlReader& r, const YAML::Node& node,
   return o;
 }
 
-void read_controller(const YamlReader& r, const YAML::Node& node, ControllerSpec& c) {
+void read_controller(const base::YamlReader& r, const YAML::Node& node, ControllerSpec& c) {
   r.only_keys(node, "controller",
               {"kind", "alpha", "beta", "gamma", "delta", "preferred_speed_mps", "lambda",
                "max_accel_mps2", "max_turn_rate", "use_depth", "leader"});
@@ -125,7 +125,7 @@ void read_controller(const YamlReader& r, const YAML::Node& node, ControllerSpec
 DemoScene default_demo_scene() {
   DemoScene d;
   servo::AnalyticScene& s = d.scene;
-  s.intrinsics = servo::CameraIntrinsics::from_horizontal_fov(160, 120, 90.0 * kDeg);
+  s.intrinsics = base::CameraIntrinsics::from_horizontal_fov(160, 120, 90.0 * kDeg);
   s.mount = {1.6, 0.0};
   s.agent_speed_mps = 1.0;
   servo::SceneObject post;
@@ -154,13 +154,13 @@ DemoScene default_demo_scene() {
 }
 
 DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& source_name) {
-  const YamlReader r(source_name);
-  const YAML::Node root = load_yaml_map(yaml_text, source_name, "camera, agent, objects",
+  const base::YamlReader r(source_name);
+  const YAML::Node root = base::load_yaml_map(yaml_text, source_name, "camera, agent, objects",
                                         {"camera", "agent", "goal", "controller", "objects"});
 
   DemoScene d;
   servo::AnalyticScene& s = d.scene;
-  s.intrinsics = servo::CameraIntrinsics::from_horizontal_fov(160, 120, 90.0 * kDeg);
+  s.intrinsics = base::CameraIntrinsics::from_horizontal_fov(160, 120, 90.0 * kDeg);
   s.mount = {1.6, 0.0};
   if (const YAML::Node camera = root["camera"]) {
     read_camera(r, camera, s);
@@ -204,13 +204,13 @@ DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& sour
   try {
     s.validate();
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(source_name, e.what());
+    throw base::ConfigError(source_name, e.what());
   }
   return d;
 }
 
 DemoScene load_demo_scene(const std::filesystem::path& path) {
-  return parse_demo_scene(read_text_file(path.string(), "scene file"), path.string());
+  return parse_demo_scene(base::read_text_file(path.string(), "scene file"), path.string());
 }
 
 }  // namespace flowsteer::launch

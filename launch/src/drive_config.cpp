@@ -6,7 +6,7 @@ namespace flowsteer::launch {
 
 namespace {
 
-drivers::SerialConfig read_serial(const YamlReader& r, const YAML::Node& node,
+drivers::SerialConfig read_serial(const base::YamlReader& r, const YAML::Node& node,
                                   const std::string& field, int default_baud) {
   drivers::SerialConfig serial;
   if (!node["device"]) {
@@ -18,7 +18,7 @@ drivers::SerialConfig read_serial(const YamlReader& r, const YAML::Node& node,
   return serial;
 }
 
-drivers::OdriveAxisConfig read_axis(const YamlReader& r, const YAML::Node& node,
+drivers::OdriveAxisConfig read_axis(const base::YamlReader& r, const YAML::Node& node,
                                     const std::string& field, drivers::OdriveAxisConfig axis) {
   if (!node) {
     return axis;
@@ -41,15 +41,15 @@ drivers::OdriveAxisConfig read_axis(const YamlReader& r, const YAML::Node& node,
 }  // namespace
 
 DriveSection parse_drive_section(const std::string& yaml_text, const std::string& source_name) {
-  const YAML::Node root = load_yaml(yaml_text, source_name);
+  const YAML::Node root = base::load_yaml(yaml_text, source_name);
   const YAML::Node drive = root.IsMap() ? root["drive"] : YAML::Node();
   if (!drive) {
-    throw ConfigError(source_name, 1, 1, "drive", "missing: the launch file has no drive section");
+    throw base::ConfigError(source_name, 1, 1, "drive", "missing: the launch file has no drive section");
   }
-  return read_drive(YamlReader(source_name), drive);
+  return read_drive(base::YamlReader(source_name), drive);
 }
 
-DriveSection read_drive(const YamlReader& r, const YAML::Node& drive) {
+DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
   r.only_keys(drive, "drive",
               {"type", "loop_rate_hz", "geometry", "limits", "watchdog", "sim", "odrive",
                "arduino_bridge", "roboclaw"});

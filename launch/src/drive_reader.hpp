@@ -1,12 +1,12 @@
 #pragma once
 
 #include "flowsteer/launch/drive_config.hpp"
-#include "yaml_reader.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 
 namespace flowsteer::launch {
 
 // The `drive:` section of a launch file already loaded (parse_drive_section loads the text
 // first): `drive` is root["drive"], present; errors are reported at its nodes.
-DriveSection read_drive(const YamlReader& r, const YAML::Node& drive);
+DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive);
 
 }  // namespace flowsteer::launch

@@ -122,7 +122,7 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
       run.row.resolution = resolution;
       runs.push_back(std::move(run));
     }
-    const servo::CameraIntrinsics& k = agents[0]->intrinsics();
+    const base::CameraIntrinsics& k = agents[0]->intrinsics();
     const double to_px = k.fx_px * spec.step_s;
     // The estimators compare images a baseline apart: until they have one, they are not measured.
     const int warmup_frames =

@@ -13,7 +13,7 @@
 #include "flowsteer/launch/calibrate.hpp"
 #include "flowsteer/launch/camera_source.hpp"
 #include "flowsteer/launch/compare.hpp"
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/demo.hpp"
 #include "flowsteer/launch/demo_scene.hpp"
 #include "flowsteer/launch/flow_evaluation.hpp"
@@ -531,14 +531,14 @@ int main(int argc, char** argv) {
         const double hfov =
             2.0 * std::atan(0.5 * scene.scene.intrinsics.width_px / scene.scene.intrinsics.fx_px);
         scene.scene.intrinsics =
-            flowsteer::servo::CameraIntrinsics::from_horizontal_fov(resolution, resolution, hfov);
+            flowsteer::base::CameraIntrinsics::from_horizontal_fov(resolution, resolution, hfov);
       }
       flowsteer::launch::run_demo(scene, std::cout);
     }
   } catch (const CLI::ValidationError& e) {
     std::cerr << "flowsteer: " << e.what() << "\n";
     return 2;
-  } catch (const flowsteer::launch::ConfigError& e) {
+  } catch (const flowsteer::base::ConfigError& e) {
     std::cerr << "flowsteer: " << e.what() << "\n";
     return 1;
   } catch (const std::exception& e) {

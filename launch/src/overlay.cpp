@@ -58,7 +58,7 @@ cv::Mat draw_overlay(const AgentPipeline& pipeline) {
 
 cv::Mat draw_overlay(const cv::Mat& image, const servo::FlowField& flow,
                      std::span<const servo::ObjectFeatures> objects,
-                     const servo::CameraIntrinsics& k, std::optional<double> goal_bearing_rad) {
+                     const base::CameraIntrinsics& k, std::optional<double> goal_bearing_rad) {
   const cv::Size size = image.size();
   cv::Mat canvas(overlay_size(size), CV_8UC3, cv::Scalar::all(0));
   cv::Mat view = canvas(cv::Rect(0, 0, size.width, size.height));

@@ -20,7 +20,7 @@ cv::Mat draw_overlay(const AgentPipeline& pipeline);
 // The same for any image with its flow and features (a robot's camera, a recording).
 cv::Mat draw_overlay(const cv::Mat& image, const servo::FlowField& flow,
                      std::span<const servo::ObjectFeatures> objects,
-                     const servo::CameraIntrinsics& intrinsics,
+                     const base::CameraIntrinsics& intrinsics,
                      std::optional<double> goal_bearing_rad);
 cv::Size overlay_size(cv::Size image);
 

@@ -59,7 +59,7 @@ StageTimes& StageTimes::operator+=(const StageTimes& other) {
   return *this;
 }
 
-Perception::Perception(const servo::CameraIntrinsics& intrinsics, const PerceptionOptions& options)
+Perception::Perception(const base::CameraIntrinsics& intrinsics, const PerceptionOptions& options)
     : options_(options),
       field_(intrinsics, synthetic(options) && options.use_depth),
       dark_finder_(options.dark),

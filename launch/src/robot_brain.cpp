@@ -20,11 +20,11 @@ PerceptionOptions perception_options(const PerceptionSection& section) {
   options.dark_regions = section.dark_regions;
   options.use_depth = false;
   // Without a mount there is no drive, so the speed is zero and the ground test is skipped.
-  options.mount = section.mount.value_or(servo::CameraMount{});
+  options.mount = section.mount.value_or(base::CameraMount{});
   return options;
 }
 
-PerceptionBrain::PerceptionBrain(const servo::CameraIntrinsics& intrinsics,
+PerceptionBrain::PerceptionBrain(const base::CameraIntrinsics& intrinsics,
                                  const PerceptionSection& perception,
                                  const ControllerSection& controller, std::ostream& log,
                                  std::ostream* frame_log)
@@ -35,7 +35,7 @@ PerceptionBrain::PerceptionBrain(const servo::CameraIntrinsics& intrinsics,
       log_(log),
       frame_log_(frame_log) {}
 
-servo::Command PerceptionBrain::step(const LoopInput& input) {
+base::Command PerceptionBrain::step(const LoopInput& input) {
   const auto start = Clock::now();
   times_ = {};
   const double speed_mps = input.measured.speed_mps;

@@ -108,7 +108,7 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   }
   options.goal = goal;
   options.camera_name = describe_camera(launch.camera);
-  const servo::CameraIntrinsics& k = camera->intrinsics();
+  const base::CameraIntrinsics& k = camera->intrinsics();
   events << "flowsteer run: " << options.camera_name << " (" << k.width_px << "x" << k.height_px
          << "), "
          << (base ? "drive " + std::string(base->drive().name())
@@ -179,7 +179,7 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
   double step_ms = 0.0;
   camera_io::Frame frame;
   while (source.read(frame, 0.0) == camera_io::ReadStatus::ok) {
-    const servo::Command c =
+    const base::Command c =
         brain.step(LoopInput{frame, {command.speed_mps, 0.0}, bearing, std::nullopt});
     const auto seq = static_cast<double>(frame.sequence);
     ++summary.frames;

@@ -8,7 +8,7 @@
 #include "drive_reader.hpp"
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/calibration/camera_mount.hpp"
-#include "yaml_reader.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 
 namespace flowsteer::launch {
 namespace {
@@ -22,7 +22,7 @@ std::string resolve(const std::string& path, const std::string& base_dir) {
 
 // Size and rate shared by the camera types.
 template <typename Options>
-void read_size_and_rate(const YamlReader& r, const YAML::Node& node, const std::string& field,
+void read_size_and_rate(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
                         Options& o) {
   if (node["width_px"]) {
     o.width_px = r.integer(node["width_px"], field + ".width_px", 1);
@@ -36,7 +36,7 @@ void read_size_and_rate(const YamlReader& r, const YAML::Node& node, const std::
   }
 }
 
-CameraSection read_camera(const YamlReader& r, const YAML::Node& camera,
+CameraSection read_camera(const base::YamlReader& r, const YAML::Node& camera,
                           const std::string& base_dir, std::vector<std::string>& warnings) {
   r.only_keys(
       camera, "camera",
@@ -61,7 +61,7 @@ CameraSection read_camera(const YamlReader& r, const YAML::Node& camera,
   }
   if (camera["calibration"]) {
     s.calibration_file = resolve(r.text(camera, "camera", "calibration", "", true), base_dir);
-    // The reader's ConfigError names the calibration file's own line and field.
+    // The reader's base::ConfigError names the calibration file's own line and field.
     lens.model = calibration::read_camera_info(s.calibration_file, warnings).model;
   }
 
@@ -120,7 +120,7 @@ CameraSection read_camera(const YamlReader& r, const YAML::Node& camera,
   return s;
 }
 
-PerceptionSection read_robot_perception(const YamlReader& r, const YAML::Node& node,
+PerceptionSection read_robot_perception(const base::YamlReader& r, const YAML::Node& node,
                                         const std::string& base_dir) {
   PerceptionSection p;
   if (!node) {
@@ -149,13 +149,13 @@ PerceptionSection read_robot_perception(const YamlReader& r, const YAML::Node& n
   }
   if (node["mount"]) {
     p.mount_file = resolve(r.text(node, "perception", "mount", "", true), base_dir);
-    // The reader's ConfigError names the mount file's own line and field.
+    // The reader's base::ConfigError names the mount file's own line and field.
     p.mount = calibration::read_camera_mount(p.mount_file).mount;
   } else if (node["height_m"] || node["pitch_deg"]) {
     if (!node["height_m"]) {
       r.fail(node, "perception.height_m", "missing: the camera's height above the floor");
     }
-    servo::CameraMount mount;
+    base::CameraMount mount;
     mount.height_m = r.positive(node, "perception", "height_m", 0.0);
     const double pitch_deg = r.number(node, "perception", "pitch_deg", 0.0);
     if (std::abs(pitch_deg) >= 89.0) {
@@ -167,7 +167,7 @@ PerceptionSection read_robot_perception(const YamlReader& r, const YAML::Node& n
   return p;
 }
 
-ControllerSection read_robot_controller(const YamlReader& r, const YAML::Node& node) {
+ControllerSection read_robot_controller(const base::YamlReader& r, const YAML::Node& node) {
   ControllerSection c;
   // No depth from a camera: the features' tau v_c / Z is MIG's 1/2, not the renderer's depth.
   c.spec.use_depth = false;
@@ -190,12 +190,12 @@ ControllerSection read_robot_controller(const YamlReader& r, const YAML::Node& n
 
 RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& source_name,
                                const std::string& base_dir) {
-  const YamlReader r(source_name);
-  const YAML::Node root = load_yaml_map(yaml_text, source_name, "camera, drive and goal",
+  const base::YamlReader r(source_name);
+  const YAML::Node root = base::load_yaml_map(yaml_text, source_name, "camera, drive and goal",
                                         {"camera", "drive", "goal", "perception", "controller"});
   RobotLaunch launch;
   if (!root["camera"]) {
-    throw ConfigError(source_name, 1, 1, "camera", "missing: the launch file has no camera");
+    throw base::ConfigError(source_name, 1, 1, "camera", "missing: the launch file has no camera");
   }
   launch.camera = read_camera(r, root["camera"], base_dir, launch.warnings);
   if (root["drive"]) {
@@ -238,7 +238,7 @@ RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& 
 }
 
 RobotLaunch read_robot_launch(const std::string& path) {
-  const std::string text = read_text_file(path, "launch file");
+  const std::string text = base::read_text_file(path, "launch file");
   return parse_robot_launch(text, path, fs::path(path).parent_path().string());
 }
 

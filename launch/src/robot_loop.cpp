@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "flowsteer/launch/perception.hpp"
-#include "flowsteer/servo/clock.hpp"
+#include "flowsteer/base/clock.hpp"
 
 namespace flowsteer::launch {
 namespace {
@@ -76,7 +76,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
                                const RobotLoopOptions& options,
                                const std::atomic<bool>& stop_requested, std::ostream& log) {
   RobotLoopResult result;
-  const double start_s = servo::monotonic_now_s();
+  const double start_s = base::monotonic_now_s();
   std::optional<GoalTracker> goal;
   if (options.goal) {
     goal.emplace(*options.goal);
@@ -84,10 +84,10 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
   BaseStopper stopper(base, log);
   if (base != nullptr) {
     base->configure();
-    base->activate(servo::monotonic_now_s());
+    base->activate(base::monotonic_now_s());
   }
   drivers::BodyVelocity measured;
-  double last_frame_s = servo::monotonic_now_s();
+  double last_frame_s = base::monotonic_now_s();
   double last_update_s = last_frame_s;
   camera_io::Frame frame;
   const auto stop = [&](StopReason reason, const std::string& why) {
@@ -105,13 +105,13 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
       stop(StopReason::stop_requested, "stop requested");
       break;
     }
-    const double now_s = servo::monotonic_now_s();
+    const double now_s = base::monotonic_now_s();
     const double left_s = options.camera_timeout_s - (now_s - last_frame_s);
     // Without a base nothing needs a steady rate: wait for the frame up to the timeout.
     const double wait_s =
         std::max(0.0, base != nullptr ? std::min(options.drive_period_s, left_s) : left_s);
     const camera_io::ReadStatus status = camera.read(frame, wait_s);
-    const double after_s = servo::monotonic_now_s();
+    const double after_s = base::monotonic_now_s();
     if (status == camera_io::ReadStatus::end_of_stream) {
       stop(StopReason::end_of_stream, options.camera_name + " ended");
       break;
@@ -124,9 +124,9 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
         input.goal_bearing_rad = goal->bearing_rad();
         input.goal_distance_m = goal->distance_m();
       }
-      const servo::Command command = brain.step(input);
+      const base::Command command = brain.step(input);
       if (base != nullptr) {
-        if (const auto rejected = base->command(command, servo::monotonic_now_s())) {
+        if (const auto rejected = base->command(command, base::monotonic_now_s())) {
           log << "flowsteer run: frame " << frame.sequence << ": command rejected: " << *rejected
               << "\n";
         }
@@ -139,7 +139,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
       break;
     }
     if (base != nullptr) {
-      const double update_s = servo::monotonic_now_s();
+      const double update_s = base::monotonic_now_s();
       const drivers::BaseState state = base->update(update_s);
       measured = state.measured;
       result.max_measured_speed_mps = std::max(result.max_measured_speed_mps, measured.speed_mps);
@@ -153,7 +153,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
       break;
     }
   }
-  result.duration_s = servo::monotonic_now_s() - start_s;
+  result.duration_s = base::monotonic_now_s() - start_s;
   return result;
 }
 

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <string>
 
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "output_files.hpp"
 
 namespace flowsteer::launch {
@@ -50,19 +50,19 @@ std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
     for (std::size_t i = 0; i < options.resolutions.size(); ++i) {
       const int n = options.resolutions[i];
       if (n < kMinResolution || n > kMaxResolution) {
-        throw ConfigError("--resolution " + std::to_string(n),
+        throw base::ConfigError("--resolution " + std::to_string(n),
                           "must be from " + std::to_string(kMinResolution) + " to " +
                               std::to_string(kMaxResolution) + " pixels");
       }
       if (std::find(options.resolutions.begin(), options.resolutions.begin() + static_cast<long>(i),
                     n) != options.resolutions.begin() + static_cast<long>(i)) {
-        throw ConfigError("--resolution " + std::to_string(n), "given twice");
+        throw base::ConfigError("--resolution " + std::to_string(n), "given twice");
       }
     }
     return options.resolutions;
   }
   if (world.agents.empty()) {
-    throw ConfigError("scenario " + world.name, "has no agents to run");
+    throw base::ConfigError("scenario " + world.name, "has no agents to run");
   }
   const int own = world.agents.front().camera.width_px;
   std::vector<int> resolutions;

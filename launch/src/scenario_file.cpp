@@ -4,7 +4,7 @@
 
 #include "builtin_scenarios.hpp"
 #include "controller_reader.hpp"
-#include "yaml_reader.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 
 namespace flowsteer::launch {
 
@@ -16,7 +16,7 @@ using sim_camera::Solid;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-Material read_material(const YamlReader& r, const YAML::Node& node, const std::string& field,
+Material read_material(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
                        Material material) {
   if (!node) {
     return material;
@@ -52,7 +52,7 @@ Material read_material(const YamlReader& r, const YAML::Node& node, const std::s
   return material;
 }
 
-Solid read_solid(const YamlReader& r, const YAML::Node& node, const std::string& field,
+Solid read_solid(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
                  bool allow_wall) {
   r.only_keys(node, field,
               {"shape", "position", "size", "radius_m", "height_m", "yaw_deg", "from", "to",
@@ -96,7 +96,7 @@ Solid read_solid(const YamlReader& r, const YAML::Node& node, const std::string&
   return s;
 }
 
-sim_camera::CameraSpec read_camera(const YamlReader& r, const YAML::Node& node,
+sim_camera::CameraSpec read_camera(const base::YamlReader& r, const YAML::Node& node,
                                    const std::string& field, sim_camera::CameraSpec camera) {
   if (!node) {
     return camera;
@@ -125,7 +125,7 @@ sim_camera::CameraSpec read_camera(const YamlReader& r, const YAML::Node& node,
 }
 
 // A scenario's controller: every setting of every steering model.
-sim_camera::ControllerSpec read_scenario_controller(const YamlReader& r, const YAML::Node& node,
+sim_camera::ControllerSpec read_scenario_controller(const base::YamlReader& r, const YAML::Node& node,
                                                     const std::string& field,
                                                     const sim_camera::ControllerSpec& c) {
   if (node) {
@@ -156,7 +156,7 @@ sim_camera::ControllerSpec read_scenario_controller(const YamlReader& r, const Y
   return read_controller(r, node, field, c);
 }
 
-sim_camera::PerceptionSpec read_scenario_perception(const YamlReader& r, const YAML::Node& node,
+sim_camera::PerceptionSpec read_scenario_perception(const base::YamlReader& r, const YAML::Node& node,
                                                     const std::string& field,
                                                     const sim_camera::PerceptionSpec& p) {
   if (node) {
@@ -165,7 +165,7 @@ sim_camera::PerceptionSpec read_scenario_perception(const YamlReader& r, const Y
   return read_perception(r, node, field, p);
 }
 
-std::vector<Eigen::Vector2d> read_points(const YamlReader& r, const YAML::Node& node,
+std::vector<Eigen::Vector2d> read_points(const base::YamlReader& r, const YAML::Node& node,
                                          const std::string& field) {
   if (!node.IsSequence() || node.size() == 0) {
     r.fail(node, field, "expected a list of points [[x, y], ...]");
@@ -181,7 +181,7 @@ std::vector<Eigen::Vector2d> read_points(const YamlReader& r, const YAML::Node& 
   return points;
 }
 
-sim_camera::PointLight read_point_light(const YamlReader& r, const YAML::Node& node,
+sim_camera::PointLight read_point_light(const base::YamlReader& r, const YAML::Node& node,
                                         const std::string& field) {
   r.only_keys(node, field, {"position", "height_m", "intensity", "range_m"});
   sim_camera::PointLight p;
@@ -195,9 +195,9 @@ sim_camera::PointLight read_point_light(const YamlReader& r, const YAML::Node& n
 }  // namespace
 
 sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::string& source_name) {
-  const YamlReader r(source_name);
+  const base::YamlReader r(source_name);
   const YAML::Node root =
-      load_yaml_map(yaml_text, source_name, "at least agents:",
+      base::load_yaml_map(yaml_text, source_name, "at least agents:",
                     {"name", "description", "step_s", "duration_s", "camera", "controller",
                      "perception", "lighting", "ground", "obstacles", "moving", "agents"});
   auto require_list = [&](const YAML::Node& node, const std::string& field) {
@@ -365,13 +365,13 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
   try {
     sim_camera::World check(w);
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(source_name, e.what());
+    throw base::ConfigError(source_name, e.what());
   }
   return w;
 }
 
 sim_camera::WorldSpec load_scenario(const std::string& path) {
-  return parse_scenario(read_text_file(path, "scenario file"), path);
+  return parse_scenario(base::read_text_file(path, "scenario file"), path);
 }
 
 std::vector<BuiltinScenario> builtin_scenarios() {
@@ -390,7 +390,7 @@ sim_camera::WorldSpec builtin_scenario(const std::string& name) {
     }
     known += known.empty() ? builtin_name : std::string(", ") + builtin_name;
   }
-  throw ConfigError("--scenario " + name, "unknown scenario (built-in ones: " + known + ")");
+  throw base::ConfigError("--scenario " + name, "unknown scenario (built-in ones: " + known + ")");
 }
 
 }  // namespace flowsteer::launch

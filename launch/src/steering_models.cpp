@@ -14,8 +14,8 @@ constexpr double kStillFlow = 0.01;
 }  // namespace
 
 GeometricPerception::GeometricPerception(const sim_camera::World& world, std::size_t agent,
-                                         const servo::CameraIntrinsics& intrinsics,
-                                         const servo::CameraMount& mount)
+                                         const base::CameraIntrinsics& intrinsics,
+                                         const base::CameraMount& mount)
     : world_(world), agent_(agent), intrinsics_(intrinsics), mount_(mount) {}
 
 std::span<const servo::ObjectFeatures> GeometricPerception::perceive() {
@@ -24,8 +24,8 @@ std::span<const servo::ObjectFeatures> GeometricPerception::perceive() {
 }
 
 MotionEnergySteering::MotionEnergySteering(const sim_camera::AgentSpec& agent,
-                                           const servo::CameraIntrinsics& intrinsics,
-                                           const servo::CameraMount& mount)
+                                           const base::CameraIntrinsics& intrinsics,
+                                           const base::CameraMount& mount)
     : mass_from_ground_(agent.controller.mass_from == "ground"),
       mount_(mount),
       controller_(intrinsics, mount_, agent.controller.motion_energy,

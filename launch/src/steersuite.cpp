@@ -7,9 +7,9 @@
 
 #include <tinyxml2.h>
 
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/scenario_file.hpp"
-#include "yaml_reader.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 
 namespace flowsteer::launch {
 
@@ -22,7 +22,7 @@ class XmlReader {
   explicit XmlReader(std::string source) : source_(std::move(source)) {}
 
   [[noreturn]] void fail(const XMLElement* at, const std::string& message) const {
-    throw ConfigError(source_, at != nullptr ? at->GetLineNum() : 1, 1,
+    throw base::ConfigError(source_, at != nullptr ? at->GetLineNum() : 1, 1,
                       at != nullptr ? at->Name() : "", message);
   }
 
@@ -107,7 +107,7 @@ sim_camera::WorldSpec parse_steersuite(const std::string& xml_text,
                                        const std::string& source_name) {
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml_text.c_str(), xml_text.size()) != tinyxml2::XML_SUCCESS) {
-    throw ConfigError(source_name, doc.ErrorLineNum(), 1, "", doc.ErrorStr());
+    throw base::ConfigError(source_name, doc.ErrorLineNum(), 1, "", doc.ErrorStr());
   }
   const XmlReader r(source_name);
   const XMLElement* root = doc.RootElement();
@@ -202,13 +202,13 @@ sim_camera::WorldSpec parse_steersuite(const std::string& xml_text,
   try {
     sim_camera::World check(w);
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(source_name, e.what());
+    throw base::ConfigError(source_name, e.what());
   }
   return w;
 }
 
 sim_camera::WorldSpec load_steersuite(const std::string& path) {
-  return parse_steersuite(read_text_file(path, "SteerSuite test case"), path);
+  return parse_steersuite(base::read_text_file(path, "SteerSuite test case"), path);
 }
 
 }  // namespace flowsteer::launch

@@ -8,7 +8,7 @@
 
 namespace flowsteer::servo {
 
-FlowField::FlowField(const CameraIntrinsics& intrinsics, bool with_depth)
+FlowField::FlowField(const base::CameraIntrinsics& intrinsics, bool with_depth)
     : intrinsics_(intrinsics) {
   intrinsics_.validate();
   x_of_col_.resize(static_cast<std::size_t>(width()));

@@ -38,8 +38,8 @@ bool clip(const std::vector<Eigen::Vector2d>& in, double a, double b, double c,
 }  // namespace
 
 std::span<const ObjectFeatures> GeometricFeatures::compute(std::span<const GeometricBody> bodies,
-                                                           const CameraIntrinsics& intrinsics,
-                                                           const CameraMount& mount,
+                                                           const base::CameraIntrinsics& intrinsics,
+                                                           const base::CameraMount& mount,
                                                            double agent_speed_mps) {
   features_.clear();
   const Eigen::Matrix3d body_to_camera = mount.camera_to_body().transpose();

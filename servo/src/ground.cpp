@@ -7,7 +7,7 @@
 
 namespace flowsteer::servo {
 
-FlatGround::FlatGround(const CameraMount& mount)
+FlatGround::FlatGround(const base::CameraMount& mount)
     : mount_(mount), cos_pitch_(std::cos(mount.pitch_rad)), sin_pitch_(std::sin(mount.pitch_rad)) {
   mount_.validate();
 }
@@ -68,7 +68,7 @@ std::optional<GroundRowFlow> ground_row_flow(const FlatGround& ground, double y,
 
 }  // namespace
 
-GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& mount,
+GroundRemovalResult mark_ground(const FlowField& derotated, const base::CameraMount& mount,
                                 double speed_mps, const GroundRemovalOptions& options,
                                 std::span<std::uint8_t> ground_mask) {
   if (ground_mask.size() != derotated.size()) {
@@ -125,7 +125,7 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& m
   return result;
 }
 
-int GroundRegionMarker::mark(const FlowField& derotated, const CameraMount& mount, double speed_mps,
+int GroundRegionMarker::mark(const FlowField& derotated, const base::CameraMount& mount, double speed_mps,
                              const GroundRemovalOptions& options, Segmentation& segmentation) {
   if (segmentation.labels.size() != derotated.size()) {
     throw std::invalid_argument("GroundRegionMarker::mark: segmentation has " +

@@ -59,7 +59,7 @@ void classify_by_ids(std::span<const std::int32_t> ids, std::span<PixelClass> ou
   }
 }
 
-void classify_by_ground(const FlowField& derotated, const CameraMount& mount, double speed_mps,
+void classify_by_ground(const FlowField& derotated, const base::CameraMount& mount, double speed_mps,
                         const GroundRemovalOptions& ground, double still_flow,
                         std::span<std::uint8_t> ground_mask, std::span<PixelClass> out) {
   check_size(out.size(), derotated.size(), "the class image");
@@ -83,8 +83,8 @@ void classify_by_ground(const FlowField& derotated, const CameraMount& mount, do
   }
 }
 
-MotionEnergyController::MotionEnergyController(const CameraIntrinsics& intrinsics,
-                                               const CameraMount& mount,
+MotionEnergyController::MotionEnergyController(const base::CameraIntrinsics& intrinsics,
+                                               const base::CameraMount& mount,
                                                const MotionEnergyOptions& options,
                                                const MotionEnergyLimits& limits)
     : intrinsics_(intrinsics), mount_(mount), options_(options), limits_(limits) {
@@ -200,7 +200,7 @@ void MotionEnergyController::find_openings() {
   }
 }
 
-Command MotionEnergyController::step(std::span<const float> intensity,
+base::Command MotionEnergyController::step(std::span<const float> intensity,
                                      std::span<const PixelClass> classes, const Percept& percept,
                                      const AgentState& agent) {
   check_size(intensity.size(), previous_.size(), "the image");

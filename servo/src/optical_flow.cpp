@@ -198,7 +198,7 @@ FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowFie
   }
 
   const double dt_s = timestamp_s - reference->timestamp_s;
-  const CameraIntrinsics& k = field.intrinsics();
+  const base::CameraIntrinsics& k = field.intrinsics();
   // Pixel homography of the rotation: newer pixel → where its ray fell in the older image.
   Eigen::Matrix3d to_older = Eigen::Matrix3d::Identity();
   const cv::Mat* older = &reference->grey;

@@ -564,7 +564,7 @@ struct Renderer::Impl {
 
   void render(const World& world, const View& view, RenderedView& out) {
     eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context);
-    const servo::CameraIntrinsics k = view.intrinsics();
+    const base::CameraIntrinsics k = view.intrinsics();
     const WorldSpec& spec = world.spec();
     render_shadow_map(world);
     resize(k.width_px, k.height_px);
@@ -700,7 +700,7 @@ struct Renderer::Impl {
     read_back(k, omega, out);
   }
 
-  void read_back(const servo::CameraIntrinsics& k, const Eigen::Vector3d& omega,
+  void read_back(const base::CameraIntrinsics& k, const Eigen::Vector3d& omega,
                  RenderedView& out) {
     out.image.create(k.height_px, k.width_px, CV_8UC3);
     out.object_ids.create(k.height_px, k.width_px, CV_32SC1);
@@ -743,8 +743,8 @@ View View::of_agent(const World& world, std::size_t agent) {
   return v;
 }
 
-servo::CameraIntrinsics View::intrinsics() const {
-  return servo::CameraIntrinsics::from_horizontal_fov(camera.width_px, camera.height_px,
+base::CameraIntrinsics View::intrinsics() const {
+  return base::CameraIntrinsics::from_horizontal_fov(camera.width_px, camera.height_px,
                                                       camera.hfov_rad);
 }
 

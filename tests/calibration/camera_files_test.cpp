@@ -12,14 +12,14 @@
 
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/calibration/camera_mount.hpp"
-#include "flowsteer/calibration/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/camera_io/camera_model.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using flowsteer::calibration::CameraInfo;
-using flowsteer::calibration::ConfigError;
+using flowsteer::base::ConfigError;
 using flowsteer::camera_io::CameraModel;
 using flowsteer::camera_io::DistortionModel;
 
@@ -71,7 +71,7 @@ std::string error_of(const fs::path& path) {
   std::vector<std::string> warnings;
   try {
     flowsteer::calibration::read_camera_info(path, warnings);
-  } catch (const ConfigError& e) {
+  } catch (const flowsteer::base::ConfigError& e) {
     return e.what();
   }
   return "no error";
@@ -204,7 +204,7 @@ TEST(CameraMountFile, BadFilesNameTheField) {
     std::ofstream(dir / "mount.yaml") << text;
     try {
       flowsteer::calibration::read_camera_mount(dir / "mount.yaml");
-    } catch (const ConfigError& e) {
+    } catch (const flowsteer::base::ConfigError& e) {
       return std::string(e.what());
     }
     return std::string("no error");

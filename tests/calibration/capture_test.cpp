@@ -34,7 +34,7 @@ class MovingCamera final : public flowsteer::camera_io::FrameSource {
     place(poses_.front());
   }
 
-  const flowsteer::servo::CameraIntrinsics& intrinsics() const override {
+  const flowsteer::base::CameraIntrinsics& intrinsics() const override {
     return camera_->intrinsics();
   }
   flowsteer::camera_io::ReadStatus read(flowsteer::camera_io::Frame& frame,

@@ -12,7 +12,7 @@
 
 #include "flowsteer/launch/agent_pipeline.hpp"
 #include "flowsteer/launch/compare.hpp"
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/scenario_file.hpp"
 
 namespace flowsteer::launch {
@@ -178,7 +178,7 @@ TEST(Compare, RejectsUnknownAndRepeatedControllers) {
     options.controllers = std::move(controllers);
     try {
       run_compare(builtin_scenario("room"), options, log);
-    } catch (const ConfigError& e) {
+    } catch (const base::ConfigError& e) {
       return e.what();
     }
     return "";
@@ -202,7 +202,7 @@ TEST(Compare, FollowersCannotUseMotionEnergy) {
 std::string error_of(const std::string& yaml) {
   try {
     parse_scenario(yaml, "scenario.yaml");
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     return e.what();
   }
   return "";

@@ -4,17 +4,17 @@
 
 #include <gtest/gtest.h>
 
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/demo.hpp"
 
 namespace flowsteer::launch {
 namespace {
 
-// The message of the ConfigError that parsing `yaml` throws.
+// The message of the base::ConfigError that parsing `yaml` throws.
 std::string error_of(const std::string& yaml) {
   try {
     parse_demo_scene(yaml, "scene.yaml");
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     return e.what();
   }
   ADD_FAILURE() << "no error for:\n" << yaml;
@@ -62,7 +62,7 @@ TEST(DemoScene, MissingFileIsNamed) {
   try {
     load_demo_scene("/nonexistent/scene.yaml");
     FAIL() << "expected an error";
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.yaml"), std::string::npos);
   }
 }

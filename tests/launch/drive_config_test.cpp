@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 
 namespace flowsteer::launch {
 namespace {
@@ -10,7 +10,7 @@ namespace {
 std::string error_of(const std::string& yaml) {
   try {
     parse_drive_section(yaml, "robot.yaml");
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     return e.what();
   }
   ADD_FAILURE() << "no error for:\n" << yaml;

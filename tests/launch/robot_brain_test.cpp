@@ -102,13 +102,13 @@ TEST(PerceptionBrain, BlindFramesBrakeAndHoldTheGoalHeading) {
   controller.spec.use_depth = false;
   controller.spec.max_accel_mps2 = 0.7;
   std::ostringstream log;
-  launch::PerceptionBrain brain(servo::CameraIntrinsics::from_horizontal_fov(160, 120, 1.0), {},
+  launch::PerceptionBrain brain(base::CameraIntrinsics::from_horizontal_fov(160, 120, 1.0), {},
                                 controller, log);
   const drivers::BodyVelocity moving{0.4, 0.0};
   const double goal_right_rad = 0.3;
 
   const camera_io::Frame first = textured_frame(0.0, 0, 0);
-  servo::Command c = brain.step({first, moving, goal_right_rad, 5.0});
+  base::Command c = brain.step({first, moving, goal_right_rad, 5.0});
   EXPECT_TRUE(brain.blind());
   EXPECT_DOUBLE_EQ(c.accel_mps2, -0.7);
   EXPECT_GT(c.turn_rate, 0.0);  // towards the goal, on the right

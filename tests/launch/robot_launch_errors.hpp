@@ -4,16 +4,16 @@
 
 #include <string>
 
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/robot_launch.hpp"
 
 namespace flowsteer::launch::test_support {
 
-// The ConfigError that parsing `yaml` as the launch file bad.yaml gives, "no error" if none.
+// The base::ConfigError that parsing `yaml` as the launch file bad.yaml gives, "no error" if none.
 inline std::string error_of(const std::string& yaml) {
   try {
     parse_robot_launch(yaml, "bad.yaml", "");
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     return e.what();
   }
   return "no error";

@@ -98,7 +98,7 @@ TEST(GoalTracker, TurningRightTowardsAGoalOnTheRightCentresIt) {
 // Accelerates and, like a real pipeline, takes time over each frame.
 class ForwardBrain : public launch::Brain {
  public:
-  servo::Command step(const launch::LoopInput& input) override {
+  base::Command step(const launch::LoopInput& input) override {
     ++frames;
     last_goal_distance_m = input.goal_distance_m;
     std::this_thread::sleep_for(std::chrono::milliseconds(15));
@@ -112,9 +112,9 @@ class ForwardBrain : public launch::Brain {
 class StallingCamera : public camera_io::FrameSource {
  public:
   StallingCamera(int frames, bool throw_after) : frames_(frames), throw_after_(throw_after) {
-    intrinsics_ = servo::CameraIntrinsics::from_horizontal_fov(32, 24, 1.0);
+    intrinsics_ = base::CameraIntrinsics::from_horizontal_fov(32, 24, 1.0);
   }
-  const servo::CameraIntrinsics& intrinsics() const override { return intrinsics_; }
+  const base::CameraIntrinsics& intrinsics() const override { return intrinsics_; }
   camera_io::ReadStatus read(camera_io::Frame& frame, double timeout_s) override {
     if (delivered_ >= frames_) {
       if (throw_after_) {
@@ -133,7 +133,7 @@ class StallingCamera : public camera_io::FrameSource {
   int frames_;
   bool throw_after_;
   int delivered_ = 0;
-  servo::CameraIntrinsics intrinsics_;
+  base::CameraIntrinsics intrinsics_;
 };
 
 std::unique_ptr<drivers::Base> sim_base() {

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/robustness.hpp"
 #include "flowsteer/launch/scenario_file.hpp"
 
@@ -38,14 +38,14 @@ TEST(Robustness, BadResolutionsAreRefusedByName) {
   try {
     robustness_resolutions(open_ground(4.0), options);
     ADD_FAILURE() << "8 pixels accepted";
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     EXPECT_STREQ(e.what(), "--resolution 8: must be from 16 to 4096 pixels");
   }
   options.resolutions = {64, 48, 64};
   try {
     robustness_resolutions(open_ground(4.0), options);
     ADD_FAILURE() << "a repeated resolution accepted";
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     EXPECT_STREQ(e.what(), "--resolution 64: given twice");
   }
 }

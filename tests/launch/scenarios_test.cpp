@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "flowsteer/launch/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/scenario_file.hpp"
 #include "flowsteer/launch/simulation.hpp"
 
@@ -26,7 +26,7 @@ SimResult run(const std::string& scenario, int resolution = 64) {
 std::string error_of(const std::string& yaml) {
   try {
     parse_scenario(yaml, "scenario.yaml");
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     return e.what();
   }
   ADD_FAILURE() << "no error for:\n" << yaml;
@@ -124,7 +124,7 @@ TEST(Scenarios, UnknownNameListsTheKnownOnes) {
   try {
     builtin_scenario("hallway");
     FAIL() << "expected an error";
-  } catch (const ConfigError& e) {
+  } catch (const base::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("room"), std::string::npos) << e.what();
   }
 }
@@ -205,7 +205,7 @@ TEST(SteerSuite, MalformedFilesAreRejectedWithTheirLine) {
   auto error_of_xml = [](const std::string& xml) -> std::string {
     try {
       parse_steersuite(xml, "case.xml");
-    } catch (const ConfigError& e) {
+    } catch (const base::ConfigError& e) {
       return e.what();
     }
     return "";

@@ -51,7 +51,7 @@ RunResult run(std::vector<SceneObject> world, const Eigen::Vector2d& goal) {
     const Eigen::Rotation2Dd to_body(-yaw);
     AnalyticScene scene;
     scene.intrinsics =
-        CameraIntrinsics::from_horizontal_fov(96, 72, 100.0 * std::numbers::pi / 180);
+        base::CameraIntrinsics::from_horizontal_fov(96, 72, 100.0 * std::numbers::pi / 180);
     scene.mount = {1.0, 0.0};
     scene.agent_speed_mps = speed;
     scene.agent_turn_rate = turn_rate;

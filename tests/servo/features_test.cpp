@@ -28,7 +28,7 @@ SceneObject panel(std::int32_t id, double x, double y, double width, Eigen::Vect
 
 AnalyticScene base_scene(double pitch_rad = 0.0) {
   AnalyticScene scene;
-  scene.intrinsics = CameraIntrinsics::from_horizontal_fov(256, 192, 90.0 * kDeg);
+  scene.intrinsics = base::CameraIntrinsics::from_horizontal_fov(256, 192, 90.0 * kDeg);
   scene.mount = {1.0, pitch_rad};
   scene.agent_speed_mps = 1.0;
   scene.agent_turn_rate = 0.3;
@@ -247,7 +247,7 @@ TEST(RadialFit, StaticSurfaceResidualsTellAWallFromAMovingPanel) {
 
 FeatureOptions with_static_foe(const Case& c) {
   FeatureOptions options;
-  options.static_foe = CameraMount{1.0, c.pitch_rad}.forward_foe();
+  options.static_foe = base::CameraMount{1.0, c.pitch_rad}.forward_foe();
   return options;
 }
 
@@ -365,7 +365,7 @@ Segmentation empty_segmentation(int regions) {
 }
 
 TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
-  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
+  const base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
   FlowField field(k);
   Segmentation s = empty_segmentation(2);
   s.labels[5] = 1;  // region 0 has no pixel, region 1 has one
@@ -381,7 +381,7 @@ TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
 }
 
 TEST(FeatureExtractor, RegionsReachingTheImageEdgeAreMarkedCut) {
-  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
+  const base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
   FlowField field(k);
   Segmentation s = empty_segmentation(3);
   for (int col = 0; col < 8; ++col) {
@@ -405,7 +405,7 @@ TEST(FeatureExtractor, RegionsReachingTheImageEdgeAreMarkedCut) {
 
 TEST(FeatureExtractor, AFourPixelRegionIsFittedByDefault) {
   // A distant object at the edge of a coarse image covers a few pixels only.
-  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 150.0 * kDeg);
+  const base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(8, 6, 150.0 * kDeg);
   FlowField field(k);
   Segmentation s = empty_segmentation(2);
   const Eigen::Vector2d foe(-2.0, 0.1);
@@ -445,7 +445,7 @@ TEST(FeatureExtractor, DarkRegionsGetGeometryButNoFit) {
 }
 
 TEST(FeatureExtractor, MismatchedSegmentationIsRejected) {
-  const CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
+  const base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
   FlowField field(k);
   Segmentation s;
   s.width = 4;

@@ -15,7 +15,7 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 
 AnalyticScene scene_with(double turn_rate, double pitch_rad) {
   AnalyticScene scene;
-  scene.intrinsics = CameraIntrinsics::from_horizontal_fov(96, 64, 80.0 * kDeg);
+  scene.intrinsics = base::CameraIntrinsics::from_horizontal_fov(96, 64, 80.0 * kDeg);
   scene.mount = {1.2, pitch_rad};
   scene.agent_speed_mps = 1.3;
   scene.agent_turn_rate = turn_rate;
@@ -33,7 +33,7 @@ AnalyticScene scene_with(double turn_rate, double pitch_rad) {
 }
 
 TEST(Intrinsics, InvalidValuesAreNamed) {
-  CameraIntrinsics k = CameraIntrinsics::from_horizontal_fov(64, 48, 60.0 * kDeg);
+  base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(64, 48, 60.0 * kDeg);
   k.fx_px = 0.0;
   try {
     k.validate();
@@ -41,8 +41,8 @@ TEST(Intrinsics, InvalidValuesAreNamed) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("fx_px"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(CameraIntrinsics::from_horizontal_fov(64, 48, 190.0 * kDeg), std::invalid_argument);
-  EXPECT_THROW(CameraIntrinsics::from_horizontal_fov(0, 48, 60.0 * kDeg), std::invalid_argument);
+  EXPECT_THROW(base::CameraIntrinsics::from_horizontal_fov(64, 48, 190.0 * kDeg), std::invalid_argument);
+  EXPECT_THROW(base::CameraIntrinsics::from_horizontal_fov(0, 48, 60.0 * kDeg), std::invalid_argument);
 }
 
 TEST(Derotation, RotationalFlowIsTheOmegaTermOfEq1) {
@@ -160,7 +160,7 @@ TEST(GroundRegions, OnlyTheRegionOfTheGroundIsMarked) {
 }
 
 TEST(GroundRemovalInput, ZeroSpeedFlowTestIsSkipped) {
-  FlowField field(CameraIntrinsics::from_horizontal_fov(16, 12, 60.0 * kDeg));
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(16, 12, 60.0 * kDeg));
   std::vector<std::uint8_t> mask(field.size(), 0);
   const auto result = mark_ground(field, {1.0, 0.0}, 0.0, {}, mask);
   EXPECT_EQ(result.test, GroundTest::skipped_no_motion);

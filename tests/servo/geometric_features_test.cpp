@@ -10,9 +10,9 @@
 namespace flowsteer::servo {
 namespace {
 
-const CameraIntrinsics kCamera =
-    CameraIntrinsics::from_horizontal_fov(64, 64, 2.0 * std::atan(1.0));
-const CameraMount kMount{1.6, 0.0};
+const base::CameraIntrinsics kCamera =
+    base::CameraIntrinsics::from_horizontal_fov(64, 64, 2.0 * std::atan(1.0));
+const base::CameraMount kMount{1.6, 0.0};
 
 // A box footprint centred at (x, y), body frame.
 std::array<Eigen::Vector2d, 4> square(double x, double y, double half) {

@@ -11,9 +11,9 @@ namespace flowsteer::servo {
 namespace {
 
 constexpr int kSize = 64;
-const CameraIntrinsics kCamera =
-    CameraIntrinsics::from_horizontal_fov(kSize, kSize, 120.0 * std::acos(-1.0) / 180.0);
-const CameraMount kMount{1.6, 0.0};
+const base::CameraIntrinsics kCamera =
+    base::CameraIntrinsics::from_horizontal_fov(kSize, kSize, 120.0 * std::acos(-1.0) / 180.0);
+const base::CameraMount kMount{1.6, 0.0};
 constexpr MotionEnergyLimits kLimits{1.0, 1.0, 1.5, 0.5};
 
 // What a camera sees of an empty flat world: floor below the horizon, sky above.
@@ -49,7 +49,7 @@ TEST(MotionEnergy, TurnsAwayFromTheHalfWithMoreEnergy) {
   Scene scene;
   scene.mass(0, 15, 10, 40);
   MotionEnergyController controller(kCamera, kMount, {}, kLimits);
-  const Command c = controller.step(scene.intensity, scene.classes, {}, {1.0});
+  const base::Command c = controller.step(scene.intensity, scene.classes, {}, {1.0});
   EXPECT_GT(controller.state().energy_left, controller.state().energy_right);
   EXPECT_EQ(controller.state().mode, MotionEnergyMode::energy);
   EXPECT_GT(c.turn_rate, 0.0);  // positive turns right, away from the mass on the left
@@ -65,7 +65,7 @@ TEST(MotionEnergy, FrameDifferenceIsTheMotionTerm) {
   controller.step(scene.intensity, scene.classes, {}, {1.0});
   EXPECT_EQ(controller.state().energy_right, 0.0);
   std::fill(scene.intensity.begin(), scene.intensity.end(), 0.9F);
-  const Command c = controller.step(scene.intensity, scene.classes, {}, {1.0});
+  const base::Command c = controller.step(scene.intensity, scene.classes, {}, {1.0});
   EXPECT_GT(controller.state().energy_right, 0.0);
   EXPECT_EQ(controller.state().energy_left, 0.0);
   EXPECT_LT(c.turn_rate, 0.0);
@@ -75,7 +75,7 @@ TEST(MotionEnergy, HeadOnPicksASideAndKeepsIt) {
   Scene scene;
   scene.mass(0, kSize - 1, 0, 45);  // a wall across the whole view, its foot not yet close
   MotionEnergyController controller(kCamera, kMount, {}, kLimits);
-  Command c = controller.step(scene.intensity, scene.classes, goal_at(0.2, 8.0), {1.0});
+  base::Command c = controller.step(scene.intensity, scene.classes, goal_at(0.2, 8.0), {1.0});
   EXPECT_EQ(controller.state().mode, MotionEnergyMode::head_on);
   EXPECT_DOUBLE_EQ(c.turn_rate, kLimits.max_turn_rate);  // to the goal's side
   // A little more energy on the right, still balanced, and the goal now on the other side: a
@@ -90,7 +90,7 @@ TEST(MotionEnergy, DangerZoneBrakesAndTurns) {
   Scene scene;
   scene.mass(26, 37, 20, kSize - 1);  // something standing right in front, down to the bottom
   MotionEnergyController controller(kCamera, kMount, {}, kLimits);
-  const Command c = controller.step(scene.intensity, scene.classes, goal_at(0.0, 8.0), {1.0});
+  const base::Command c = controller.step(scene.intensity, scene.classes, goal_at(0.0, 8.0), {1.0});
   EXPECT_EQ(controller.state().mode, MotionEnergyMode::danger);
   EXPECT_DOUBLE_EQ(c.accel_mps2, -kLimits.max_accel_mps2);
   EXPECT_DOUBLE_EQ(std::abs(c.turn_rate), kLimits.max_turn_rate);
@@ -99,7 +99,7 @@ TEST(MotionEnergy, DangerZoneBrakesAndTurns) {
 TEST(MotionEnergy, RidgeGivesFreePathAndOpenings) {
   Scene scene;
   MotionEnergyController controller(kCamera, kMount, {}, kLimits);
-  Command c = controller.step(scene.intensity, scene.classes, goal_at(0.3, 5.0), {1.0});
+  base::Command c = controller.step(scene.intensity, scene.classes, goal_at(0.3, 5.0), {1.0});
   EXPECT_TRUE(controller.state().free_path);
   EXPECT_EQ(controller.state().mode, MotionEnergyMode::goal);
   EXPECT_NEAR(c.turn_rate, MotionEnergyOptions{}.goal_gain * 0.3, 1e-12);

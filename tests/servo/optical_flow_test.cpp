@@ -34,7 +34,7 @@ class EveryEstimator : public ::testing::TestWithParam<FlowMethod> {};
 TEST_P(EveryEstimator, ATranslatedTextureGivesItsShiftInNormalisedUnitsPerSecond) {
   const int width = 96;
   const int height = 64;
-  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
   const cv::Mat texture = textured_image(width, height, 7);
   OpticalFlowOptions options;
   options.baseline_s = 0.1;
@@ -69,7 +69,7 @@ INSTANTIATE_TEST_SUITE_P(Methods, EveryEstimator,
                          [](const auto& info) { return std::string(to_string(info.param)); });
 
 TEST(OpticalFlow, BadFramesGiveAStatusNotACrash) {
-  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg);
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg);
   FlowField field(intrinsics);
   OpticalFlow flow(FlowMethod::dis_fast);
   const cv::Mat texture = textured_image(64, 48, 3);
@@ -96,7 +96,7 @@ TEST(OpticalFlow, BadFramesGiveAStatusNotACrash) {
 TEST(OpticalFlow, AStraightEdgeGivesNoFlowWhereTextureDoes) {
   const int width = 96;
   const int height = 64;
-  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
   const cv::Mat texture = textured_image(width, height, 5);
   // Left half: texture; right half: dark above a bright floor, a horizon-like edge at row 32.
   const auto scene = [&](int dx) {
@@ -150,7 +150,7 @@ Eigen::Vector3d older_ray(const Eigen::Matrix3d& rotation, double x, double y) {
 }
 
 TEST(RotationOver, MatchesTheRateForSmallAnglesAndTheExactRotationForLargeOnes) {
-  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(48, 32, 120.0 * kDeg);
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(48, 32, 120.0 * kDeg);
   const FlowField grid(intrinsics);
   const Eigen::Vector3d omega = camera_angular_velocity(0.05, 0.1);
   // A tiny rotation: the displacement over the interval is the rate times the interval.
@@ -205,7 +205,7 @@ std::vector<std::uint8_t> two_halves_over_ground(FlowField& field, int ground_fr
 
 // Two halves moving differently, the bottom rows excluded as ground.
 TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame) {
-  FlowField field(CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
   const std::vector<std::uint8_t> ground = two_halves_over_ground(field, 40);
   field.at(5, 5) = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
   for (SegmentationMethod method :
@@ -237,7 +237,7 @@ TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame
 // A field wider than fast_max_side_px: flow_graph_fast segments it on a reduced grid and brings
 // the labels back to every pixel.
 TEST(FlowSegmenter, FastGraphLabelsEveryPixelOfAReducedField) {
-  FlowField field(CameraIntrinsics::from_horizontal_fov(256, 192, 90.0 * kDeg));
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(256, 192, 90.0 * kDeg));
   const std::vector<std::uint8_t> ground = two_halves_over_ground(field, 160);
   FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast);
   Segmentation out;
@@ -261,7 +261,7 @@ TEST(FlowSegmenter, FastGraphLabelsEveryPixelOfAReducedField) {
 // segments joins each island to the pixels without flow around it; together the islands must not
 // come out as one region spanning the image.
 TEST(FlowSegmenter, ScatteredIslandsOfFlowAreNoRegion) {
-  FlowField field(CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (int row = 0; row < field.height(); ++row) {
     for (int col = 0; col < field.width(); ++col) {
@@ -295,7 +295,7 @@ TEST(FlowSegmenter, ScatteredIslandsOfFlowAreNoRegion) {
 // edges of equal weight between pixels with and without flow, whose order decides which segment
 // a small one joins.
 TEST(FlowSegmenter, FastGraphSegmentsAsOpenCvGraphSegmentationDoes) {
-  const auto intrinsics = CameraIntrinsics::from_horizontal_fov(80, 60, 90.0 * kDeg);
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(80, 60, 90.0 * kDeg);
   const Eigen::Vector2f motions[] = {{0.0F, 0.0F}, {3.0F, 0.0F}, {-2.0F, 1.0F}, {0.5F, -3.0F}};
   for (const std::uint64_t seed : {1U, 2U, 3U}) {
     FlowField field(intrinsics);

@@ -63,7 +63,7 @@ TEST(Renderer, DepthOfABoxFaceAndIdsFollowTheGeometry) {
   EXPECT_EQ(out.object_ids.at<std::int32_t>(0, 5), servo::kSkyId);
   EXPECT_EQ(out.object_ids.at<std::int32_t>(119, 5), servo::kGroundId);
   EXPECT_TRUE(std::isinf(out.depth_m.at<float>(0, 5)));
-  const servo::CameraIntrinsics k = View::of_agent(world, 0).intrinsics();
+  const base::CameraIntrinsics k = View::of_agent(world, 0).intrinsics();
   for (int col = 0; col < 160; ++col) {
     const double x = (col - k.cx_px) / k.fx_px;
     if (std::abs(std::abs(x) - 1.0 / 4.5) < 0.02) {
@@ -162,7 +162,7 @@ TEST(Renderer, ShadowedGroundIsDarkerByTheAmbientRatio) {
   RenderedView out;
   renderer().render(world, View::of_agent(world, 0), out);
   // The shadow reaches 4 m in front of the wall (45°): ground from x = 5 to 8.9 is in shadow.
-  const servo::CameraIntrinsics k = View::of_agent(world, 0).intrinsics();
+  const base::CameraIntrinsics k = View::of_agent(world, 0).intrinsics();
   auto ground_row = [&](double distance) {
     // Row whose ray meets the ground at `distance` ahead, for a camera pitched down by 30°.
     const double angle = std::atan2(1.5, distance) - 30.0 * kDeg;

@@ -17,12 +17,12 @@
 
 #include "flowsteer/drivers/base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
-#include "flowsteer/servo/clock.hpp"
+#include "flowsteer/base/clock.hpp"
 
 namespace {
 
 using namespace flowsteer::drivers;
-using flowsteer::servo::monotonic_now_s;
+using flowsteer::base::monotonic_now_s;
 
 constexpr double kLoopPeriodS = 0.02;
 constexpr std::uint8_t kLeftNode = 3;

@@ -24,7 +24,7 @@ struct CameraInfo {
 // Reads a camera_info YAML file. Tolerates the variants found in the wild, each with a line in
 // `warnings`: no camera_name (empty), no distortion_model (plumb_bob), keys it does not know
 // (ignored). A distortion_model of "none" (with no coefficients) is read as
-// DistortionModel::none without a warning; an empty one is an error. Throws ConfigError
+// DistortionModel::none without a warning; an empty one is an error. Throws base::ConfigError
 // ("file:line:col: field: ...") when the file cannot be read, is not YAML, misses a field the
 // camera needs or holds a value out of range.
 CameraInfo read_camera_info(const std::filesystem::path& path, std::vector<std::string>& warnings);

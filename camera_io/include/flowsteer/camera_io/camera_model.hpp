@@ -6,7 +6,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 
 namespace flowsteer::camera_io {
 
@@ -36,7 +36,7 @@ struct CameraModel {
   std::vector<double> coefficients;  // distortion_coefficient_count(distortion) of them
 
   // The intrinsics of the undistorted image Undistorter makes: same size and matrix.
-  servo::CameraIntrinsics pinhole() const;
+  base::CameraIntrinsics pinhole() const;
   cv::Matx33d camera_matrix() const;
   // True when the image needs no remapping (no model, or every coefficient zero).
   bool is_pinhole() const;
@@ -58,10 +58,10 @@ class Undistorter {
   // image size is not the model's.
   const cv::Mat& apply(const cv::Mat& image);
 
-  const servo::CameraIntrinsics& intrinsics() const { return intrinsics_; }
+  const base::CameraIntrinsics& intrinsics() const { return intrinsics_; }
 
  private:
-  servo::CameraIntrinsics intrinsics_;
+  base::CameraIntrinsics intrinsics_;
   cv::Mat map_xy_;  // CV_16SC2 fixed-point maps: cv::remap's fast path
   cv::Mat map_fraction_;
   cv::Mat undistorted_;

@@ -5,7 +5,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 
 namespace flowsteer::camera_io {
 
@@ -32,7 +32,7 @@ class FrameSource {
  public:
   virtual ~FrameSource() = default;
   // Intrinsics of the images this source delivers (undistorted pinhole).
-  virtual const servo::CameraIntrinsics& intrinsics() const = 0;
+  virtual const base::CameraIntrinsics& intrinsics() const = 0;
   // Waits up to timeout_s for the next frame. The frame's images may share memory with the
   // source's buffers (as mapped capture buffers do) and stay valid until the next read():
   // clone() what must outlive it, such as the previous image for numerical flow.

@@ -6,7 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include "flowsteer/camera_io/camera_model.hpp"
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 
 namespace flowsteer::camera_io {
 
@@ -28,14 +28,14 @@ class Lens {
   // source's image size, the model is invalid or the field of view is not in (0, π).
   Lens(const LensOptions& options, int width_px, int height_px, const std::string& source);
 
-  const servo::CameraIntrinsics& intrinsics() const { return intrinsics_; }
+  const base::CameraIntrinsics& intrinsics() const { return intrinsics_; }
   // The undistorted image, valid until the next apply(); `image` itself when the lens is an
   // ideal pinhole. Allocates only on the first call.
   const cv::Mat& apply(const cv::Mat& image);
 
  private:
   std::optional<Undistorter> undistorter_;
-  servo::CameraIntrinsics intrinsics_;
+  base::CameraIntrinsics intrinsics_;
 };
 
 }  // namespace flowsteer::camera_io

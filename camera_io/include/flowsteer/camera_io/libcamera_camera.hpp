@@ -37,7 +37,7 @@ class LibcameraCamera final : public FrameSource {
   LibcameraCamera(const LibcameraCamera&) = delete;
   LibcameraCamera& operator=(const LibcameraCamera&) = delete;
 
-  const servo::CameraIntrinsics& intrinsics() const override;
+  const base::CameraIntrinsics& intrinsics() const override;
   ReadStatus read(Frame& frame, double timeout_s) override;
 
   // Frames the camera skipped, from gaps in its frame sequence numbers, and failed frames.

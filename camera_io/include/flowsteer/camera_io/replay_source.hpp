@@ -40,7 +40,7 @@ class ReplaySource final : public FrameSource {
   ReplaySource(const ReplaySource&) = delete;
   ReplaySource& operator=(const ReplaySource&) = delete;
 
-  const servo::CameraIntrinsics& intrinsics() const override { return lens_->intrinsics(); }
+  const base::CameraIntrinsics& intrinsics() const override { return lens_->intrinsics(); }
   ReadStatus read(Frame& frame, double timeout_s) override;
 
   // The frame rate the timestamps follow when they are not the container's: the option, or

@@ -57,7 +57,7 @@ class V4l2Camera final : public FrameSource {
   V4l2Camera(const V4l2Camera&) = delete;
   V4l2Camera& operator=(const V4l2Camera&) = delete;
 
-  const servo::CameraIntrinsics& intrinsics() const override { return lens_->intrinsics(); }
+  const base::CameraIntrinsics& intrinsics() const override { return lens_->intrinsics(); }
   // Waits up to timeout_s for the next filled buffer, converts it to BGR and undistorts it;
   // frame.image shares the camera's buffer for that, valid until the next read(). Timestamps are
   // the driver's when it stamps buffers with the monotonic clock (driver_timestamps()), else the

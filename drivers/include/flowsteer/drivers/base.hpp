@@ -6,7 +6,7 @@
 
 #include "flowsteer/drivers/command_stage.hpp"
 #include "flowsteer/drivers/drive.hpp"
-#include "flowsteer/servo/control.hpp"
+#include "flowsteer/base/command.hpp"
 
 namespace flowsteer::drivers {
 
@@ -36,7 +36,7 @@ class Base {
   void deactivate();
 
   // A fresh command from the controller; see CommandStage::command.
-  std::optional<std::string> command(const servo::Command& command, double now_s);
+  std::optional<std::string> command(const base::Command& command, double now_s);
   // Runs the command stage, writes the wheel speeds and reads the drive's state. Call at the
   // loop rate: the drive needs a steady stream and the watchdog needs a clock.
   BaseState update(double now_s);

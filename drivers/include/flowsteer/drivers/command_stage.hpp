@@ -4,7 +4,7 @@
 #include <string>
 
 #include "flowsteer/drivers/drive.hpp"
-#include "flowsteer/servo/control.hpp"
+#include "flowsteer/base/command.hpp"
 
 namespace flowsteer::drivers {
 
@@ -69,7 +69,7 @@ class CommandStage {
   // Takes a fresh command. A command with NaN or Inf is rejected: it does not refresh the
   // watchdog, and the reason is returned (and kept in last_rejection()). Commands are also
   // rejected while the emergency stop holds. Returns std::nullopt when accepted.
-  std::optional<std::string> command(const servo::Command& command, double now_s);
+  std::optional<std::string> command(const base::Command& command, double now_s);
 
   // Advances to now_s: integrates a_c into the speed, applies the limits and the watchdog and
   // maps to wheel speeds. Call it at the drive's loop rate, commands or not.
@@ -88,7 +88,7 @@ class CommandStage {
 
  private:
   CommandStageConfig config_;
-  servo::Command last_command_;
+  base::Command last_command_;
   std::optional<double> last_command_s_;  // none: no fresh command since reset
   std::optional<double> last_update_s_;
   double speed_mps_ = 0.0;

@@ -36,7 +36,7 @@ class AgentPipeline {
   // The features the controller saw: from the flow, or from exact geometry (type geometric).
   std::span<const servo::ObjectFeatures> objects() const { return objects_; }
   const servo::Percept& percept() const { return percept_; }
-  const servo::CameraIntrinsics& intrinsics() const { return camera_.intrinsics(); }
+  const base::CameraIntrinsics& intrinsics() const { return camera_.intrinsics(); }
 
  private:
   const sim_camera::World& world_;

@@ -44,7 +44,7 @@ struct CompareResult {
 // writes into out_dir, all at once at the end: one folder per controller with what `flowsteer
 // sim` writes, topviews.png (the top views side by side), compare.csv (the table below),
 // compare_agents.csv (per controller and agent), turn_rates.csv and turn_rates.png (the
-// histograms). Throws ConfigError for an unknown or repeated controller, std::invalid_argument
+// histograms). Throws base::ConfigError for an unknown or repeated controller, std::invalid_argument
 // when a scenario's agent cannot take a controller (a follower cannot use motion_energy).
 CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptions& options,
                           std::ostream& log);

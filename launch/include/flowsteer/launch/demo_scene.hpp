@@ -35,7 +35,7 @@ struct DemoScene {
 // left, with the goal beyond them.
 DemoScene default_demo_scene();
 
-// Reads a demo scene from YAML (format: launch/scenes/demo_street.yaml). Throws ConfigError
+// Reads a demo scene from YAML (format: launch/scenes/demo_street.yaml). Throws base::ConfigError
 // naming the file, line, column and field of the first problem.
 DemoScene load_demo_scene(const std::filesystem::path& path);
 DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& source_name);

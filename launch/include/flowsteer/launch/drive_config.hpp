@@ -22,7 +22,7 @@ struct DriveSection {
   double loop_rate_hz = 50.0;
 };
 
-// Reads the `drive:` mapping of a launch file. Throws ConfigError naming the file, line,
+// Reads the `drive:` mapping of a launch file. Throws base::ConfigError naming the file, line,
 // column and field of the first problem (an unknown type or key, a setting out of range, a
 // loop period not well below the watchdog timeout).
 DriveSection parse_drive_section(const std::string& yaml_text, const std::string& source_name);

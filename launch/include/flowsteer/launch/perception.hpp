@@ -40,7 +40,7 @@ struct PerceptionOptions {
   bool dark_regions = false;  // MIG 2019's dark-region awareness
   // With synthetic flow, give the feature fit the renderer's depth (numerical flow has none).
   bool use_depth = true;
-  servo::CameraMount mount;
+  base::CameraMount mount;
   servo::OpticalFlowOptions optical_flow;
   servo::FlowSegmentationOptions flow_segmentation;
   servo::DarkRegionOptions dark;
@@ -55,7 +55,7 @@ struct PerceptionOptions {
 // segmentation, dark regions and per-object features.
 class Perception {
  public:
-  Perception(const servo::CameraIntrinsics& intrinsics, const PerceptionOptions& options);
+  Perception(const base::CameraIntrinsics& intrinsics, const PerceptionOptions& options);
 
   // speed_mps and turn_rate_cy are what the base measured (turn rate positive to the right) over
   // the interval that ends with this frame; numerical flow spans several frames and is computed
@@ -68,7 +68,7 @@ class Perception {
                             StageTimes& times);
 
   const PerceptionOptions& options() const { return options_; }
-  const servo::CameraIntrinsics& intrinsics() const { return field_.intrinsics(); }
+  const base::CameraIntrinsics& intrinsics() const { return field_.intrinsics(); }
   servo::FlowStatus status() const { return status_; }
   const servo::FlowField& flow() const { return field_; }
   const servo::Segmentation& segmentation() const { return segmentation_; }

@@ -28,11 +28,11 @@ class PerceptionBrain final : public Brain {
  public:
   // log: the changes between seeing and blind. frame_log (may be null): one line per frame
   // with the status, the objects and the command.
-  PerceptionBrain(const servo::CameraIntrinsics& intrinsics, const PerceptionSection& perception,
+  PerceptionBrain(const base::CameraIntrinsics& intrinsics, const PerceptionSection& perception,
                   const ControllerSection& controller, std::ostream& log,
                   std::ostream* frame_log = nullptr);
 
-  servo::Command step(const LoopInput& input) override;
+  base::Command step(const LoopInput& input) override;
 
   const Perception& perception() const { return perception_; }
   // The last step's controller output (the blind command on a blind frame) and goal.

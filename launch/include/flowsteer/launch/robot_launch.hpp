@@ -11,7 +11,7 @@
 #include "flowsteer/camera_io/replay_source.hpp"
 #include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "flowsteer/launch/drive_config.hpp"
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/sim_camera/world.hpp"
@@ -46,7 +46,7 @@ struct PerceptionSection {
   // when the file gives neither. Required with a drive: the flat-ground test predicts the
   // floor's flow from it. Without a drive the measured speed is zero and the test is skipped,
   // so any mount serves.
-  std::optional<servo::CameraMount> mount;
+  std::optional<base::CameraMount> mount;
   std::string mount_file;  // resolved against the launch file's folder; empty when inline
 };
 
@@ -69,7 +69,7 @@ struct RobotLaunch {
   std::vector<std::string> warnings;  // from the camera_info reader
 };
 
-// Reads a robot launch file. Throws ConfigError naming the file, line, column and field of the
+// Reads a robot launch file. Throws base::ConfigError naming the file, line, column and field of the
 // first problem: an unknown key or type, a value out of range, a calibration file that cannot
 // be read (its own file:line:col) or is for another image size.
 RobotLaunch read_robot_launch(const std::string& path);

@@ -45,7 +45,7 @@ struct LoopInput {
 class Brain {
  public:
   virtual ~Brain() = default;
-  virtual servo::Command step(const LoopInput& input) = 0;
+  virtual base::Command step(const LoopInput& input) = 0;
 };
 
 enum class StopReason { end_of_stream, camera_timeout, stop_requested, frame_limit };

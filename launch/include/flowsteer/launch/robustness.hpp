@@ -35,7 +35,7 @@ struct RobustnessRun {
 };
 
 // The resolutions a run over `world` uses: options.resolutions, or the default around the
-// scenario's own. Throws ConfigError for one below 16 or above 4096 pixels, or given twice.
+// scenario's own. Throws base::ConfigError for one below 16 or above 4096 pixels, or given twice.
 std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
                                         const RobustnessOptions& options);
 

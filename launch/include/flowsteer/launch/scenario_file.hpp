@@ -9,7 +9,7 @@ namespace flowsteer::launch {
 
 // Scenario files (YAML) describe a world for `flowsteer sim`: lights, obstacles, moving
 // obstacles, agents with their goals or leader, controller and camera. The format is documented
-// in launch/scenarios/room.yaml. Errors throw ConfigError with the file, line, column and field.
+// in launch/scenarios/room.yaml. Errors throw base::ConfigError with the file, line, column and field.
 sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::string& source_name);
 sim_camera::WorldSpec load_scenario(const std::string& path);
 
@@ -19,7 +19,7 @@ struct BuiltinScenario {
   std::string description;
 };
 std::vector<BuiltinScenario> builtin_scenarios();
-// Throws ConfigError listing the known names when `name` is not one of them.
+// Throws base::ConfigError listing the known names when `name` is not one of them.
 sim_camera::WorldSpec builtin_scenario(const std::string& name);
 
 // A SteerSuite test case (its XML schema: agents with initial conditions and goal sequences of

@@ -19,14 +19,14 @@ class GeometricPerception {
  public:
   // The world must outlive this. `intrinsics` and `mount` are the agent's camera's.
   GeometricPerception(const sim_camera::World& world, std::size_t agent,
-                      const servo::CameraIntrinsics& intrinsics, const servo::CameraMount& mount);
+                      const base::CameraIntrinsics& intrinsics, const base::CameraMount& mount);
   std::span<const servo::ObjectFeatures> perceive();
 
  private:
   const sim_camera::World& world_;
   std::size_t agent_;
-  servo::CameraIntrinsics intrinsics_;
-  servo::CameraMount mount_;
+  base::CameraIntrinsics intrinsics_;
+  base::CameraMount mount_;
   sim_camera::WorldGeometry geometry_;
   servo::GeometricFeatures features_;
 };
@@ -37,7 +37,7 @@ class MotionEnergySteering {
  public:
   // `intrinsics` and `mount` are the agent's camera's.
   MotionEnergySteering(const sim_camera::AgentSpec& agent,
-                       const servo::CameraIntrinsics& intrinsics, const servo::CameraMount& mount);
+                       const base::CameraIntrinsics& intrinsics, const base::CameraMount& mount);
 
   // `derotated` is used with mass_from: ground only. Fills out.command (and out.unclamped);
   // the navigation function's cost and terms stay empty.
@@ -49,7 +49,7 @@ class MotionEnergySteering {
 
  private:
   bool mass_from_ground_;
-  servo::CameraMount mount_;
+  base::CameraMount mount_;
   servo::MotionEnergyController controller_;
   std::vector<float> intensity_;
   std::vector<servo::PixelClass> classes_;

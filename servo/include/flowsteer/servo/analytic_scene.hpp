@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/flow_field.hpp"
 
 namespace flowsteer::servo {
@@ -26,8 +26,8 @@ struct SceneObject {
 };
 
 struct AnalyticScene {
-  CameraIntrinsics intrinsics;
-  CameraMount mount;
+  base::CameraIntrinsics intrinsics;
+  base::CameraMount mount;
   double agent_speed_mps = 1.0;
   double agent_turn_rate = 0.0;  // ω about the camera's y axis, positive turns right
   bool ground = true;

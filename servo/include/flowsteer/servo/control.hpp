@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "flowsteer/base/command.hpp"
 #include "flowsteer/servo/features.hpp"
 
 namespace flowsteer::servo {
@@ -15,14 +16,6 @@ namespace flowsteer::servo {
 // What the agent knows about itself.
 struct AgentState {
   double speed_mps = 0.0;  // v_c, forward, along the optical axis
-};
-
-// What the control law outputs: forward acceleration a_c and turn rate ω about the camera's y
-// axis, which points down, so positive ω turns the agent right. A drive turns this into
-// ω_z = −ω (DESIGN.md).
-struct Command {
-  double accel_mps2 = 0.0;
-  double turn_rate = 0.0;
 };
 
 // What the agent perceives in one control step.
@@ -133,8 +126,8 @@ struct ControlLimits {
 };
 
 struct ControlOutput {
-  Command command;
-  Command unclamped;
+  base::Command command;
+  base::Command unclamped;
   double cost = 0.0;
   std::vector<TermEvaluation> terms;
 };

@@ -170,7 +170,7 @@ struct FeatureOptions {
   // that slanted and curved surfaces give the FOE and the TTC at that depth exactly.
   bool use_depth = true;
   RadialFitOptions fit;
-  // The FOE of every static object's derotated flow (CameraMount::forward_foe). When set, a
+  // The FOE of every static object's derotated flow (base::CameraMount::forward_foe). When set, a
   // region whose fitted FOE is consistent with it (Wald statistic below static_foe_chi2) gets
   // it, and its τ is fitted about it. Flow noise scatters a static object's FOE, and without
   // depth a slanted surface pulls it towards its near end; the avoidance term's acceleration

@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 
 namespace flowsteer::servo {
 
@@ -15,9 +15,9 @@ namespace flowsteer::servo {
 // nothing was hit). Pixel (col, row) sits at normalised point (x(col), y(row)).
 class FlowField {
  public:
-  explicit FlowField(const CameraIntrinsics& intrinsics, bool with_depth = false);
+  explicit FlowField(const base::CameraIntrinsics& intrinsics, bool with_depth = false);
 
-  const CameraIntrinsics& intrinsics() const { return intrinsics_; }
+  const base::CameraIntrinsics& intrinsics() const { return intrinsics_; }
   int width() const { return intrinsics_.width_px; }
   int height() const { return intrinsics_.height_px; }
   std::size_t size() const { return flow_.size(); }
@@ -47,7 +47,7 @@ class FlowField {
   }
 
  private:
-  CameraIntrinsics intrinsics_;
+  base::CameraIntrinsics intrinsics_;
   std::vector<double> x_of_col_;
   std::vector<double> y_of_row_;
   std::vector<Eigen::Vector2f> flow_;

@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/features.hpp"
 
 namespace flowsteer::servo {
@@ -40,8 +40,8 @@ class GeometricFeatures {
   // Features of the bodies seen by a camera at `mount` on an agent moving forward at
   // agent_speed_mps, in the order of `bodies`, leaving out those entirely out of view.
   std::span<const ObjectFeatures> compute(std::span<const GeometricBody> bodies,
-                                          const CameraIntrinsics& intrinsics,
-                                          const CameraMount& mount, double agent_speed_mps);
+                                          const base::CameraIntrinsics& intrinsics,
+                                          const base::CameraMount& mount, double agent_speed_mps);
 
  private:
   std::vector<ObjectFeatures> features_;

@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/flow_field.hpp"
 #include "flowsteer/servo/segmentation.hpp"
 
@@ -17,7 +17,7 @@ namespace flowsteer::servo {
 // flow (x y, y²) v_c / h for zero pitch; generalised here to a pitched camera).
 class FlatGround {
  public:
-  explicit FlatGround(const CameraMount& mount);
+  explicit FlatGround(const base::CameraMount& mount);
 
   // Depth of the ground along the ray through (x, y); empty at or above the horizon.
   std::optional<double> depth_at(double x, double y) const;
@@ -26,7 +26,7 @@ class FlatGround {
   std::optional<Eigen::Vector2d> flow_at(double x, double y, double speed_mps) const;
 
  private:
-  CameraMount mount_;
+  base::CameraMount mount_;
   double cos_pitch_;
   double sin_pitch_;
 };
@@ -59,7 +59,7 @@ struct GroundRemovalResult {
 // Sets ground_mask[i] = 1 for every pixel that matches the flat ground and leaves the others
 // untouched. Uses the depth test when the field has depth, the flow test otherwise; the flow
 // must already be derotated. ground_mask must have one entry per pixel.
-GroundRemovalResult mark_ground(const FlowField& derotated, const CameraMount& mount,
+GroundRemovalResult mark_ground(const FlowField& derotated, const base::CameraMount& mount,
                                 double speed_mps, const GroundRemovalOptions& options,
                                 std::span<std::uint8_t> ground_mask);
 
@@ -70,7 +70,7 @@ class GroundRegionMarker {
   // Marks as RegionKind::ground every visible region of `segmentation` whose flow as a whole
   // matches the flat ground (region_tolerance above). A region with any pixel at or above the
   // horizon is never ground. Returns how many it marked.
-  int mark(const FlowField& derotated, const CameraMount& mount, double speed_mps,
+  int mark(const FlowField& derotated, const base::CameraMount& mount, double speed_mps,
            const GroundRemovalOptions& options, Segmentation& segmentation);
 
  private:

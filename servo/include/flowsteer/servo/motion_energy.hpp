@@ -4,7 +4,7 @@
 #include <span>
 #include <vector>
 
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/control.hpp"
 #include "flowsteer/servo/flow_field.hpp"
 #include "flowsteer/servo/ground.hpp"
@@ -30,7 +30,7 @@ void classify_by_ids(std::span<const std::int32_t> ids, std::span<PixelClass> ou
 // pixel whose derotated flow is slower than still_flow (normalised units per second: far
 // background, sky) is empty; every other pixel is mass. `ground_mask` is scratch with one entry
 // per pixel.
-void classify_by_ground(const FlowField& derotated, const CameraMount& mount, double speed_mps,
+void classify_by_ground(const FlowField& derotated, const base::CameraMount& mount, double speed_mps,
                         const GroundRemovalOptions& ground, double still_flow,
                         std::span<std::uint8_t> ground_mask, std::span<PixelClass> out);
 
@@ -99,18 +99,18 @@ struct MotionEnergyLimits {
 // difference of the halves, the head-on case, and the ridge giving openings, a free-path test
 // to the goal and the danger zone. The paper leaves the action selection to Silas's behaviour
 // system; here the cases are taken in order of urgency: danger, head-on, free path to the goal,
-// opening, energy. Its output is the same Command as the vision controller's (positive turn rate
+// opening, energy. Its output is the same base::Command as the vision controller's (positive turn rate
 // turns right). Keeps the previous image and every buffer between steps: no allocation per
 // step once constructed.
 class MotionEnergyController {
  public:
-  MotionEnergyController(const CameraIntrinsics& intrinsics, const CameraMount& mount,
+  MotionEnergyController(const base::CameraIntrinsics& intrinsics, const base::CameraMount& mount,
                          const MotionEnergyOptions& options, const MotionEnergyLimits& limits);
 
   // `intensity` is the image in [0, 1] and `classes` what each pixel shows, one entry per pixel
   // of the intrinsics' size, row-major. Uses the percept's goal bearing and distance (its
   // objects are not used). Throws std::invalid_argument on a size mismatch.
-  Command step(std::span<const float> intensity, std::span<const PixelClass> classes,
+  base::Command step(std::span<const float> intensity, std::span<const PixelClass> classes,
                const Percept& percept, const AgentState& agent);
 
   const MotionEnergyState& state() const { return state_; }
@@ -123,8 +123,8 @@ class MotionEnergyController {
   bool free_path_to(double bearing_rad, double distance_m) const;
   void find_openings();
 
-  CameraIntrinsics intrinsics_;
-  CameraMount mount_;
+  base::CameraIntrinsics intrinsics_;
+  base::CameraMount mount_;
   MotionEnergyOptions options_;
   MotionEnergyLimits limits_;
   double horizon_row_ = 0.0;

@@ -14,7 +14,7 @@
 // motion-energy steering, from the image alone: motion_energy.hpp.
 
 #include "flowsteer/servo/analytic_scene.hpp"
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/control.hpp"
 #include "flowsteer/servo/dynamics.hpp"
 #include "flowsteer/servo/features.hpp"

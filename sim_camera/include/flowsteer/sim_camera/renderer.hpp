@@ -7,7 +7,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::sim_camera {
@@ -22,7 +22,7 @@ struct View {
   std::optional<std::size_t> self;  // the agent whose body is not drawn
 
   static View of_agent(const World& world, std::size_t agent);
-  servo::CameraIntrinsics intrinsics() const;
+  base::CameraIntrinsics intrinsics() const;
 };
 
 // One render: all channels for the same instant, row-major from the top-left pixel.

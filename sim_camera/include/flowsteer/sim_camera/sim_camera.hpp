@@ -15,7 +15,7 @@ class SimCamera final : public camera_io::FrameSource {
   // The world and the renderer must outlive the camera.
   SimCamera(const World& world, Renderer& renderer, std::size_t agent);
 
-  const servo::CameraIntrinsics& intrinsics() const override { return intrinsics_; }
+  const base::CameraIntrinsics& intrinsics() const override { return intrinsics_; }
   // Never times out: a render is always there. Timestamps are simulated time.
   camera_io::ReadStatus read(camera_io::Frame& frame, double timeout_s) override;
 
@@ -23,7 +23,7 @@ class SimCamera final : public camera_io::FrameSource {
   const World& world_;
   Renderer& renderer_;
   std::size_t agent_;
-  servo::CameraIntrinsics intrinsics_;
+  base::CameraIntrinsics intrinsics_;
   std::uint64_t sequence_ = 0;
   RenderedView view_;
 };

@@ -2,7 +2,7 @@
 
 #include <Eigen/Core>
 
-namespace flowsteer::servo {
+namespace flowsteer::base {
 
 // Pinhole intrinsics of an undistorted image: they map a pixel (col, row) to normalised
 // image coordinates x = X/Z, y = Y/Z of the camera frame (z forward, x right, y down).
@@ -45,4 +45,4 @@ struct CameraMount {
   Eigen::Vector2d forward_foe() const;
 };
 
-}  // namespace flowsteer::servo
+}  // namespace flowsteer::base

@@ -11,9 +11,9 @@
 #include <yaml-cpp/yaml.h>
 #include <Eigen/Core>
 
-#include "flowsteer/calibration/config_error.hpp"
+#include "flowsteer/base/config_error.hpp"
 
-namespace flowsteer::calibration {
+namespace flowsteer::base {
 
 // Reads typed fields out of YAML nodes and reports problems at the node's position, under a
 // dotted field path such as "objects[2].radius_m".
@@ -188,4 +188,4 @@ YAML::Node load_yaml_map(const std::string& text, const std::string& source_name
 // Reads a whole file; ConfigError when it cannot be opened or read.
 std::string read_text_file(const std::string& path, const char* what);
 
-}  // namespace flowsteer::calibration
+}  // namespace flowsteer::base

@@ -2,7 +2,7 @@
 
 #include <time.h>
 
-namespace flowsteer::servo {
+namespace flowsteer::base {
 
 // The project's one clock (DESIGN.md: time in seconds, monotonic clock): CLOCK_MONOTONIC in
 // seconds. V4L2 and libcamera stamp frames with this clock, and std::chrono::steady_clock reads
@@ -13,4 +13,15 @@ inline double monotonic_now_s() {
   return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
-}  // namespace flowsteer::servo
+// Times the stages of a step: elapsed_ms() since construction or the last restart().
+class Stopwatch {
+ public:
+  Stopwatch() : start_s_(monotonic_now_s()) {}
+  void restart() { start_s_ = monotonic_now_s(); }
+  double elapsed_ms() const { return 1e3 * (monotonic_now_s() - start_s_); }
+
+ private:
+  double start_s_;
+};
+
+}  // namespace flowsteer::base

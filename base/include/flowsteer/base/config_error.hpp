@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace flowsteer::calibration {
+namespace flowsteer::base {
 
 // A problem in a file the user wrote: the message starts with "file:line:column: field:" so
 // that editors and terminals can jump to it.
@@ -18,4 +18,4 @@ class ConfigError : public std::runtime_error {
       : std::runtime_error(file + ": " + message) {}
 };
 
-}  // namespace flowsteer::calibration
+}  // namespace flowsteer::base

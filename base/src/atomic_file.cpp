@@ -1,4 +1,4 @@
-#include "flowsteer/calibration/atomic_file.hpp"
+#include "flowsteer/base/atomic_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,7 +10,7 @@
 #include <system_error>
 #include <vector>
 
-namespace flowsteer::calibration {
+namespace flowsteer::base {
 
 namespace {
 
@@ -72,4 +72,4 @@ void write_file_atomically(const std::filesystem::path& path, const std::string&
   }
 }
 
-}  // namespace flowsteer::calibration
+}  // namespace flowsteer::base

@@ -1,8 +1,8 @@
-#include "flowsteer/calibration/yaml_reader.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 
 #include <fstream>
 
-namespace flowsteer::calibration {
+namespace flowsteer::base {
 
 YAML::Node load_yaml(const std::string& text, const std::string& source_name) {
   try {
@@ -35,4 +35,4 @@ std::string read_text_file(const std::string& path, const char* what) {
   return text.str();
 }
 
-}  // namespace flowsteer::calibration
+}  // namespace flowsteer::base

@@ -1,11 +1,11 @@
-#include "flowsteer/servo/camera.hpp"
+#include "flowsteer/base/camera.hpp"
 
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 
-namespace flowsteer::servo {
+namespace flowsteer::base {
 
 namespace {
 
@@ -69,4 +69,4 @@ Eigen::Vector2d CameraMount::forward_foe() const {
   return forward.head<2>() / forward.z();
 }
 
-}  // namespace flowsteer::servo
+}  // namespace flowsteer::base
