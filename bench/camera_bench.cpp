@@ -115,26 +115,26 @@ void BM_ReplayReadDisFlow640x480(benchmark::State& state) {
 // One frame from capture to command, as the robot loop runs it (the calibrated recording is
 // undistorted). Counters: each stage's mean milliseconds.
 void BM_CaptureToCommand640x480(benchmark::State& state) {
-  flowsteer::launch::PerceptionSection perception;
+  flowsteer::config::PerceptionSection perception;
   perception.flow = static_cast<flowsteer::servo::FlowMethod>(state.range(0));
   perception.segmentation = flowsteer::servo::SegmentationMethod::flow_graph_fast;
   perception.mount = {0.3, 0.1};
-  flowsteer::launch::ControllerSection controller;
+  flowsteer::config::ControllerSection controller;
   controller.spec.use_depth = false;
   std::ostringstream log;
   std::unique_ptr<ReplaySource> source;
-  std::unique_ptr<flowsteer::launch::PerceptionBrain> brain;
+  std::unique_ptr<flowsteer::launch::RobotBrain> brain;
   Frame frame;
   // A fresh recording needs a first frame before there is flow; that frame is not timed.
   const auto restart = [&] {
     source = std::make_unique<ReplaySource>(options(true));
-    brain = std::make_unique<flowsteer::launch::PerceptionBrain>(source->intrinsics(), perception,
-                                                                 controller, log);
+    brain = std::make_unique<flowsteer::launch::RobotBrain>(
+        source->intrinsics(), flowsteer::launch::robot_brain_config(perception, controller), log);
     source->read(frame, 0.1);
     brain->step({frame, {0.3, 0.0}, 0.1, 5.0});
   };
   restart();
-  flowsteer::launch::StageTimes sum;
+  flowsteer::pipeline::StageTimes sum;
   for (auto _ : state) {
     if (source->read(frame, 0.1) != ReadStatus::ok) {
       state.PauseTiming();
@@ -144,7 +144,7 @@ void BM_CaptureToCommand640x480(benchmark::State& state) {
     }
     const flowsteer::base::Command command = brain->step({frame, {0.3, 0.0}, 0.1, 5.0});
     benchmark::DoNotOptimize(command);
-    sum += brain->times();
+    sum += brain->brain().times();
   }
   const double n = static_cast<double>(state.iterations());
   state.counters["flow_ms"] = sum.flow / n;

@@ -21,9 +21,9 @@
 
 #include <benchmark/benchmark.h>
 
-#include "flowsteer/launch/agent_pipeline.hpp"
+#include "flowsteer/eval/simulated_agent.hpp"
 #include "flowsteer/launch/robot_brain.hpp"
-#include "flowsteer/launch/scenario_file.hpp"
+#include "flowsteer/config/scenario_file.hpp"
 
 namespace {
 
@@ -37,8 +37,8 @@ const std::map<int, double> kPaperSeconds = {
 constexpr std::size_t kAgent = 1;
 constexpr int kSteps = 120;
 
-sim_camera::WorldSpec room(int resolution, const sim_camera::PerceptionSpec& perception) {
-  sim_camera::WorldSpec spec = launch::builtin_scenario("room");
+sim_camera::WorldSpec room(int resolution, const servo::PerceptionConfig& perception) {
+  sim_camera::WorldSpec spec = config::builtin_scenario("room");
   for (auto& a : spec.agents) {
     a.camera.width_px = a.camera.height_px = resolution;
     a.perception = perception;
@@ -51,7 +51,7 @@ void coast(sim_camera::World& world) {
   world.step(std::vector<std::pair<double, double>>(world.agents().size(), {0.0, 0.0}));
 }
 
-void report(benchmark::State& state, const launch::StageTimes& sum) {
+void report(benchmark::State& state, const pipeline::StageTimes& sum) {
   const double n = static_cast<double>(state.iterations());
   state.counters["render_ms"] = sum.render / n;
   state.counters["flow_ms"] = sum.flow / n;
@@ -61,13 +61,13 @@ void report(benchmark::State& state, const launch::StageTimes& sum) {
 }
 
 void run_steps(benchmark::State& state, int resolution,
-               const sim_camera::PerceptionSpec& perception) {
+               const servo::PerceptionConfig& perception) {
   const sim_camera::WorldSpec spec = room(resolution, perception);
   const auto renderer = sim_camera::Renderer::create();
   std::optional<sim_camera::World> world;
-  std::optional<launch::AgentPipeline> pipeline;
-  launch::StageTimes times;
-  launch::StageTimes sum;
+  std::optional<eval::SimulatedAgent> pipeline;
+  pipeline::StageTimes times;
+  pipeline::StageTimes sum;
   int step = kSteps;
   for (auto _ : state) {
     if (step == kSteps) {
@@ -103,13 +103,13 @@ BENCHMARK(AgentStep)
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
 
-sim_camera::PerceptionSpec numerical(const benchmark::State& state) {
+servo::PerceptionConfig numerical(const benchmark::State& state) {
   return {static_cast<servo::FlowMethod>(state.range(0)),
           servo::SegmentationMethod::flow_graph_fast};
 }
 
 void AgentStepNumerical(benchmark::State& state) {
-  const sim_camera::PerceptionSpec perception = numerical(state);
+  const servo::PerceptionConfig perception = numerical(state);
   run_steps(state, static_cast<int>(state.range(1)), perception);
   state.SetLabel(std::string(servo::to_string(perception.flow)));
 }
@@ -142,7 +142,7 @@ Recording record_steps(const sim_camera::WorldSpec& spec) {
     const sim_camera::AgentState& agent = world.agents()[kAgent];
     s.measured = {agent.speed_mps, agent.turn_rate};
     const Eigen::Vector2d to_goal = spec.agents[kAgent].goals[agent.next_goal] - agent.position_m;
-    s.goal_bearing_rad = launch::goal_bearing_rad(to_goal.x(), to_goal.y(), agent.yaw_rad);
+    s.goal_bearing_rad = pipeline::goal_bearing_rad(to_goal.x(), to_goal.y(), agent.yaw_rad);
     s.goal_distance_m = to_goal.norm();
     coast(world);
   }
@@ -150,38 +150,38 @@ Recording record_steps(const sim_camera::WorldSpec& spec) {
 }
 
 void RobotStepNumerical(benchmark::State& state) {
-  const sim_camera::PerceptionSpec perception = numerical(state);
+  const servo::PerceptionConfig perception = numerical(state);
   const sim_camera::WorldSpec spec = room(static_cast<int>(state.range(1)), perception);
   const Recording recording = record_steps(spec);
   const std::vector<RecordedStep>& steps = recording.steps;
   const sim_camera::AgentSpec& agent = spec.agents[kAgent];
-  launch::PerceptionSection perception_section;
+  config::PerceptionSection perception_section;
   perception_section.flow = perception.flow;
   perception_section.segmentation = perception.segmentation;
   perception_section.mount = base::CameraMount{agent.camera.height_m, agent.camera.pitch_rad};
-  launch::ControllerSection controller;
+  config::ControllerSection controller;
   controller.spec = agent.controller;
   controller.preferred_speed_mps = agent.preferred_speed_mps;
   controller.robot_width_m = 2.0 * agent.radius_m;
   std::ostringstream log;
-  std::unique_ptr<launch::PerceptionBrain> brain;
+  std::unique_ptr<launch::RobotBrain> brain;
   const auto step = [&](const RecordedStep& s) {
     return brain->step({s.frame, s.measured, s.goal_bearing_rad, s.goal_distance_m});
   };
-  launch::StageTimes sum;
+  pipeline::StageTimes sum;
   std::size_t next = steps.size();
   for (auto _ : state) {
     if (next == steps.size()) {
       // A fresh brain; its first frame (no flow yet) is not timed.
       state.PauseTiming();
-      brain = std::make_unique<launch::PerceptionBrain>(recording.intrinsics, perception_section,
-                                                        controller, log);
+      brain = std::make_unique<launch::RobotBrain>(
+          recording.intrinsics, launch::robot_brain_config(perception_section, controller), log);
       step(steps.front());
       next = 1;
       state.ResumeTiming();
     }
     benchmark::DoNotOptimize(step(steps[next++]));
-    sum += brain->times();
+    sum += brain->brain().times();
   }
   report(state, sum);
   state.SetLabel(std::string(servo::to_string(perception.flow)));

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "flowsteer/servo/servo.hpp"
+#include "flowsteer/servo/steering.hpp"
 
 namespace flowsteer::launch {
 
@@ -30,15 +31,9 @@ std::string column(const std::string& text, int width) {
              : std::string(static_cast<std::size_t>(width) - text.size(), ' ') + text;
 }
 
-servo::NavigationFunction navigation_for(const ControllerSpec& c) {
-  return c.kind == ControllerSpec::Kind::goal_reaching
-             ? servo::goal_reaching(c.goal_weights, c.avoidance)
-             : servo::following(c.follow_weights, c.avoidance);
-}
-
 }  // namespace
 
-void run_demo(const DemoScene& demo, std::ostream& out) {
+void run_demo(const config::DemoScene& demo, std::ostream& out) {
   const servo::AnalyticScene& scene = demo.scene;
   servo::SceneRender render = servo::render_scene(scene);
   servo::derotate(render.flow,
@@ -52,14 +47,14 @@ void run_demo(const DemoScene& demo, std::ostream& out) {
   servo::FeatureExtractor extractor;
   const auto objects = extractor.extract(render.flow, segmentation);
 
-  servo::Percept percept{objects, {}, {}, demo.controller.leader_id};
+  servo::Percept percept{objects, {}, {}, demo.leader_id};
   if (demo.goal_m) {
     // Body y points left; a bearing is positive to the right.
     percept.goal_bearing_rad = -std::atan2(demo.goal_m->y(), demo.goal_m->x());
     percept.goal_distance_m = demo.goal_m->norm();
   }
-  servo::Controller controller(navigation_for(demo.controller), demo.controller.lambda,
-                               demo.controller.limits);
+  servo::Controller controller =
+      servo::make_controller(demo.controller, demo.agent_width_m, demo.preferred_speed_mps);
   const servo::ControlOutput command = controller.step(percept, {scene.agent_speed_mps});
 
   const double deg = 180.0 / std::numbers::pi;

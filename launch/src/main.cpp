@@ -12,20 +12,20 @@
 
 #include "flowsteer/launch/calibrate.hpp"
 #include "flowsteer/launch/camera_source.hpp"
-#include "flowsteer/launch/compare.hpp"
+#include "flowsteer/eval/compare.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/demo.hpp"
-#include "flowsteer/launch/demo_scene.hpp"
-#include "flowsteer/launch/flow_evaluation.hpp"
+#include "flowsteer/config/demo_scene.hpp"
+#include "flowsteer/eval/flow_evaluation.hpp"
 #include "flowsteer/launch/robot_commands.hpp"
-#include "flowsteer/launch/robot_launch.hpp"
-#include "flowsteer/launch/robustness.hpp"
-#include "flowsteer/launch/scenario_file.hpp"
-#include "flowsteer/launch/simulation.hpp"
+#include "flowsteer/config/robot_launch.hpp"
+#include "flowsteer/eval/robustness.hpp"
+#include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/simulation.hpp"
 
 namespace {
 
-using flowsteer::launch::DemoScene;
+using flowsteer::config::DemoScene;
 
 // Set by SIGINT / SIGTERM: the robot loop sees it, stops the base and returns.
 std::atomic<bool> g_stop_requested{false};
@@ -77,12 +77,12 @@ flowsteer::sim_camera::WorldSpec load_world(const std::string& command, const st
                                             (steersuite ? ", --steersuite" : ""));
   }
   if (!file.empty()) {
-    return flowsteer::launch::load_scenario(file);
+    return flowsteer::config::load_scenario(file);
   }
   if (has_steersuite) {
-    return flowsteer::launch::load_steersuite(*steersuite);
+    return flowsteer::config::load_steersuite(*steersuite);
   }
-  return flowsteer::launch::builtin_scenario(name.empty() ? "room" : name);
+  return flowsteer::config::builtin_scenario(name.empty() ? "room" : name);
 }
 
 // "x,y,width[,vx,vy]": a box obstacle in the agent's body frame.
@@ -182,7 +182,7 @@ int main(int argc, char** argv) {
   compare->add_option("--scenario", compare_name, "a built-in scenario (flowsteer scenarios)");
   compare
       ->add_option("--controllers", controllers,
-                   "comma-separated steering models: " + flowsteer::launch::controller_type_names())
+                   "comma-separated steering models: " + flowsteer::servo::steering_model_names())
       ->delimiter(',')
       ->required();
   compare->add_option("--out", compare_out, "folder for the outputs")->capture_default_str();
@@ -363,7 +363,7 @@ int main(int argc, char** argv) {
 
   try {
     if (app.got_subcommand("scenarios")) {
-      for (const auto& s : flowsteer::launch::builtin_scenarios()) {
+      for (const auto& s : flowsteer::config::builtin_scenarios()) {
         std::cout << s.name << std::string(s.name.size() < 18 ? 18 - s.name.size() : 1, ' ')
                   << s.description << "\n";
       }
@@ -386,7 +386,7 @@ int main(int argc, char** argv) {
     if (*replay) {
       // run_replay_command refuses synthetic flow, saying why.
       replay_command.flow = flow_method_option("--flow", replay_flow, "method",
-                                               flowsteer::launch::numerical_flow_method_names());
+                                               flowsteer::config::numerical_flow_method_names());
       if (*replay_hfov) {
         replay_command.hfov_deg = replay_hfov_deg;
       }
@@ -414,7 +414,7 @@ int main(int argc, char** argv) {
     if (*sim) {
       const flowsteer::sim_camera::WorldSpec world =
           load_world("sim", scenario_file, scenario_name, &steersuite_file);
-      flowsteer::launch::SimOptions options;
+      flowsteer::eval::SimOptions options;
       options.out_dir = out_dir;
       if (sim_resolution > 0) {
         options.resolution = sim_resolution;
@@ -433,7 +433,7 @@ int main(int argc, char** argv) {
       options.progress_bar = isatty(STDERR_FILENO) != 0;
       std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size() << " agents) -> "
                 << out_dir << "\n";
-      const auto result = flowsteer::launch::run_simulation(world, options, std::cerr);
+      const auto result = flowsteer::eval::run_simulation(world, options, std::cerr);
       std::cout << "scenario " << result.scenario << ": " << result.steps << " steps, "
                 << result.duration_s << " s simulated, " << result.collisions.size()
                 << " collisions\n";
@@ -459,7 +459,7 @@ int main(int argc, char** argv) {
                 << ", control " << t.control << ")\n";
     }
     if (*eval_flow) {
-      flowsteer::launch::FlowEvalOptions options;
+      flowsteer::eval::FlowEvalOptions options;
       options.resolutions = eval_resolutions;
       options.frames = eval_frames;
       for (const std::string& name : eval_methods) {
@@ -472,14 +472,14 @@ int main(int argc, char** argv) {
       const bool is_file = eval_scenario.find('.') != std::string::npos;
       const flowsteer::sim_camera::WorldSpec world =
           load_world("eval flow", is_file ? eval_scenario : "", is_file ? "" : eval_scenario);
-      const auto rows = flowsteer::launch::evaluate_flow(world, options, std::cerr);
-      flowsteer::launch::print_flow_table(rows, std::cout);
-      flowsteer::launch::write_flow_evaluation(rows, eval_out);
+      const auto rows = flowsteer::eval::evaluate_flow(world, options, std::cerr);
+      flowsteer::eval::print_flow_table(rows, std::cout);
+      flowsteer::eval::write_flow_evaluation(rows, eval_out);
     }
     if (*eval_robustness) {
       const flowsteer::sim_camera::WorldSpec world =
           load_world("eval robustness", robustness_file, robustness_name);
-      flowsteer::launch::RobustnessOptions options;
+      flowsteer::eval::RobustnessOptions options;
       options.resolutions = robustness_resolutions;
       for (const std::string& name : robustness_flows) {
         options.flows.push_back(
@@ -492,14 +492,14 @@ int main(int argc, char** argv) {
         options.steps = robustness_steps;
       }
       options.out_dir = robustness_out;
-      const auto runs = flowsteer::launch::evaluate_robustness(world, options, std::cerr);
-      flowsteer::launch::print_robustness_table(runs, std::cout);
+      const auto runs = flowsteer::eval::evaluate_robustness(world, options, std::cerr);
+      flowsteer::eval::print_robustness_table(runs, std::cout);
     }
     if (*compare) {
       const flowsteer::sim_camera::WorldSpec world =
           load_world("compare", compare_file, compare_name);
-      flowsteer::launch::CompareOptions options;
-      options.controllers = controllers;
+      flowsteer::eval::CompareOptions options;
+      options.controllers = flowsteer::eval::parse_controllers(controllers);
       options.out_dir = compare_out;
       if (compare_resolution > 0) {
         options.resolution = compare_resolution;
@@ -507,13 +507,13 @@ int main(int argc, char** argv) {
       if (compare_steps > 0) {
         options.steps = compare_steps;
       }
-      const auto result = flowsteer::launch::run_compare(world, options, std::cerr);
+      const auto result = flowsteer::eval::run_compare(world, options, std::cerr);
       std::cout << "scenario " << result.scenario << " -> " << compare_out << "\n";
-      flowsteer::launch::print_compare_table(flowsteer::launch::compare_table(result), std::cout);
+      flowsteer::eval::print_compare_table(flowsteer::eval::compare_table(result), std::cout);
     }
     if (*demo) {
-      DemoScene scene = scene_file.empty() ? flowsteer::launch::default_demo_scene()
-                                           : flowsteer::launch::load_demo_scene(scene_file);
+      DemoScene scene = scene_file.empty() ? flowsteer::config::default_demo_scene()
+                                           : flowsteer::config::load_demo_scene(scene_file);
       if (!obstacles.empty()) {
         scene.scene.objects.clear();
         for (std::size_t i = 0; i < obstacles.size(); ++i) {

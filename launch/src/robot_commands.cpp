@@ -10,9 +10,9 @@
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/camera_io/replay_source.hpp"
 #include "flowsteer/launch/robot_brain.hpp"
-#include "flowsteer/launch/robot_launch.hpp"
-#include "output_files.hpp"
-#include "overlay.hpp"
+#include "flowsteer/config/robot_launch.hpp"
+#include "flowsteer/eval/output_files.hpp"
+#include "flowsteer/eval/overlay.hpp"
 
 namespace flowsteer::launch {
 
@@ -45,11 +45,11 @@ class TeeBuffer final : public std::streambuf {
   std::streambuf* b_;
 };
 
-std::optional<GoalSection> goal_of(const RunCommand& command, std::optional<GoalSection> goal) {
+std::optional<config::GoalSection> goal_of(const RunCommand& command, std::optional<config::GoalSection> goal) {
   if (!command.goal_bearing_deg && !command.goal_distance_m) {
     return goal;
   }
-  GoalSection g = goal.value_or(GoalSection{});
+  config::GoalSection g = goal.value_or(config::GoalSection{});
   if (command.goal_bearing_deg) {
     if (!(std::abs(*command.goal_bearing_deg) <= 180.0)) {
       throw std::invalid_argument("--goal-bearing " + std::to_string(*command.goal_bearing_deg) +
@@ -74,8 +74,8 @@ std::optional<GoalSection> goal_of(const RunCommand& command, std::optional<Goal
 
 RobotLoopResult run_robot_command(const RunCommand& command,
                                   const std::atomic<bool>& stop_requested, std::ostream& log) {
-  const RobotLaunch launch = read_robot_launch(command.launch_file);
-  const std::optional<GoalSection> goal = goal_of(command, launch.goal);
+  const config::RobotLaunch launch = config::read_robot_launch(command.launch_file);
+  const std::optional<config::GoalSection> goal = goal_of(command, launch.goal);
 
   std::ofstream log_file;
   if (!command.log_file.empty()) {
@@ -93,13 +93,13 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   for (const std::string& warning : launch.warnings) {
     events << "flowsteer run: " << warning << "\n";
   }
-  const std::unique_ptr<camera_io::FrameSource> camera = make_camera(launch.camera);
-  std::unique_ptr<drivers::Base> base;
+  const std::unique_ptr<camera_io::FrameSource> camera = config::make_camera(launch.camera);
+  std::unique_ptr<drivers::Base> robot_base;
   if (launch.drive) {
-    base = make_base(*launch.drive);
+    robot_base = config::make_base(*launch.drive);
   }
-  PerceptionBrain brain(camera->intrinsics(), launch.perception, launch.controller, events,
-                        frame_log);
+  RobotBrain brain(camera->intrinsics(),
+                   robot_brain_config(launch.perception, launch.controller), events, frame_log);
 
   RobotLoopOptions options;
   options.camera_timeout_s = launch.camera.timeout_s;
@@ -107,11 +107,11 @@ RobotLoopResult run_robot_command(const RunCommand& command,
     options.drive_period_s = 1.0 / launch.drive->loop_rate_hz;
   }
   options.goal = goal;
-  options.camera_name = describe_camera(launch.camera);
+  options.camera_name = config::describe_camera(launch.camera);
   const base::CameraIntrinsics& k = camera->intrinsics();
   events << "flowsteer run: " << options.camera_name << " (" << k.width_px << "x" << k.height_px
          << "), "
-         << (base ? "drive " + std::string(base->drive().name())
+         << (robot_base ? "drive " + std::string(robot_base->drive().name())
                   : std::string("no drive: commands are logged, not sent"))
          << ", flow " << servo::to_string(launch.perception.flow) << ", segmentation "
          << servo::to_string(launch.perception.segmentation);
@@ -120,7 +120,7 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   }
   events << "\n";
   const RobotLoopResult result =
-      run_robot_loop(*camera, base.get(), brain, options, stop_requested, events);
+      run_robot_loop(*camera, robot_base.get(), brain, options, stop_requested, events);
   events << "flowsteer run: " << result.frames << " frames in " << result.duration_s << " s ("
          << stop_reason_name(result.reason) << ")\n";
   events.flush();
@@ -149,27 +149,28 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
   }
   if (command.flow == servo::FlowMethod::synthetic) {
     throw std::invalid_argument("--flow synthetic needs a simulator; a recording needs one of " +
-                                numerical_flow_method_names());
+                                config::numerical_flow_method_names());
   }
   if (!(command.speed_mps >= 0.0)) {
     throw std::invalid_argument("--speed must be >= 0");
   }
   camera_io::ReplaySource source(options);
-  PerceptionSection perception;
+  config::PerceptionSection perception;
   perception.flow = command.flow;
-  ControllerSection controller;
+  config::ControllerSection controller;
   controller.spec.use_depth = false;
-  PerceptionBrain brain(source.intrinsics(), perception, controller, log);
+  RobotBrain robot(source.intrinsics(), robot_brain_config(perception, controller), log);
+  const pipeline::Brain& brain = robot.brain();
 
-  OutputDir out(command.out_dir);
+  eval::OutputDir out(command.out_dir);
   const cv::Size size(source.intrinsics().width_px, source.intrinsics().height_px);
   const double fps = source.frame_rate_hz() > 0.0 ? source.frame_rate_hz() : 30.0;
   std::unique_ptr<cv::VideoWriter> video =
-      open_video(out.staging_path("overlay.mp4"), overlay_size(size), fps);
+      eval::open_video(out.staging_path("overlay.mp4"), eval::overlay_size(size), fps);
 
-  CsvTable features({"status", "kind", "frame", "t_s", "label", "centre_x", "centre_y", "width",
+  eval::CsvTable features({"status", "kind", "frame", "t_s", "label", "centre_x", "centre_y", "width",
                      "foe_x", "foe_y", "ttc_s", "pixels"});
-  CsvTable commands({"flow_status", "frame", "t_s", "objects", "goal_bearing_rad", "accel_mps2",
+  eval::CsvTable commands({"flow_status", "frame", "t_s", "objects", "goal_bearing_rad", "accel_mps2",
                      "turn_rate", "cost"});
   const std::optional<double> bearing =
       command.goal_bearing_deg ? std::optional<double>(*command.goal_bearing_deg * kDeg)
@@ -180,7 +181,7 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
   camera_io::Frame frame;
   while (source.read(frame, 0.0) == camera_io::ReadStatus::ok) {
     const base::Command c =
-        brain.step(LoopInput{frame, {command.speed_mps, 0.0}, bearing, std::nullopt});
+        robot.step(LoopInput{frame, {command.speed_mps, 0.0}, bearing, std::nullopt});
     const auto seq = static_cast<double>(frame.sequence);
     ++summary.frames;
     if (brain.blind()) {
@@ -188,7 +189,7 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
     } else {
       step_ms += brain.times().total;
     }
-    for (const servo::ObjectFeatures& o : brain.perception().objects()) {
+    for (const servo::ObjectFeatures& o : brain.objects()) {
       features.add(
           {servo::to_string(o.status), servo::to_string(o.kind)},
           {seq, frame.timestamp_s, static_cast<double>(o.label), o.centre.x(), o.centre.y(),
@@ -196,9 +197,9 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
       ++summary.object_rows;
     }
     commands.add({servo::to_string(brain.perception().status())},
-                 {seq, frame.timestamp_s, static_cast<double>(brain.perception().objects().size()),
+                 {seq, frame.timestamp_s, static_cast<double>(brain.objects().size()),
                   bearing.value_or(nan), c.accel_mps2, c.turn_rate, brain.output().cost});
-    video->write(draw_overlay(frame.image, brain.perception().flow(), brain.perception().objects(),
+    video->write(eval::draw_overlay(frame.image, brain.perception().flow(), brain.objects(),
                               source.intrinsics(), bearing));
   }
   video->release();

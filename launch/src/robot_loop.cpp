@@ -5,7 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
-#include "flowsteer/launch/perception.hpp"
+#include "flowsteer/pipeline/brain.hpp"
 #include "flowsteer/base/clock.hpp"
 
 namespace flowsteer::launch {
@@ -14,7 +14,7 @@ namespace {
 // Leaves the base stopped and deactivated however the loop ends.
 class BaseStopper {
  public:
-  BaseStopper(drivers::Base* base, std::ostream& log) : base_(base), log_(log) {}
+  BaseStopper(drivers::Base* robot_base, std::ostream& log) : base_(robot_base), log_(log) {}
   ~BaseStopper() {
     if (base_ == nullptr || base_->lifecycle() != drivers::Lifecycle::active) {
       return;
@@ -37,7 +37,7 @@ class BaseStopper {
 
 }  // namespace
 
-GoalTracker::GoalTracker(const GoalSection& goal)
+GoalTracker::GoalTracker(const config::GoalSection& goal)
     : goal_x_m_(goal.distance_m * std::cos(goal.bearing_rad)),
       goal_y_m_(-goal.distance_m * std::sin(goal.bearing_rad)) {}
 
@@ -51,7 +51,7 @@ void GoalTracker::advance(const drivers::BodyVelocity& measured, double dt_s) {
 }
 
 double GoalTracker::bearing_rad() const {
-  return goal_bearing_rad(goal_x_m_ - x_m_, goal_y_m_ - y_m_, yaw_rad_);
+  return pipeline::goal_bearing_rad(goal_x_m_ - x_m_, goal_y_m_ - y_m_, yaw_rad_);
 }
 
 double GoalTracker::distance_m() const {
@@ -72,7 +72,7 @@ const char* stop_reason_name(StopReason reason) {
   return "?";
 }
 
-RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* base, Brain& brain,
+RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* robot_base, FrameHandler& brain,
                                const RobotLoopOptions& options,
                                const std::atomic<bool>& stop_requested, std::ostream& log) {
   RobotLoopResult result;
@@ -81,10 +81,10 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
   if (options.goal) {
     goal.emplace(*options.goal);
   }
-  BaseStopper stopper(base, log);
-  if (base != nullptr) {
-    base->configure();
-    base->activate(base::monotonic_now_s());
+  BaseStopper stopper(robot_base, log);
+  if (robot_base != nullptr) {
+    robot_base->configure();
+    robot_base->activate(base::monotonic_now_s());
   }
   drivers::BodyVelocity measured;
   double last_frame_s = base::monotonic_now_s();
@@ -93,10 +93,10 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
   const auto stop = [&](StopReason reason, const std::string& why) {
     result.reason = reason;
     log << "flowsteer run: " << why;
-    if (base != nullptr) {
+    if (robot_base != nullptr) {
       // The stopper deactivates; latching the stop first makes the zero immediate.
-      base->emergency_stop();
-      log << ": base " << base->drive().name() << " stopped";
+      robot_base->emergency_stop();
+      log << ": base " << robot_base->drive().name() << " stopped";
     }
     log << "\n";
   };
@@ -109,7 +109,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
     const double left_s = options.camera_timeout_s - (now_s - last_frame_s);
     // Without a base nothing needs a steady rate: wait for the frame up to the timeout.
     const double wait_s =
-        std::max(0.0, base != nullptr ? std::min(options.drive_period_s, left_s) : left_s);
+        std::max(0.0, robot_base != nullptr ? std::min(options.drive_period_s, left_s) : left_s);
     const camera_io::ReadStatus status = camera.read(frame, wait_s);
     const double after_s = base::monotonic_now_s();
     if (status == camera_io::ReadStatus::end_of_stream) {
@@ -125,8 +125,8 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
         input.goal_distance_m = goal->distance_m();
       }
       const base::Command command = brain.step(input);
-      if (base != nullptr) {
-        if (const auto rejected = base->command(command, base::monotonic_now_s())) {
+      if (robot_base != nullptr) {
+        if (const auto rejected = robot_base->command(command, base::monotonic_now_s())) {
           log << "flowsteer run: frame " << frame.sequence << ": command rejected: " << *rejected
               << "\n";
         }
@@ -138,9 +138,9 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ba
       stop(StopReason::camera_timeout, why.str());
       break;
     }
-    if (base != nullptr) {
+    if (robot_base != nullptr) {
       const double update_s = base::monotonic_now_s();
-      const drivers::BaseState state = base->update(update_s);
+      const drivers::BaseState state = robot_base->update(update_s);
       measured = state.measured;
       result.max_measured_speed_mps = std::max(result.max_measured_speed_mps, measured.speed_mps);
       if (goal) {

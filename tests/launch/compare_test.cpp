@@ -10,18 +10,20 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "flowsteer/launch/agent_pipeline.hpp"
-#include "flowsteer/launch/compare.hpp"
+#include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/eval/compare.hpp"
 #include "flowsteer/base/config_error.hpp"
-#include "flowsteer/launch/scenario_file.hpp"
+#include "flowsteer/config/scenario_file.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::eval {
 namespace {
 
-SimResult run_with(const std::string& scenario, const std::string& type) {
+using namespace flowsteer::config;
+
+SimResult run_with(const std::string& scenario, servo::SteeringModel model) {
   sim_camera::WorldSpec world = builtin_scenario(scenario);
   for (auto& a : world.agents) {
-    a.controller.type = type;
+    a.controller.model = model;
   }
   SimOptions options;
   options.resolution = 64;
@@ -35,7 +37,7 @@ class MotionEnergyCrosses : public ::testing::TestWithParam<const char*> {};
 // Blumberg's corridor following and obstacle avoidance: every agent reaches its goal, and none
 // touches a wall, an obstacle or another agent.
 TEST_P(MotionEnergyCrosses, WithoutCollision) {
-  const SimResult result = run_with(GetParam(), "motion_energy");
+  const SimResult result = run_with(GetParam(), servo::SteeringModel::motion_energy);
   EXPECT_EQ(result.collisions.size(), 0U);
   for (const AgentResult& a : result.agents) {
     EXPECT_TRUE(a.reached_goal) << a.name;
@@ -49,7 +51,7 @@ INSTANTIATE_TEST_SUITE_P(Blumberg, MotionEnergyCrosses, ::testing::Values("room"
 // the head-on case turns at the full rate instead, and the agent walks on along the wall rather
 // than stopping in front of it (its path is longer than the 6 m to the wall).
 TEST(MotionEnergy, TurnsAwayFromAWallHeadOn) {
-  const SimResult result = run_with("wall_head_on", "motion_energy");
+  const SimResult result = run_with("wall_head_on", servo::SteeringModel::motion_energy);
   EXPECT_EQ(result.collisions.size(), 0U);
   const AgentResult& walker = result.agents.front();
   EXPECT_GT(walker.min_clearance_m, 0.0);
@@ -69,23 +71,23 @@ TEST(GeometricReference, ComputesNoFlow) {
     a.perception.flow = servo::FlowMethod::dis_fast;
     a.perception.segmentation = servo::SegmentationMethod::flow_graph_fast;
   }
-  spec.agents.at(0).controller.type = "geometric";
+  spec.agents.at(0).controller.model = servo::SteeringModel::geometric;
   sim_camera::World world(spec);
   const auto renderer = sim_camera::Renderer::create();
-  AgentPipeline geometric(world, *renderer, 0);
-  AgentPipeline vision(world, *renderer, 1);
+  SimulatedAgent geometric(world, *renderer, 0);
+  SimulatedAgent vision(world, *renderer, 1);
   for (int step = 0; step < 2; ++step) {
-    StageTimes geometric_times;
-    StageTimes vision_times;
+    pipeline::StageTimes geometric_times;
+    pipeline::StageTimes vision_times;
     geometric.step(geometric_times);
     vision.step(vision_times);
     EXPECT_EQ(geometric_times.flow, 0.0);
     EXPECT_GT(vision_times.flow, 0.0);
     world.step(std::vector<std::pair<double, double>>(spec.agents.size(), {0.0, 0.0}));
   }
-  EXPECT_EQ(geometric.perception().status(), servo::FlowStatus::no_previous_frame);
-  EXPECT_EQ(vision.perception().status(), servo::FlowStatus::ok);
-  EXPECT_FALSE(geometric.objects().empty());  // the walls and the other agents, from geometry
+  EXPECT_EQ(geometric.brain().perception().status(), servo::FlowStatus::no_previous_frame);
+  EXPECT_EQ(vision.brain().perception().status(), servo::FlowStatus::ok);
+  EXPECT_FALSE(geometric.brain().objects().empty());  // the walls and the other agents, from geometry
 }
 
 class VisionAgainstReference : public ::testing::TestWithParam<const char*> {};
@@ -99,7 +101,7 @@ class VisionAgainstReference : public ::testing::TestWithParam<const char*> {};
 //   agent may misplace an object by about that much.
 TEST_P(VisionAgainstReference, BothAvoidAndVisionStaysNearTheReference) {
   CompareOptions options;
-  options.controllers = {"vision", "geometric"};
+  options.controllers = {servo::SteeringModel::vision, servo::SteeringModel::geometric};
   options.resolution = 64;
   options.write_outputs = false;
   std::ostringstream log;
@@ -107,10 +109,10 @@ TEST_P(VisionAgainstReference, BothAvoidAndVisionStaysNearTheReference) {
   const std::vector<CompareRow> rows = compare_table(result);
   ASSERT_EQ(rows.size(), 2U);
   for (const CompareRow& r : rows) {
-    EXPECT_EQ(r.summary.collisions, 0) << r.controller;
-    EXPECT_EQ(r.summary.goals_reached, r.summary.agents) << r.controller;
+    EXPECT_EQ(r.summary.collisions, 0) << servo::to_string(r.controller);
+    EXPECT_EQ(r.summary.goals_reached, r.summary.agents) << servo::to_string(r.controller);
   }
-  EXPECT_EQ(rows[1].controller, "geometric");
+  EXPECT_EQ(rows[1].controller, servo::SteeringModel::geometric);
   EXPECT_LT(std::abs(rows[0].path_length_vs_reference), 0.10);
   EXPECT_GT(rows[0].min_clearance_vs_reference_m, -0.25);
   // The histograms count the non-zero turn rates of each run.
@@ -119,7 +121,7 @@ TEST_P(VisionAgainstReference, BothAvoidAndVisionStaysNearTheReference) {
     for (const int c : run.turn_rate_counts) {
       total += c;
     }
-    EXPECT_GT(total, 0) << run.controller;
+    EXPECT_GT(total, 0) << servo::to_string(run.controller);
   }
 }
 
@@ -130,7 +132,7 @@ TEST(Compare, WritesTopViewsTableAndHistogramsForEveryController) {
       std::filesystem::temp_directory_path() / "flowsteer_compare_test";
   std::filesystem::remove_all(dir);
   CompareOptions options;
-  options.controllers = controller_types();
+  options.controllers = parse_controllers({"vision", "geometric", "motion_energy"});
   options.resolution = 32;
   options.steps = 20;
   options.out_dir = dir;
@@ -140,7 +142,7 @@ TEST(Compare, WritesTopViewsTableAndHistogramsForEveryController) {
        {"compare.csv", "compare_agents.csv", "turn_rates.csv", "turn_rates.png", "topviews.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
   }
-  for (const std::string& c : controller_types()) {
+  for (const std::string c : {"vision", "geometric", "motion_energy"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / c / "summary.json")) << c;
     EXPECT_TRUE(std::filesystem::exists(dir / c / "topview.png")) << c;
   }
@@ -162,7 +164,7 @@ TEST(Compare, WritesTopViewsTableAndHistogramsForEveryController) {
   EXPECT_GT(cv::imread((dir / "turn_rates.png").string()).cols, 0);
   // A second run replaces the folders of the controllers it runs and keeps the others.
   std::ofstream(dir / "geometric" / "stale.txt") << "from before\n";
-  options.controllers = {"geometric"};
+  options.controllers = {servo::SteeringModel::geometric};
   run_compare(builtin_scenario("crossing"), options, log);
   EXPECT_TRUE(std::filesystem::exists(dir / "geometric" / "summary.json"));
   EXPECT_FALSE(std::filesystem::exists(dir / "geometric" / "stale.txt"));
@@ -175,8 +177,8 @@ TEST(Compare, RejectsUnknownAndRepeatedControllers) {
   options.write_outputs = false;
   std::ostringstream log;
   auto error_of = [&](std::vector<std::string> controllers) -> std::string {
-    options.controllers = std::move(controllers);
     try {
+      options.controllers = parse_controllers(controllers);
       run_compare(builtin_scenario("room"), options, log);
     } catch (const base::ConfigError& e) {
       return e.what();
@@ -192,7 +194,7 @@ TEST(Compare, RejectsUnknownAndRepeatedControllers) {
 
 TEST(Compare, FollowersCannotUseMotionEnergy) {
   CompareOptions options;
-  options.controllers = {"motion_energy"};
+  options.controllers = {servo::SteeringModel::motion_energy};
   options.write_outputs = false;
   options.steps = 1;
   std::ostringstream log;
@@ -214,10 +216,10 @@ TEST(ScenarioFile, ControllerTypeAndMotionEnergySettings) {
       "agents:\n  - {start: [0, 0], goal: [9, 0]}\n"
       "  - {start: [0, 3], goal: [9, 3], controller: {type: geometric}}\n",
       "scenario.yaml");
-  EXPECT_EQ(w.agents[0].controller.type, "motion_energy");
+  EXPECT_EQ(w.agents[0].controller.model, servo::SteeringModel::motion_energy);
   EXPECT_DOUBLE_EQ(w.agents[0].controller.motion_energy.flow_weight, 0.7);
-  EXPECT_EQ(w.agents[0].controller.mass_from, "ground");
-  EXPECT_EQ(w.agents[1].controller.type, "geometric");
+  EXPECT_EQ(w.agents[0].controller.mass_from, servo::MassSource::ground);
+  EXPECT_EQ(w.agents[1].controller.model, servo::SteeringModel::geometric);
   EXPECT_EQ(error_of("controller: {type: magic}\nagents:\n  - {start: [0, 0], goal: [4, 0]}\n"),
             "scenario.yaml:1:20: controller.type: expected one of: vision, geometric, "
             "motion_energy; got 'magic'");
@@ -237,4 +239,4 @@ TEST(ScenarioFile, ControllerTypeAndMotionEnergySettings) {
 }
 
 }  // namespace
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::eval

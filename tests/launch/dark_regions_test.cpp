@@ -15,13 +15,15 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "flowsteer/launch/agent_pipeline.hpp"
-#include "flowsteer/launch/scenario_file.hpp"
-#include "flowsteer/launch/simulation.hpp"
+#include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/simulation.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::eval {
 namespace {
+
+using namespace flowsteer::config;
 
 SimResult run_with_delta(sim_camera::WorldSpec spec, double delta,
                          servo::FlowMethod flow = servo::FlowMethod::dis_fast) {
@@ -194,11 +196,11 @@ Trace walk(const sim_camera::WorldSpec& spec) {
   const std::int32_t obstacle_id = sim_camera::obstacle_render_id(0);
   sim_camera::World world(spec);
   const auto renderer = sim_camera::Renderer::create();
-  AgentPipeline pipeline(world, *renderer, 0);
+  SimulatedAgent pipeline(world, *renderer, 0);
   Trace trace;
   const int steps = static_cast<int>(std::ceil(spec.duration_s / spec.step_s - 1e-9));
   for (int k = 0; k < steps && !world.finished(); ++k) {
-    StageTimes times;
+    pipeline::StageTimes times;
     const servo::ControlOutput& out = pipeline.step(times);
     const Eigen::Vector2d& position = world.agents()[0].position_m;
     trace.gaps_m.push_back((position - obstacle.centre_m).norm() - obstacle.radius_m -
@@ -214,7 +216,7 @@ Trace walk(const sim_camera::WorldSpec& spec) {
     }
     trace.avoidance_turns.push_back(turn);
     bool visible = false;
-    for (const servo::ObjectFeatures& object : pipeline.objects()) {
+    for (const servo::ObjectFeatures& object : pipeline.brain().objects()) {
       visible = visible ||
                 (object.kind == servo::RegionKind::visible && object.source_id == obstacle_id &&
                  object.status == servo::MotionStatus::approaching);
@@ -298,4 +300,4 @@ TEST(DarkRegions, CarriedLightAgentReactsLaterThanInDaylight) {
 }
 
 }  // namespace
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::eval

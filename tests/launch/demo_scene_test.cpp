@@ -1,4 +1,4 @@
-#include "flowsteer/launch/demo_scene.hpp"
+#include "flowsteer/config/demo_scene.hpp"
 
 #include <sstream>
 
@@ -7,8 +7,10 @@
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/launch/demo.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::config {
 namespace {
+
+using launch::run_demo;
 
 // The message of the base::ConfigError that parsing `yaml` throws.
 std::string error_of(const std::string& yaml) {
@@ -80,4 +82,4 @@ TEST(Demo, DefaultSceneSeesEveryObjectAndSteers) {
 }
 
 }  // namespace
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::config

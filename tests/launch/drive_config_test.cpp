@@ -1,10 +1,10 @@
-#include "flowsteer/launch/drive_config.hpp"
+#include "flowsteer/config/drive_config.hpp"
 
 #include <gtest/gtest.h>
 
 #include "flowsteer/base/config_error.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::config {
 namespace {
 
 std::string error_of(const std::string& yaml) {
@@ -113,4 +113,4 @@ TEST(DriveSection, ErrorsNameTheField) {
 }
 
 }  // namespace
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::config

@@ -1,4 +1,4 @@
-#include "flowsteer/launch/flow_evaluation.hpp"
+#include "flowsteer/eval/flow_evaluation.hpp"
 
 #include <iostream>
 #include <sstream>
@@ -6,10 +6,12 @@
 
 #include <gtest/gtest.h>
 
-#include "flowsteer/launch/scenario_file.hpp"
+#include "flowsteer/config/scenario_file.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::eval {
 namespace {
+
+using namespace flowsteer::config;
 
 // The exact flow's row, then DIS (medium)'s, over 40 frames of a built-in scenario at 256².
 std::vector<FlowEvalRow> evaluate_dis_medium(
@@ -90,4 +92,4 @@ TEST(FlowEvaluation, StaticSurfacesWithoutDepthKeepTheHeadingAsFoe) {
 }
 
 }  // namespace
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::eval

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -12,11 +13,11 @@
 #include <opencv2/videoio.hpp>
 
 #include "flowsteer/camera_io/replay_source.hpp"
-#include "flowsteer/launch/agent_pipeline.hpp"
-#include "flowsteer/launch/perception.hpp"
+#include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/pipeline/perception.hpp"
 #include "flowsteer/launch/robot_brain.hpp"
-#include "flowsteer/launch/robot_launch.hpp"
-#include "flowsteer/launch/scenario_file.hpp"
+#include "flowsteer/config/robot_launch.hpp"
+#include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 #include "robot_launch_errors.hpp"
@@ -34,7 +35,7 @@ const char* kDrive =
 using launch::test_support::error_of;
 
 TEST(RobotLaunchSections, PerceptionAndControllerAreRead) {
-  const launch::RobotLaunch l = launch::parse_robot_launch(
+  const config::RobotLaunch l = config::parse_robot_launch(
       std::string(kCamera) + kDrive +
           "perception: {flow: dis_medium, segmentation: flow_graph, dark_regions: true, "
           "height_m: 0.3, pitch_deg: 10}\n"
@@ -97,38 +98,38 @@ camera_io::Frame textured_frame(double t_s, std::uint64_t sequence, int shift_px
 
 // A blind frame (no flow yet, or a single colour) brakes at the controller's limit and turns
 // towards the goal only; the switch to blind and back is logged once each.
-TEST(PerceptionBrain, BlindFramesBrakeAndHoldTheGoalHeading) {
-  launch::ControllerSection controller;
+TEST(RobotBrain, BlindFramesBrakeAndHoldTheGoalHeading) {
+  config::ControllerSection controller;
   controller.spec.use_depth = false;
   controller.spec.max_accel_mps2 = 0.7;
   std::ostringstream log;
-  launch::PerceptionBrain brain(base::CameraIntrinsics::from_horizontal_fov(160, 120, 1.0), {},
-                                controller, log);
+  launch::RobotBrain brain(base::CameraIntrinsics::from_horizontal_fov(160, 120, 1.0),
+                           launch::robot_brain_config({}, controller), log);
   const drivers::BodyVelocity moving{0.4, 0.0};
   const double goal_right_rad = 0.3;
 
   const camera_io::Frame first = textured_frame(0.0, 0, 0);
   base::Command c = brain.step({first, moving, goal_right_rad, 5.0});
-  EXPECT_TRUE(brain.blind());
+  EXPECT_TRUE(brain.brain().blind());
   EXPECT_DOUBLE_EQ(c.accel_mps2, -0.7);
   EXPECT_GT(c.turn_rate, 0.0);  // towards the goal, on the right
   // Stopped, it stays stopped: no reversing.
   camera_io::Frame again = first;
   again.sequence = 1;
   c = brain.step({again, {0.0, 0.0}, goal_right_rad, 5.0});
-  EXPECT_TRUE(brain.blind());  // the same timestamp: no time for motion
+  EXPECT_TRUE(brain.brain().blind());  // the same timestamp: no time for motion
   EXPECT_DOUBLE_EQ(c.accel_mps2, 0.0);
 
   camera_io::Frame grey = textured_frame(0.1, 2, 0);
   grey.image.setTo(cv::Scalar::all(128));
   c = brain.step({grey, moving, -goal_right_rad, 5.0});
-  EXPECT_TRUE(brain.blind());
+  EXPECT_TRUE(brain.brain().blind());
   EXPECT_LT(c.turn_rate, 0.0);
   EXPECT_DOUBLE_EQ(c.accel_mps2, -0.7);
 
   brain.step({textured_frame(0.2, 3, 2), moving, goal_right_rad, 5.0});
   brain.step({textured_frame(0.3, 4, 4), moving, goal_right_rad, 5.0});
-  EXPECT_FALSE(brain.blind());
+  EXPECT_FALSE(brain.brain().blind());
   const std::string text = log.str();
   EXPECT_NE(text.find("frame 0: blind (no previous frame): braking to a stop, holding the goal "
                       "heading, no avoidance"),
@@ -163,19 +164,19 @@ struct Seen {
 // intrinsics from the field of view, BGR frames) is checked exactly, so each frame gives the
 // same segmentation and the same objects; a lossy codec would add its own error to the flow.
 TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
-  sim_camera::WorldSpec spec = launch::builtin_scenario("flow_targets");
+  sim_camera::WorldSpec spec = config::builtin_scenario("flow_targets");
   spec.agents[0].camera.width_px = spec.agents[0].camera.height_px = 256;
   spec.agents[0].perception = {};
   sim_camera::World world(spec);
   const auto renderer = sim_camera::Renderer::create();
-  launch::AgentPipeline agent(world, *renderer, 0);
+  eval::SimulatedAgent agent(world, *renderer, 0);
 
-  launch::PerceptionOptions options;
+  pipeline::PerceptionOptions options;
   options.flow = servo::FlowMethod::dis_medium;
   options.segmentation = servo::SegmentationMethod::flow_graph;
   options.use_depth = false;
   options.mount = {spec.agents[0].camera.height_m, spec.agents[0].camera.pitch_rad};
-  launch::Perception direct(agent.intrinsics(), options);
+  pipeline::Perception direct(agent.intrinsics(), options);
 
   const fs::path video = fs::temp_directory_path() / "flowsteer_replay_of_render.avi";
   constexpr int kFrames = 16;
@@ -189,7 +190,7 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
     ASSERT_TRUE(writer.isOpened()) << "OpenCV cannot write FFV1 to " << video;
     std::vector<std::pair<double, double>> commands(1);
     for (int f = 0; f < kFrames; ++f) {
-      launch::StageTimes times;
+      pipeline::StageTimes times;
       const servo::ControlOutput& out = agent.step(times);
       commands[0] = {out.command.accel_mps2, out.command.turn_rate};
       const sim_camera::AgentState& state = world.agents()[0];
@@ -214,7 +215,7 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
   replay_options.lens.horizontal_fov_rad = spec.agents[0].camera.hfov_rad;
   camera_io::ReplaySource source(replay_options);
   EXPECT_NEAR(source.intrinsics().fx_px, agent.intrinsics().fx_px, 1e-9);
-  launch::Perception replayed(source.intrinsics(), options);
+  pipeline::Perception replayed(source.intrinsics(), options);
   camera_io::Frame frame;
   int f = 0;
   int compared = 0;
@@ -227,7 +228,7 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
     SCOPED_TRACE("frame " + std::to_string(f));
     const Seen& seen = direct_seen[f];
     EXPECT_DOUBLE_EQ(frame.timestamp_s, seen.timestamp_s);
-    launch::StageTimes times;
+    pipeline::StageTimes times;
     ASSERT_EQ(replayed.process(frame, speeds[f], 0.0, times), seen.status);
     if (seen.status == servo::FlowStatus::ok) {
       EXPECT_EQ(replayed.segmentation().labels, seen.labels);
@@ -250,6 +251,105 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
   EXPECT_EQ(f, kFrames);
   EXPECT_GE(compared, 10) << "too few approaching objects to compare";
   fs::remove(video);
+}
+
+// One brain: the frames a simulated agent renders, driven through the path `flowsteer sim` takes
+// (SimulatedAgent) and through the path `flowsteer run` and `replay` take (RobotBrain, on the
+// frames without the renderer's channels, as a camera gives them), give the same command bit for
+// bit at every frame, blind frames included, for every model a camera can run. The geometric
+// model needs the simulator's geometry, which a robot refuses by name.
+struct Recorded {
+  camera_io::Frame frame;
+  double speed_mps;
+  double turn_rate;
+  std::optional<double> goal_bearing_rad;
+  std::optional<double> goal_distance_m;
+  base::Command command;
+};
+
+std::vector<Recorded> record_simulated_agent(sim_camera::WorldSpec spec, int frames) {
+  sim_camera::World world(spec);
+  const auto renderer = sim_camera::Renderer::create();
+  eval::SimulatedAgent agent(world, *renderer, 0);
+  std::vector<Recorded> recorded;
+  std::vector<std::pair<double, double>> commands(spec.agents.size(), {0.0, 0.0});
+  for (int f = 0; f < frames; ++f) {
+    const sim_camera::AgentState state = world.agents()[0];
+    pipeline::StageTimes times;
+    const servo::ControlOutput& out = agent.step(times);
+    Recorded r{agent.frame(), state.speed_mps, state.turn_rate,
+               agent.brain().percept().goal_bearing_rad, agent.brain().percept().goal_distance_m,
+               out.command};
+    r.frame.image = r.frame.image.clone();
+    r.frame.sim.reset();  // as a camera gives it
+    recorded.push_back(std::move(r));
+    commands[0] = {out.command.accel_mps2, out.command.turn_rate};
+    world.step(commands);
+  }
+  return recorded;
+}
+
+class OneBrain : public ::testing::TestWithParam<servo::SteeringModel> {};
+
+TEST_P(OneBrain, SimulatorAndRobotPathsGiveTheSameCommands) {
+  sim_camera::WorldSpec spec = config::builtin_scenario("room");
+  for (sim_camera::AgentSpec& a : spec.agents) {
+    a.camera.width_px = a.camera.height_px = 96;
+    a.perception = {servo::FlowMethod::dis_fast, servo::SegmentationMethod::flow_graph_fast};
+    a.controller.use_depth = false;  // a camera has no depth
+    a.controller.model = GetParam();
+    a.controller.mass_from = servo::MassSource::ground;  // a camera has no object ids
+  }
+  sim_camera::AgentSpec& walker = spec.agents[0];
+  walker.start_speed_mps = 0.8;  // moving while blind: the first frames brake
+  const std::vector<Recorded> recorded = record_simulated_agent(spec, 40);
+
+  config::PerceptionSection perception;
+  perception.flow = walker.perception.flow;
+  perception.segmentation = walker.perception.segmentation;
+  perception.mount = base::CameraMount{walker.camera.height_m, walker.camera.pitch_rad};
+  config::ControllerSection controller;
+  controller.spec = walker.controller;
+  controller.robot_width_m = 2.0 * walker.radius_m;
+  controller.preferred_speed_mps = walker.preferred_speed_mps;
+  std::ostringstream log;
+  launch::RobotBrain robot(
+      base::CameraIntrinsics::from_horizontal_fov(96, 96, walker.camera.hfov_rad),
+      launch::robot_brain_config(perception, controller), log);
+
+  int blind = 0;
+  int turning = 0;
+  for (std::size_t f = 0; f < recorded.size(); ++f) {
+    SCOPED_TRACE("frame " + std::to_string(f));
+    const Recorded& r = recorded[f];
+    const base::Command c = robot.step(
+        {r.frame, {r.speed_mps, r.turn_rate}, r.goal_bearing_rad, r.goal_distance_m});
+    EXPECT_EQ(c.accel_mps2, r.command.accel_mps2);
+    EXPECT_EQ(c.turn_rate, r.command.turn_rate);
+    blind += robot.brain().blind() ? 1 : 0;
+    turning += std::abs(c.turn_rate) > 1e-3 ? 1 : 0;
+  }
+  EXPECT_GE(blind, 1);
+  EXPECT_EQ(recorded.front().command.accel_mps2, -walker.controller.max_accel_mps2);
+  EXPECT_GE(turning, 10) << "too few frames that steer to compare";
+}
+
+INSTANTIATE_TEST_SUITE_P(CameraModels, OneBrain,
+                         ::testing::Values(servo::SteeringModel::vision,
+                                           servo::SteeringModel::motion_energy),
+                         [](const auto& info) { return std::string(servo::to_string(info.param)); });
+
+TEST(OneBrain, TheGeometricModelNeedsTheSimulatorsGeometry) {
+  config::ControllerSection controller;
+  controller.spec.model = servo::SteeringModel::geometric;
+  std::ostringstream log;
+  try {
+    launch::RobotBrain robot(base::CameraIntrinsics::from_horizontal_fov(64, 64, 1.0),
+                             launch::robot_brain_config({}, controller), log);
+    FAIL() << "a robot ran the geometric model";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("exact geometry"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -5,14 +5,14 @@
 #include <string>
 
 #include "flowsteer/base/config_error.hpp"
-#include "flowsteer/launch/robot_launch.hpp"
+#include "flowsteer/config/robot_launch.hpp"
 
 namespace flowsteer::launch::test_support {
 
 // The base::ConfigError that parsing `yaml` as the launch file bad.yaml gives, "no error" if none.
 inline std::string error_of(const std::string& yaml) {
   try {
-    parse_robot_launch(yaml, "bad.yaml", "");
+    config::parse_robot_launch(yaml, "bad.yaml", "");
   } catch (const base::ConfigError& e) {
     return e.what();
   }

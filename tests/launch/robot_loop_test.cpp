@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/videoio.hpp>
 
-#include "flowsteer/launch/robot_launch.hpp"
+#include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/launch/robot_loop.hpp"
 #include "robot_launch_errors.hpp"
 
@@ -21,25 +21,25 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace flowsteer;
-using launch::parse_robot_launch;
+using config::parse_robot_launch;
 
 using launch::test_support::error_of;
 
 TEST(RobotLaunch, ShippedLaunchFilesParse) {
   for (const char* name : {"v4l2_sim_base.yaml", "v4l2_odrive.yaml", "replay.yaml"}) {
     SCOPED_TRACE(name);
-    const launch::RobotLaunch l =
-        launch::read_robot_launch(std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/" + name);
+    const config::RobotLaunch l =
+        config::read_robot_launch(std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/" + name);
     EXPECT_TRUE(l.goal.has_value());
     EXPECT_EQ(l.drive.has_value(), std::string(name) != "replay.yaml");
   }
-  const launch::RobotLaunch replay =
-      launch::read_robot_launch(std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/replay.yaml");
+  const config::RobotLaunch replay =
+      config::read_robot_launch(std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/replay.yaml");
   // Relative recordings are found beside the launch file.
   EXPECT_EQ(std::get<camera_io::ReplayOptions>(replay.camera.source).path,
             std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/run.mp4");
-  const launch::RobotLaunch v4l2 =
-      launch::read_robot_launch(std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/v4l2_odrive.yaml");
+  const config::RobotLaunch v4l2 =
+      config::read_robot_launch(std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/v4l2_odrive.yaml");
   const auto& o = std::get<camera_io::V4l2Options>(v4l2.camera.source);
   EXPECT_EQ(o.format, camera_io::PixelFormat::mjpeg);
   EXPECT_DOUBLE_EQ(v4l2.camera.timeout_s, 0.3);
@@ -96,7 +96,7 @@ TEST(GoalTracker, TurningRightTowardsAGoalOnTheRightCentresIt) {
 }
 
 // Accelerates and, like a real pipeline, takes time over each frame.
-class ForwardBrain : public launch::Brain {
+class ForwardBrain : public launch::FrameHandler {
  public:
   base::Command step(const launch::LoopInput& input) override {
     ++frames;
@@ -137,12 +137,12 @@ class StallingCamera : public camera_io::FrameSource {
 };
 
 std::unique_ptr<drivers::Base> sim_base() {
-  const launch::RobotLaunch l = parse_robot_launch(
+  const config::RobotLaunch l = parse_robot_launch(
       "camera: {type: replay, replay: {path: x.avi}}\n"
       "drive: {type: sim, loop_rate_hz: 50, watchdog: {timeout_s: 0.3, ramp_s: 0.1}}\n"
       "perception: {height_m: 0.3}\n",
       "test.yaml", "");
-  return launch::make_base(*l.drive);
+  return config::make_base(*l.drive);
 }
 
 TEST(RobotLoop, ReplayEndStopsTheBaseAndSaysSo) {
@@ -161,7 +161,7 @@ TEST(RobotLoop, ReplayEndStopsTheBaseAndSaysSo) {
   ForwardBrain brain;
   launch::RobotLoopOptions options;
   options.camera_name = "replay " + video.string();
-  options.goal = launch::GoalSection{0.0, 10.0};
+  options.goal = config::GoalSection{0.0, 10.0};
   std::atomic<bool> stop{false};
   std::ostringstream log;
   const auto result = launch::run_robot_loop(camera, base.get(), brain, options, stop, log);

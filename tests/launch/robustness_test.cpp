@@ -7,11 +7,13 @@
 #include <gtest/gtest.h>
 
 #include "flowsteer/base/config_error.hpp"
-#include "flowsteer/launch/robustness.hpp"
-#include "flowsteer/launch/scenario_file.hpp"
+#include "flowsteer/eval/robustness.hpp"
+#include "flowsteer/config/scenario_file.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::eval {
 namespace {
+
+using namespace flowsteer::config;
 
 // One agent on open ground with its goal 3 m ahead, and one with a goal it cannot reach in the
 // scenario's 4 s.
@@ -124,4 +126,4 @@ TEST(Robustness, FollowersHaveNoGoalToReach) {
 }
 
 }  // namespace
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::eval

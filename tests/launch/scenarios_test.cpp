@@ -9,11 +9,13 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "flowsteer/base/config_error.hpp"
-#include "flowsteer/launch/scenario_file.hpp"
-#include "flowsteer/launch/simulation.hpp"
+#include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/simulation.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::eval {
 namespace {
+
+using namespace flowsteer::config;
 
 SimResult run(const std::string& scenario, int resolution = 64) {
   SimOptions options;
@@ -169,9 +171,9 @@ TEST(ScenarioFile, FollowersFollowWithBetaOneUnlessToldOtherwise) {
       "agents:\n  - {start: [0, 0], goal: [9, 0]}\n  - {start: [-3, 0], leader: 0}\n"
       "  - {start: [-6, 0], leader: 1, controller: {beta: 0.3}}\n",
       "scenario.yaml");
-  EXPECT_EQ(w.agents[1].controller.kind, "following");
+  EXPECT_EQ(w.agents[1].controller.kind, servo::NavigationKind::following);
   EXPECT_DOUBLE_EQ(w.agents[1].controller.beta, 1.0);
-  EXPECT_EQ(w.agents[2].controller.kind, "following");
+  EXPECT_EQ(w.agents[2].controller.kind, servo::NavigationKind::following);
   EXPECT_DOUBLE_EQ(w.agents[2].controller.beta, 0.3);
 }
 
@@ -267,4 +269,4 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
 }
 
 }  // namespace
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::eval

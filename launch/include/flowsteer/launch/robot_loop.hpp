@@ -8,7 +8,7 @@
 
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/drivers/base.hpp"
-#include "flowsteer/launch/robot_launch.hpp"
+#include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/servo/control.hpp"
 
 namespace flowsteer::launch {
@@ -17,7 +17,7 @@ namespace flowsteer::launch {
 // the base's measured motion (a unicycle; wheel slip accumulates, as with any odometry).
 class GoalTracker {
  public:
-  explicit GoalTracker(const GoalSection& goal);
+  explicit GoalTracker(const config::GoalSection& goal);
   // Moves the robot by its measured speed and turn rate (positive right) over dt_s.
   void advance(const drivers::BodyVelocity& measured, double dt_s);
   // Bearing from the robot's heading, positive to the right, in (-π, π].
@@ -41,10 +41,11 @@ struct LoopInput {
   std::optional<double> goal_distance_m;
 };
 
-// Turns a frame into a command: perception, features and the controller.
-class Brain {
+// Turns a frame into a command: the robot's pipeline::Brain (RobotBrain), or a test's stand-in
+// for it.
+class FrameHandler {
  public:
-  virtual ~Brain() = default;
+  virtual ~FrameHandler() = default;
   virtual base::Command step(const LoopInput& input) = 0;
 };
 
@@ -55,7 +56,7 @@ struct RobotLoopOptions {
   double camera_timeout_s = 0.5;
   // How often the base is updated while waiting for frames (the drive's loop rate).
   double drive_period_s = 0.02;
-  std::optional<GoalSection> goal;
+  std::optional<config::GoalSection> goal;
   std::size_t max_frames = 0;          // 0: no limit
   std::string camera_name = "camera";  // for the log
 };
@@ -73,7 +74,7 @@ struct RobotLoopResult {
 // recording, when the camera delivers nothing for camera_timeout_s, when stop_requested
 // becomes true (a signal handler sets it), and when anything throws (the exception then
 // reaches the caller after the stop). Each stop is logged with its reason.
-RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* base, Brain& brain,
+RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* robot_base, FrameHandler& brain,
                                const RobotLoopOptions& options,
                                const std::atomic<bool>& stop_requested, std::ostream& log);
 

@@ -1,0 +1,103 @@
+#include "flowsteer/config/controller_reader.hpp"
+
+namespace flowsteer::config {
+
+namespace {
+
+// The names of servo's enums are string literals: null-terminated views.
+const char* to_c_str(std::string_view literal) {
+  return literal.data();
+}
+
+// The settings of type motion_energy; given with another type, they are a mistake.
+void read_motion_energy(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
+                        servo::ControllerConfig& c) {
+  if (c.model != servo::SteeringModel::motion_energy) {
+    for (const char* key : {"mass_from", "flow_weight", "steer_gain", "goal_gain", "head_on_energy",
+                            "head_on_balance", "danger_distance_m", "danger_fraction",
+                            "corner_step", "corner_rise", "free_path_range_m"}) {
+      if (node[key]) {
+        r.fail(node[key], base::YamlReader::join(field, key),
+               "only for type: motion_energy (this controller's type is " +
+                   std::string(servo::to_string(c.model)) + ")");
+      }
+    }
+    return;
+  }
+  auto fraction = [&](const char* key, double value, bool zero_allowed) {
+    value = r.number(node, field, key, value);
+    if (!((zero_allowed ? value >= 0.0 : value > 0.0) && value <= 1.0)) {
+      r.fail(node[key], base::YamlReader::join(field, key),
+             std::string("must be in ") + (zero_allowed ? "[0, 1]" : "(0, 1]"));
+    }
+    return value;
+  };
+  servo::MotionEnergyOptions& m = c.motion_energy;
+  c.mass_from = *servo::parse_mass_source(
+      r.word(node, field, "mass_from", {"ids", "ground"}, to_c_str(servo::to_string(c.mass_from))));
+  m.flow_weight = fraction("flow_weight", m.flow_weight, true);
+  m.steer_gain = r.non_negative(node, field, "steer_gain", m.steer_gain);
+  m.goal_gain = r.non_negative(node, field, "goal_gain", m.goal_gain);
+  m.head_on_energy = fraction("head_on_energy", m.head_on_energy, false);
+  m.head_on_balance = fraction("head_on_balance", m.head_on_balance, false);
+  m.danger_distance_m = r.positive(node, field, "danger_distance_m", m.danger_distance_m);
+  m.danger_fraction = fraction("danger_fraction", m.danger_fraction, false);
+  m.corner_step = fraction("corner_step", m.corner_step, false);
+  m.corner_rise = fraction("corner_rise", m.corner_rise, false);
+  m.free_path_range_m = r.positive(node, field, "free_path_range_m", m.free_path_range_m);
+}
+
+}  // namespace
+
+servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::Node& node,
+                                        const std::string& field, servo::ControllerConfig c) {
+  if (!node) {
+    return c;
+  }
+  c.model = *servo::parse_steering_model(r.word(node, field, "type",
+                                                {"vision", "geometric", "motion_energy"},
+                                                to_c_str(servo::to_string(c.model))));
+  c.kind = *servo::parse_navigation_kind(r.word(node, field, "kind", {"goal_reaching", "following"},
+                                                to_c_str(servo::to_string(c.kind))));
+  c.alpha = r.non_negative(node, field, "alpha", c.alpha);
+  c.beta = r.non_negative(node, field, "beta", c.beta);
+  c.gamma = r.non_negative(node, field, "gamma", c.gamma);
+  c.delta = r.non_negative(node, field, "delta", c.delta);
+  if (c.delta > c.gamma) {
+    r.fail(node["delta"] ? node["delta"] : node, field + ".delta",
+           "must not exceed gamma (MIG 2019: visible obstacles weigh at least as much)");
+  }
+  c.lambda = r.positive(node, field, "lambda", c.lambda);
+  c.max_accel_mps2 = r.positive(node, field, "max_accel_mps2", c.max_accel_mps2);
+  c.max_turn_rate = r.positive(node, field, "max_turn_rate", c.max_turn_rate);
+  c.use_depth = r.boolean(node, field, "use_depth", c.use_depth);
+  c.clearance_margin_m = r.non_negative(node, field, "clearance_margin_m", c.clearance_margin_m);
+  read_motion_energy(r, node, field, c);
+  return c;
+}
+
+servo::PerceptionConfig read_perception(const base::YamlReader& r, const YAML::Node& node,
+                                        const std::string& field, servo::PerceptionConfig perception) {
+  if (!node) {
+    return perception;
+  }
+  if (const YAML::Node flow = node["flow"]) {
+    const auto method = servo::parse_flow_method(flow.IsScalar() ? flow.Scalar() : "");
+    if (!method) {
+      r.fail(flow, field + ".flow", "expected one of " + servo::flow_method_names());
+    }
+    perception.flow = *method;
+  }
+  if (const YAML::Node segmentation = node["segmentation"]) {
+    const auto method =
+        servo::parse_segmentation_method(segmentation.IsScalar() ? segmentation.Scalar() : "");
+    if (!method) {
+      r.fail(segmentation, field + ".segmentation",
+             "expected one of " + servo::segmentation_method_names());
+    }
+    perception.segmentation = *method;
+  }
+  return perception;
+}
+
+}  // namespace flowsteer::config

@@ -1,0 +1,194 @@
+#include "flowsteer/config/drive_config.hpp"
+
+#include "drive_reader.hpp"
+
+namespace flowsteer::config {
+
+namespace {
+
+drivers::SerialConfig read_serial(const base::YamlReader& r, const YAML::Node& node,
+                                  const std::string& field, int default_baud) {
+  drivers::SerialConfig serial;
+  if (!node["device"]) {
+    r.fail(node, field + ".device", "missing: which serial device, e.g. /dev/ttyACM0?");
+  }
+  serial.device = r.text(node, field, "device", "", true);
+  serial.baud = node["baud"] ? r.integer(node["baud"], field + ".baud", 1) : default_baud;
+  serial.timeout_s = r.positive(node, field, "timeout_s", serial.timeout_s);
+  return serial;
+}
+
+drivers::OdriveAxisConfig read_axis(const base::YamlReader& r, const YAML::Node& node,
+                                    const std::string& field, drivers::OdriveAxisConfig axis) {
+  if (!node) {
+    return axis;
+  }
+  r.only_keys(node, field, {"node_id", "direction"});
+  if (node["node_id"]) {
+    const int id = r.integer(node["node_id"], field + ".node_id", 0);
+    if (id > 63) {
+      r.fail(node["node_id"], field + ".node_id", "must be 0..63 (6 bits of the CAN id)");
+    }
+    axis.node_id = static_cast<std::uint8_t>(id);
+  }
+  axis.direction = r.number(node, field, "direction", axis.direction);
+  if (axis.direction != 1.0 && axis.direction != -1.0) {
+    r.fail(node["direction"], field + ".direction", "must be 1 or -1");
+  }
+  return axis;
+}
+
+}  // namespace
+
+DriveSection parse_drive_section(const std::string& yaml_text, const std::string& source_name) {
+  const YAML::Node root = base::load_yaml(yaml_text, source_name);
+  const YAML::Node drive = root.IsMap() ? root["drive"] : YAML::Node();
+  if (!drive) {
+    throw base::ConfigError(source_name, 1, 1, "drive", "missing: the launch file has no drive section");
+  }
+  return read_drive(base::YamlReader(source_name), drive);
+}
+
+DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
+  r.only_keys(drive, "drive",
+              {"type", "loop_rate_hz", "geometry", "limits", "watchdog", "sim", "odrive",
+               "arduino_bridge", "roboclaw"});
+  DriveSection s;
+  const std::string type =
+      r.word(drive, "drive", "type", {"sim", "odrive_can", "arduino_bridge", "roboclaw"}, "");
+  if (type.empty()) {
+    r.fail(drive, "drive.type", "missing: sim, odrive_can, arduino_bridge or roboclaw");
+  }
+  // Settings of another drive than the chosen one are a mistake, not something to ignore.
+  const std::string own = type == "odrive_can" ? "odrive" : type;
+  for (const char* other : {"sim", "odrive", "arduino_bridge", "roboclaw"}) {
+    if (drive[other] && own != other) {
+      r.fail(drive[other], std::string("drive.") + other,
+             "settings for another drive than type '" + type + "'");
+    }
+  }
+  s.loop_rate_hz = r.positive(drive, "drive", "loop_rate_hz", s.loop_rate_hz);
+
+  if (const YAML::Node g = drive["geometry"]) {
+    r.only_keys(g, "drive.geometry", {"wheel_separation_m", "wheel_radius_m"});
+    s.stage.geometry.wheel_separation_m =
+        r.positive(g, "drive.geometry", "wheel_separation_m", s.stage.geometry.wheel_separation_m);
+    s.stage.geometry.wheel_radius_m =
+        r.positive(g, "drive.geometry", "wheel_radius_m", s.stage.geometry.wheel_radius_m);
+  }
+  if (const YAML::Node l = drive["limits"]) {
+    r.only_keys(l, "drive.limits",
+                {"max_speed_mps", "max_reverse_speed_mps", "max_accel_mps2", "max_turn_rate",
+                 "max_wheel_speed_radps"});
+    auto& lim = s.stage.limits;
+    lim.max_speed_mps = r.positive(l, "drive.limits", "max_speed_mps", lim.max_speed_mps);
+    lim.max_reverse_speed_mps =
+        r.non_negative(l, "drive.limits", "max_reverse_speed_mps", lim.max_reverse_speed_mps);
+    lim.max_accel_mps2 = r.positive(l, "drive.limits", "max_accel_mps2", lim.max_accel_mps2);
+    lim.max_turn_rate = r.positive(l, "drive.limits", "max_turn_rate", lim.max_turn_rate);
+    lim.max_wheel_speed_radps =
+        r.positive(l, "drive.limits", "max_wheel_speed_radps", lim.max_wheel_speed_radps);
+  }
+  if (const YAML::Node w = drive["watchdog"]) {
+    r.only_keys(w, "drive.watchdog", {"timeout_s", "ramp_s"});
+    s.stage.watchdog.timeout_s =
+        r.positive(w, "drive.watchdog", "timeout_s", s.stage.watchdog.timeout_s);
+    s.stage.watchdog.ramp_s =
+        r.non_negative(w, "drive.watchdog", "ramp_s", s.stage.watchdog.ramp_s);
+    if (s.stage.watchdog.ramp_s > s.stage.watchdog.timeout_s) {
+      r.fail(w["ramp_s"], "drive.watchdog.ramp_s", "must not exceed timeout_s");
+    }
+  }
+  // The watchdog must see several loop periods before it trips.
+  if (1.0 / s.loop_rate_hz > 0.5 * s.stage.watchdog.timeout_s) {
+    r.fail(drive["loop_rate_hz"] ? drive["loop_rate_hz"] : drive, "drive.loop_rate_hz",
+           "one loop period must be at most half of watchdog.timeout_s");
+  }
+
+  const YAML::Node own_node = drive[own];
+  const std::string field = "drive." + own;
+  if (type == "sim") {
+    drivers::SimBaseConfig c;
+    c.geometry = s.stage.geometry;
+    if (own_node) {
+      r.only_keys(own_node, field, {"wheel_time_constant_s"});
+      c.wheel_time_constant_s = r.non_negative(own_node, field, "wheel_time_constant_s", 0.0);
+    }
+    s.drive = c;
+  } else if (type == "odrive_can") {
+    drivers::OdriveCanConfig c;
+    if (own_node) {
+      r.only_keys(own_node, field,
+                  {"can_interface", "left", "right", "motor_turns_per_wheel_turn", "timeout_s"});
+      c.interface = r.text(own_node, field, "can_interface", c.interface, true);
+      c.left = read_axis(r, own_node["left"], field + ".left", c.left);
+      c.right = read_axis(r, own_node["right"], field + ".right", c.right);
+      if (c.left.node_id == c.right.node_id) {
+        r.fail(own_node, field, "left and right need different node ids");
+      }
+      c.motor_turns_per_wheel_turn =
+          r.positive(own_node, field, "motor_turns_per_wheel_turn", c.motor_turns_per_wheel_turn);
+      c.timeout_s = r.positive(own_node, field, "timeout_s", c.timeout_s);
+    }
+    s.drive = c;
+  } else {
+    if (!own_node) {
+      r.fail(drive, field, "missing: the serial drive's settings (device, ticks_per_wheel_rev)");
+    }
+    if (!own_node["ticks_per_wheel_rev"]) {
+      r.fail(own_node, field + ".ticks_per_wheel_rev", "missing: encoder ticks per wheel turn");
+    }
+    if (type == "arduino_bridge") {
+      r.only_keys(
+          own_node, field,
+          {"device", "baud", "timeout_s", "ticks_per_wheel_rev", "pid_rate_hz", "boot_wait_s"});
+      drivers::ArduinoBridgeConfig c;
+      c.serial = read_serial(r, own_node, field, 57600);
+      c.ticks_per_wheel_rev = r.positive(own_node, field, "ticks_per_wheel_rev", 0.0);
+      c.pid_rate_hz = r.positive(own_node, field, "pid_rate_hz", c.pid_rate_hz);
+      c.boot_wait_s = r.non_negative(own_node, field, "boot_wait_s", c.boot_wait_s);
+      s.drive = c;
+    } else {
+      r.only_keys(own_node, field,
+                  {"device", "baud", "timeout_s", "address", "ticks_per_wheel_rev",
+                   "board_timeout_s", "left_is_m1"});
+      drivers::RoboClawConfig c;
+      c.serial = read_serial(r, own_node, field, 38400);
+      if (own_node["address"]) {
+        const int address = r.integer(own_node["address"], field + ".address", 0x80);
+        if (address > 0x87) {
+          r.fail(own_node["address"], field + ".address", "must be 0x80..0x87");
+        }
+        c.address = static_cast<std::uint8_t>(address);
+      }
+      c.ticks_per_wheel_rev = r.positive(own_node, field, "ticks_per_wheel_rev", 0.0);
+      c.board_timeout_s = r.positive(own_node, field, "board_timeout_s", c.board_timeout_s);
+      if (c.board_timeout_s < 0.1 || c.board_timeout_s > 25.5) {
+        r.fail(own_node["board_timeout_s"], field + ".board_timeout_s", "must be 0.1 .. 25.5 s");
+      }
+      c.left_is_m1 = r.boolean(own_node, field, "left_is_m1", c.left_is_m1);
+      s.drive = c;
+    }
+  }
+  return s;
+}
+
+std::unique_ptr<drivers::Base> make_base(const DriveSection& section) {
+  std::unique_ptr<drivers::Drive> drive = std::visit(
+      [](const auto& config) -> std::unique_ptr<drivers::Drive> {
+        using C = std::decay_t<decltype(config)>;
+        if constexpr (std::is_same_v<C, drivers::SimBaseConfig>) {
+          return std::make_unique<drivers::SimBase>(config);
+        } else if constexpr (std::is_same_v<C, drivers::OdriveCanConfig>) {
+          return std::make_unique<drivers::OdriveCanDrive>(config);
+        } else if constexpr (std::is_same_v<C, drivers::ArduinoBridgeConfig>) {
+          return std::make_unique<drivers::ArduinoBridgeDrive>(config);
+        } else {
+          return std::make_unique<drivers::RoboClawDrive>(config);
+        }
+      },
+      section.drive);
+  return std::make_unique<drivers::Base>(std::move(drive), section.stage);
+}
+
+}  // namespace flowsteer::config

@@ -1,0 +1,12 @@
+#pragma once
+
+#include "flowsteer/config/drive_config.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
+
+namespace flowsteer::config {
+
+// The `drive:` section of a launch file already loaded (parse_drive_section loads the text
+// first): `drive` is root["drive"], present; errors are reported at its nodes.
+DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive);
+
+}  // namespace flowsteer::config

@@ -1,0 +1,396 @@
+#include "flowsteer/config/scenario_file.hpp"
+
+#include <numbers>
+
+#include "builtin_scenarios.hpp"
+#include "flowsteer/config/controller_reader.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
+
+namespace flowsteer::config {
+
+namespace {
+
+using sim_camera::AgentSpec;
+using sim_camera::Material;
+using sim_camera::Solid;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Material read_material(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
+                       Material material) {
+  if (!node) {
+    return material;
+  }
+  r.only_keys(node, field, {"albedo", "pattern", "scale_m", "contrast"});
+  if (const YAML::Node albedo = node["albedo"]) {
+    if (!albedo.IsSequence() || albedo.size() != 3) {
+      r.fail(albedo, field + ".albedo", "expected [r, g, b] in [0, 1]");
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double value = r.number(albedo[c], field + ".albedo[" + std::to_string(c) + "]");
+      if (value < 0.0 || value > 1.0) {
+        r.fail(albedo[c], field + ".albedo", "components must be in [0, 1]");
+      }
+      material.albedo[c] = static_cast<float>(value);
+    }
+  }
+  const std::string pattern =
+      r.word(node, field, "pattern", {"plain", "checker", "noise", "stripes"}, "");
+  if (pattern == "plain") {
+    material.pattern = Material::Pattern::plain;
+  } else if (pattern == "checker") {
+    material.pattern = Material::Pattern::checker;
+  } else if (pattern == "noise") {
+    material.pattern = Material::Pattern::noise;
+  } else if (pattern == "stripes") {
+    material.pattern = Material::Pattern::stripes;
+  }
+  material.pattern_scale_m =
+      static_cast<float>(r.positive(node, field, "scale_m", material.pattern_scale_m));
+  material.pattern_contrast =
+      static_cast<float>(r.non_negative(node, field, "contrast", material.pattern_contrast));
+  return material;
+}
+
+Solid read_solid(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
+                 bool allow_wall) {
+  r.only_keys(node, field,
+              {"shape", "position", "size", "radius_m", "height_m", "yaw_deg", "from", "to",
+               "thickness_m", "material"});
+  Solid s;
+  const std::string shape = allow_wall
+                                ? r.word(node, field, "shape", {"box", "cylinder", "wall"}, "box")
+                                : r.word(node, field, "shape", {"box", "cylinder"}, "box");
+  s.material = read_material(r, node["material"], field + ".material", s.material);
+  if (shape == "wall") {
+    if (!node["from"] || !node["to"]) {
+      r.fail(node, field, "a wall needs from: [x, y] and to: [x, y]");
+    }
+    const Eigen::Vector2d from = r.pair(node, field, "from", Eigen::Vector2d::Zero());
+    const Eigen::Vector2d to = r.pair(node, field, "to", Eigen::Vector2d::Zero());
+    if ((to - from).norm() < 1e-6) {
+      r.fail(node["to"], field + ".to", "a wall needs two distinct ends");
+    }
+    s.shape = Solid::Shape::box;
+    s.centre_m = 0.5 * (from + to);
+    s.size_m = {(to - from).norm(), r.positive(node, field, "thickness_m", 0.2)};
+    s.yaw_rad = std::atan2(to.y() - from.y(), to.x() - from.x());
+    s.height_m = r.positive(node, field, "height_m", 2.5);
+    return s;
+  }
+  if (!node["position"]) {
+    r.fail(node, field + ".position", "missing: where is it?");
+  }
+  s.centre_m = r.pair(node, field, "position", Eigen::Vector2d::Zero());
+  s.height_m = r.positive(node, field, "height_m", 1.0);
+  s.yaw_rad = r.number(node, field, "yaw_deg", 0.0) * kDeg;
+  if (shape == "cylinder") {
+    s.shape = Solid::Shape::cylinder;
+    s.radius_m = r.positive(node, field, "radius_m", 0.3);
+  } else {
+    s.size_m = r.pair(node, field, "size", {1.0, 1.0});
+    if (!(s.size_m.x() > 0.0 && s.size_m.y() > 0.0)) {
+      r.fail(node["size"], field + ".size", "both extents must be positive");
+    }
+  }
+  return s;
+}
+
+sim_camera::CameraSpec read_camera(const base::YamlReader& r, const YAML::Node& node,
+                                   const std::string& field, sim_camera::CameraSpec camera) {
+  if (!node) {
+    return camera;
+  }
+  r.only_keys(node, field, {"resolution", "hfov_deg", "height_m", "pitch_deg"});
+  if (const YAML::Node res = node["resolution"]) {
+    if (res.IsSequence() && res.size() == 2) {
+      camera.width_px = r.integer(res[0], field + ".resolution[0]", 8);
+      camera.height_px = r.integer(res[1], field + ".resolution[1]", 8);
+    } else {
+      camera.width_px = camera.height_px = r.integer(res, field + ".resolution", 8);
+    }
+  }
+  const double hfov = r.number(node, field, "hfov_deg", camera.hfov_rad / kDeg);
+  if (!(hfov > 0.0 && hfov < 180.0)) {
+    r.fail(node["hfov_deg"], field + ".hfov_deg", "must be in (0, 180)");
+  }
+  camera.hfov_rad = hfov * kDeg;
+  camera.height_m = r.positive(node, field, "height_m", camera.height_m);
+  const double pitch = r.number(node, field, "pitch_deg", camera.pitch_rad / kDeg);
+  if (std::abs(pitch) >= 89.0) {
+    r.fail(node["pitch_deg"], field + ".pitch_deg", "must be within (-89, 89)");
+  }
+  camera.pitch_rad = pitch * kDeg;
+  return camera;
+}
+
+// A scenario's controller: every setting of every steering model.
+servo::ControllerConfig read_scenario_controller(const base::YamlReader& r, const YAML::Node& node,
+                                                    const std::string& field,
+                                                    const servo::ControllerConfig& c) {
+  if (node) {
+    r.only_keys(node, field,
+                {"type",
+                 "kind",
+                 "alpha",
+                 "beta",
+                 "gamma",
+                 "delta",
+                 "lambda",
+                 "max_accel_mps2",
+                 "max_turn_rate",
+                 "use_depth",
+                 "clearance_margin_m",
+                 "mass_from",
+                 "flow_weight",
+                 "steer_gain",
+                 "goal_gain",
+                 "head_on_energy",
+                 "head_on_balance",
+                 "danger_distance_m",
+                 "danger_fraction",
+                 "corner_step",
+                 "corner_rise",
+                 "free_path_range_m"});
+  }
+  return read_controller(r, node, field, c);
+}
+
+servo::PerceptionConfig read_scenario_perception(const base::YamlReader& r, const YAML::Node& node,
+                                                    const std::string& field,
+                                                    const servo::PerceptionConfig& p) {
+  if (node) {
+    r.only_keys(node, field, {"flow", "segmentation"});
+  }
+  return read_perception(r, node, field, p);
+}
+
+std::vector<Eigen::Vector2d> read_points(const base::YamlReader& r, const YAML::Node& node,
+                                         const std::string& field) {
+  if (!node.IsSequence() || node.size() == 0) {
+    r.fail(node, field, "expected a list of points [[x, y], ...]");
+  }
+  std::vector<Eigen::Vector2d> points;
+  for (std::size_t k = 0; k < node.size(); ++k) {
+    const std::string f = field + "[" + std::to_string(k) + "]";
+    if (!node[k].IsSequence() || node[k].size() != 2) {
+      r.fail(node[k], f, "expected a point [x, y]");
+    }
+    points.emplace_back(r.number(node[k][0], f + "[0]"), r.number(node[k][1], f + "[1]"));
+  }
+  return points;
+}
+
+sim_camera::PointLight read_point_light(const base::YamlReader& r, const YAML::Node& node,
+                                        const std::string& field) {
+  r.only_keys(node, field, {"position", "height_m", "intensity", "range_m"});
+  sim_camera::PointLight p;
+  const Eigen::Vector2d xy = r.pair(node, field, "position", {0.0, 0.0});
+  p.position_m = {xy.x(), xy.y(), r.number(node, field, "height_m", 3.0)};
+  p.intensity = static_cast<float>(r.non_negative(node, field, "intensity", 1.0));
+  p.range_m = r.positive(node, field, "range_m", 8.0);
+  return p;
+}
+
+}  // namespace
+
+sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::string& source_name) {
+  const base::YamlReader r(source_name);
+  const YAML::Node root =
+      base::load_yaml_map(yaml_text, source_name, "at least agents:",
+                    {"name", "description", "step_s", "duration_s", "camera", "controller",
+                     "perception", "lighting", "ground", "obstacles", "moving", "agents"});
+  auto require_list = [&](const YAML::Node& node, const std::string& field) {
+    if (!node.IsSequence()) {
+      r.fail(node, field, "expected a list");
+    }
+  };
+  sim_camera::WorldSpec w;
+  w.name = r.text(root, "", "name", source_name);
+  w.description = r.text(root, "", "description", "");
+  w.step_s = r.positive(root, "", "step_s", w.step_s);
+  w.duration_s = r.positive(root, "", "duration_s", w.duration_s);
+  const sim_camera::CameraSpec camera = read_camera(r, root["camera"], "camera", {});
+  const servo::ControllerConfig controller =
+      read_scenario_controller(r, root["controller"], "controller", {});
+  const servo::PerceptionConfig perception =
+      read_scenario_perception(r, root["perception"], "perception", {});
+
+  if (const YAML::Node lighting = root["lighting"]) {
+    r.only_keys(lighting, "lighting", {"ambient", "sun", "points"});
+    w.lighting.ambient =
+        static_cast<float>(r.non_negative(lighting, "lighting", "ambient", w.lighting.ambient));
+    if (const YAML::Node sun = lighting["sun"]) {
+      if (sun.IsScalar() && sun.Scalar() == "none") {
+        w.lighting.sun.reset();
+      } else {
+        r.only_keys(sun, "lighting.sun", {"azimuth_deg", "elevation_deg", "intensity", "shadows"});
+        sim_camera::SunLight s;
+        s.azimuth_rad = r.number(sun, "lighting.sun", "azimuth_deg", s.azimuth_rad / kDeg) * kDeg;
+        s.elevation_rad =
+            r.number(sun, "lighting.sun", "elevation_deg", s.elevation_rad / kDeg) * kDeg;
+        if (!(s.elevation_rad > 0.0 && s.elevation_rad < std::numbers::pi / 2)) {
+          r.fail(sun["elevation_deg"], "lighting.sun.elevation_deg", "must be in (0, 90)");
+        }
+        s.intensity =
+            static_cast<float>(r.non_negative(sun, "lighting.sun", "intensity", s.intensity));
+        s.shadows = r.boolean(sun, "lighting.sun", "shadows", s.shadows);
+        w.lighting.sun = s;
+      }
+    }
+    if (const YAML::Node points = lighting["points"]) {
+      require_list(points, "lighting.points");
+      for (std::size_t k = 0; k < points.size(); ++k) {
+        w.lighting.points.push_back(
+            read_point_light(r, points[k], "lighting.points[" + std::to_string(k) + "]"));
+      }
+    }
+  }
+  if (const YAML::Node ground = root["ground"]) {
+    r.only_keys(ground, "ground", {"size_m", "material"});
+    w.ground_size_m = r.positive(ground, "ground", "size_m", w.ground_size_m);
+    w.ground = read_material(r, ground["material"], "ground.material", w.ground);
+  }
+  if (const YAML::Node obstacles = root["obstacles"]) {
+    require_list(obstacles, "obstacles");
+    for (std::size_t k = 0; k < obstacles.size(); ++k) {
+      w.obstacles.push_back(
+          read_solid(r, obstacles[k], "obstacles[" + std::to_string(k) + "]", true));
+    }
+  }
+  if (const YAML::Node moving = root["moving"]) {
+    require_list(moving, "moving");
+    for (std::size_t k = 0; k < moving.size(); ++k) {
+      const std::string field = "moving[" + std::to_string(k) + "]";
+      const YAML::Node node = moving[k];
+      r.only_keys(
+          node, field,
+          {"shape", "size", "radius_m", "height_m", "material", "waypoints", "speed_mps", "loop"});
+      YAML::Node body = YAML::Clone(node);
+      body.remove("waypoints");
+      body.remove("speed_mps");
+      body.remove("loop");
+      if (!node["waypoints"]) {
+        r.fail(node, field + ".waypoints", "missing: a moving obstacle needs waypoints");
+      }
+      sim_camera::MovingObstacle m;
+      m.waypoints = read_points(r, node["waypoints"], field + ".waypoints");
+      body["position"] = node["waypoints"][0];
+      m.body = read_solid(r, body, field, false);
+      if (m.waypoints.size() < 2) {
+        r.fail(node["waypoints"], field + ".waypoints", "needs at least two waypoints");
+      }
+      m.speed_mps = r.non_negative(node, field, "speed_mps", 1.0);
+      m.loop = r.boolean(node, field, "loop", false);
+      w.moving.push_back(m);
+    }
+  }
+  const YAML::Node agents = root["agents"];
+  if (!agents || !agents.IsSequence() || agents.size() == 0) {
+    r.fail(agents ? agents : root, "agents", "expected a list of one agent or more");
+  }
+  for (std::size_t i = 0; i < agents.size(); ++i) {
+    const std::string field = "agents[" + std::to_string(i) + "]";
+    const YAML::Node node = agents[i];
+    r.only_keys(node, field,
+                {"name", "start", "heading_deg", "speed_mps", "preferred_speed_mps",
+                 "max_speed_mps", "radius_m", "height_m", "goal", "goals", "goal_radius_m",
+                 "leader", "controller", "perception", "camera", "material", "carried_light"});
+    AgentSpec a;
+    a.name = r.text(node, field, "name", "agent" + std::to_string(i));
+    if (!node["start"]) {
+      r.fail(node, field + ".start", "missing: where does the agent start?");
+    }
+    a.start_m = r.pair(node, field, "start", Eigen::Vector2d::Zero());
+    a.heading_rad = r.number(node, field, "heading_deg", 0.0) * kDeg;
+    a.preferred_speed_mps = r.non_negative(node, field, "preferred_speed_mps", 1.0);
+    a.start_speed_mps = r.non_negative(node, field, "speed_mps", a.preferred_speed_mps);
+    a.max_speed_mps = r.positive(node, field, "max_speed_mps", 1.5 * a.preferred_speed_mps);
+    a.radius_m = r.positive(node, field, "radius_m", a.radius_m);
+    a.height_m = r.positive(node, field, "height_m", a.height_m);
+    a.goal_radius_m = r.positive(node, field, "goal_radius_m", a.goal_radius_m);
+    if (node["goal"] && node["goals"]) {
+      r.fail(node["goals"], field + ".goals", "give goal or goals, not both");
+    }
+    if (node["goal"]) {
+      a.goals = {r.pair(node, field, "goal", Eigen::Vector2d::Zero())};
+    } else if (node["goals"]) {
+      a.goals = read_points(r, node["goals"], field + ".goals");
+    }
+    a.controller =
+        read_scenario_controller(r, node["controller"], field + ".controller", controller);
+    if (const YAML::Node leader = node["leader"]) {
+      const int index = r.integer(leader, field + ".leader", 0);
+      if (static_cast<std::size_t>(index) >= agents.size() ||
+          static_cast<std::size_t>(index) == i) {
+        r.fail(leader, field + ".leader", "must be the index of another agent");
+      }
+      a.leader = index;
+      if (!node["controller"] || !node["controller"]["kind"]) {
+        a.controller.kind = servo::NavigationKind::following;
+        // CGF §8.2 follows with β = 1 where goal reaching uses 0.1; a β written anywhere wins.
+        const bool beta_given = (node["controller"] && node["controller"]["beta"]) ||
+                                (root["controller"] && root["controller"]["beta"]);
+        if (!beta_given) {
+          a.controller.beta = 1.0;
+        }
+      }
+    }
+    if (a.controller.model == servo::SteeringModel::motion_energy && a.leader) {
+      r.fail(node["leader"], field + ".leader",
+             "a motion_energy controller steers to goals and cannot follow a leader");
+    }
+    if (a.controller.kind == servo::NavigationKind::following && !a.leader) {
+      r.fail(node, field + ".leader", "missing: a following agent needs a leader");
+    }
+    if (!a.leader && a.goals.empty()) {
+      r.fail(node, field + ".goal", "missing: the agent needs a goal or a leader");
+    }
+    a.camera = read_camera(r, node["camera"], field + ".camera", camera);
+    a.perception =
+        read_scenario_perception(r, node["perception"], field + ".perception", perception);
+    a.material = read_material(r, node["material"], field + ".material", a.material);
+    if (const YAML::Node light = node["carried_light"]) {
+      r.only_keys(light, field + ".carried_light", {"intensity", "range_m", "height_m", "ahead_m"});
+      sim_camera::PointLight p;
+      p.position_m = {r.number(light, field + ".carried_light", "ahead_m", 0.4), 0.0,
+                      r.positive(light, field + ".carried_light", "height_m", 1.2)};
+      p.intensity =
+          static_cast<float>(r.non_negative(light, field + ".carried_light", "intensity", 1.5));
+      p.range_m = r.positive(light, field + ".carried_light", "range_m", 6.0);
+      a.carried_light = p;
+    }
+    w.agents.push_back(a);
+  }
+  try {
+    sim_camera::World check(w);
+  } catch (const std::invalid_argument& e) {
+    throw base::ConfigError(source_name, e.what());
+  }
+  return w;
+}
+
+sim_camera::WorldSpec load_scenario(const std::string& path) {
+  return parse_scenario(base::read_text_file(path, "scenario file"), path);
+}
+
+std::vector<BuiltinScenario> builtin_scenarios() {
+  std::vector<BuiltinScenario> out;
+  for (const auto& [name, text] : builtin::kScenarios) {
+    out.push_back({name, parse_scenario(text, std::string("builtin:") + name).description});
+  }
+  return out;
+}
+
+sim_camera::WorldSpec builtin_scenario(const std::string& name) {
+  std::string known;
+  for (const auto& [builtin_name, text] : builtin::kScenarios) {
+    if (name == builtin_name) {
+      return parse_scenario(text, std::string("builtin:") + builtin_name);
+    }
+    known += known.empty() ? builtin_name : std::string(", ") + builtin_name;
+  }
+  throw base::ConfigError("--scenario " + name, "unknown scenario (built-in ones: " + known + ")");
+}
+
+}  // namespace flowsteer::config

@@ -1,0 +1,64 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "flowsteer/eval/simulation.hpp"
+
+namespace flowsteer::eval {
+
+// An output folder that is written all at once: files go to a staging folder inside it and
+// move into place on commit(); without a commit (an error on the way) the staging folder is
+// removed and the folder keeps what it had.
+class OutputDir {
+ public:
+  // Creates the folder; throws std::runtime_error naming it when that fails.
+  explicit OutputDir(std::filesystem::path dir);
+  ~OutputDir();
+  OutputDir(const OutputDir&) = delete;
+  OutputDir& operator=(const OutputDir&) = delete;
+
+  std::filesystem::path staging_path(const std::string& file_name) const;
+  // Moves every file and folder of the staging folder into place; a folder replaces the one of
+  // the same name.
+  void commit();
+
+ private:
+  std::filesystem::path dir_;
+  std::filesystem::path staging_;
+};
+
+// A table of numbers written as CSV (NaN as an empty cell); a row may start with text cells
+// (names without commas or quotes).
+class CsvTable {
+ public:
+  explicit CsvTable(std::vector<std::string> header) : header_(std::move(header)) {}
+  // Each row has one cell per header column; a row of another width is a programming error
+  // (std::logic_error), caught before a column shifts under its header.
+  void add(std::vector<double> row) { add({}, std::move(row)); }
+  void add(std::vector<std::string> labels, std::vector<double> values);
+  // Throws std::runtime_error naming the file when it cannot be written.
+  void write(const std::filesystem::path& path) const;
+
+ private:
+  std::vector<std::string> header_;
+  struct Row {
+    std::vector<std::string> labels;
+    std::vector<double> values;
+  };
+  std::vector<Row> rows_;
+};
+
+void write_summary_json(const std::filesystem::path& path, const SimResult& result);
+
+// Writes `text` to `path`, or throws std::runtime_error naming the file.
+void write_text(const std::filesystem::path& path, const std::string& text);
+
+// Writes `image` to `path` in the format its extension names, or throws std::runtime_error
+// naming the file.
+void write_image(const std::filesystem::path& path, const cv::Mat& image);
+
+}  // namespace flowsteer::eval

@@ -1,0 +1,39 @@
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/sim_camera/world.hpp"
+
+namespace flowsteer::eval {
+
+// An agent's view beside its colour-coded derotated flow, with the features drawn on the view:
+// FOE (blue), centre (orange) and TTC of each object, the goal's bearing (pink) (CGF Fig. 3).
+cv::Mat draw_overlay(const SimulatedAgent& agent);
+// The same for any image with its flow and features (a robot's camera, a recording).
+cv::Mat draw_overlay(const cv::Mat& image, const servo::FlowField& flow,
+                     std::span<const servo::ObjectFeatures> objects,
+                     const base::CameraIntrinsics& intrinsics,
+                     std::optional<double> goal_bearing_rad);
+cv::Size overlay_size(cv::Size image);
+
+// Flow as colour: hue for the direction, brightness for the magnitude (up to max_magnitude).
+cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude);
+
+// Throws std::runtime_error naming the file when OpenCV cannot encode MP4 there.
+std::unique_ptr<cv::VideoWriter> open_video(const std::filesystem::path& path, cv::Size size,
+                                            double fps);
+
+// The world from above (CGF Fig. 5): obstacles, paths coloured per agent, goals, collisions.
+cv::Mat draw_topview(const sim_camera::World& world,
+                     const std::vector<std::vector<Eigen::Vector2d>>& paths,
+                     const std::vector<sim_camera::Collision>& collisions);
+
+}  // namespace flowsteer::eval

@@ -1,0 +1,75 @@
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/sim_camera/world.hpp"
+
+namespace flowsteer::eval {
+
+struct SimOptions {
+  std::filesystem::path out_dir = "flowsteer_out";
+  std::optional<int> resolution;  // overrides every agent's camera: N×N pixels
+  std::optional<int> steps;       // stop after this many steps
+  // Override every agent's perception (scenario key perception:).
+  std::optional<servo::FlowMethod> flow;
+  std::optional<servo::SegmentationMethod> segmentation;
+  bool video = false;         // an MP4 per agent of its view with the features drawn on it
+  bool progress_bar = false;  // a bar that redraws itself, for terminals
+  bool write_outputs = true;  // false: only the returned result (tests, benchmarks)
+};
+
+struct AgentResult {
+  std::string name;
+  bool reached_goal = false;
+  double time_to_goal_s = -1.0;
+  double path_length_m = 0.0;
+  double min_clearance_m = 0.0;
+  int collisions = 0;
+  double final_distance_to_leader_m = -1.0;  // followers only
+  // The commanded turn rate ω (rad/s, positive right) at every step the agent was steering.
+  std::vector<double> turn_rates;
+  // Where the agent was (world frame, m) when it chose each of those turn rates.
+  std::vector<Eigen::Vector2d> positions_m;
+};
+
+struct SimResult {
+  std::string scenario;
+  int steps = 0;
+  double duration_s = 0.0;
+  std::vector<AgentResult> agents;
+  std::vector<sim_camera::Collision> collisions;
+  pipeline::StageTimes per_agent_step_ms;  // mean over agents and steps
+  cv::Mat topview;               // the run from above, as topview.png (draw_topview)
+};
+
+// What one run came to, over its agents.
+struct RunSummary {
+  int collisions = 0;
+  int goals_reached = 0;
+  int agents = 0;
+  int followers = 0;                 // agents following a leader: they have no goal to reach
+  double mean_time_to_goal_s = 0.0;  // over the agents that reached their goal (NaN if none)
+  double mean_path_length_m = 0.0;
+  double min_clearance_m = 0.0;  // over all agents and steps
+  int agents_with_goal() const { return agents - followers; }
+  // No collision, and every agent that has a goal reached it.
+  bool clean() const { return collisions == 0 && goals_reached == agents_with_goal(); }
+};
+RunSummary summarize(const SimResult& result);
+
+// Runs the world to its end: each agent renders its view, the servo core turns it into a
+// command, the world moves. Writes trajectories.csv, costs.csv, topview.png and summary.json
+// (and agent_N.mp4 with --video) into out_dir, each file complete or not at all. Progress goes
+// to `log`. Throws std::runtime_error when no renderer can be created or out_dir is not
+// writable.
+SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& options,
+                         std::ostream& log);
+
+}  // namespace flowsteer::eval

@@ -1,0 +1,275 @@
+#include "flowsteer/eval/flow_evaluation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+#include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/pipeline/perception.hpp"
+#include "flowsteer/servo/analytic_scene.hpp"
+#include "flowsteer/eval/output_files.hpp"
+
+namespace flowsteer::eval {
+
+namespace {
+
+double median(std::vector<double> values) {
+  if (values.empty())
+    return std::numeric_limits<double>::quiet_NaN();
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// The renderer object a region covers most (the most frequent id among its pixels, ground and
+// sky included) and how many of the region's pixels are that object's.
+struct RegionCover {
+  std::int32_t id = -1;
+  int object_px = 0;
+  int region_px = 0;
+};
+
+// Fills `covers` with one entry per region of `segmentation`; `pairs` is scratch.
+void cover_regions(const servo::Segmentation& segmentation, const cv::Mat& object_ids,
+                   std::vector<std::pair<std::int32_t, std::int32_t>>& pairs,
+                   std::vector<RegionCover>& covers) {
+  pairs.clear();
+  const auto* ids = object_ids.ptr<std::int32_t>();
+  for (std::size_t i = 0; i < segmentation.labels.size(); ++i) {
+    if (segmentation.labels[i] != servo::Segmentation::kNoRegion) {
+      pairs.emplace_back(segmentation.labels[i], ids[i]);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  covers.assign(static_cast<std::size_t>(segmentation.region_count()), {});
+  for (std::size_t begin = 0; begin < pairs.size();) {
+    std::size_t end = begin;
+    while (end < pairs.size() && pairs[end] == pairs[begin]) {
+      ++end;
+    }
+    RegionCover& cover = covers[static_cast<std::size_t>(pairs[begin].first)];
+    const auto count = static_cast<int>(end - begin);
+    cover.region_px += count;
+    if (count > cover.object_px) {
+      cover.id = pairs[begin].second;
+      cover.object_px = count;
+    }
+    begin = end;
+  }
+}
+
+struct MethodRun {
+  std::unique_ptr<pipeline::Perception> perception;
+  FlowEvalRow row;
+  double epe_sum = 0.0;
+  double valid_count = 0.0;
+  double total_count = 0.0;
+  double ms_sum = 0.0;
+  double recall_sum = 0.0;
+  double purity_sum = 0.0;
+  std::vector<double> foe_errors;
+  std::vector<double> ttc_errors;
+  std::vector<std::pair<std::int32_t, std::int32_t>> region_id_pairs;
+  std::vector<RegionCover> covers;
+};
+
+}  // namespace
+
+std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
+                                       const FlowEvalOptions& options, std::ostream& log) {
+  if (world_spec.agents.empty()) {
+    throw std::invalid_argument("flow evaluation: the scenario has no agent to carry the camera");
+  }
+  const std::span<const servo::FlowMethod> all = servo::numerical_flow_methods();
+  // The synthetic row fits the exact flow without depth: the error the fit itself makes, which
+  // every estimator's row includes.
+  std::vector<servo::FlowMethod> methods{servo::FlowMethod::synthetic};
+  if (options.methods.empty()) {
+    methods.insert(methods.end(), all.begin(), all.end());
+  } else {
+    methods.insert(methods.end(), options.methods.begin(), options.methods.end());
+  }
+  std::unique_ptr<sim_camera::Renderer> renderer = sim_camera::Renderer::create();
+  std::vector<FlowEvalRow> rows;
+  for (const int resolution : options.resolutions) {
+    sim_camera::WorldSpec spec = world_spec;
+    for (auto& a : spec.agents) {
+      a.camera.width_px = a.camera.height_px = resolution;
+      a.perception = {};
+    }
+    sim_camera::World world(spec);
+    std::vector<std::unique_ptr<SimulatedAgent>> agents;
+    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+      agents.push_back(std::make_unique<SimulatedAgent>(world, *renderer, i));
+    }
+    const sim_camera::AgentSpec& walker = spec.agents[0];
+    pipeline::PerceptionOptions truth_options = brain_config(walker).perception;
+    truth_options.dark_regions = false;
+    truth_options.use_depth = true;
+    pipeline::Perception truth(agents[0]->intrinsics(), truth_options);
+    std::vector<MethodRun> runs;
+    for (servo::FlowMethod method : methods) {
+      pipeline::PerceptionOptions o = truth_options;
+      o.flow = method;
+      o.use_depth = false;
+      o.segmentation = options.segmentation;
+      MethodRun run;
+      run.perception = std::make_unique<pipeline::Perception>(agents[0]->intrinsics(), o);
+      run.row.method = method;
+      run.row.segmentation = options.segmentation;
+      run.row.resolution = resolution;
+      runs.push_back(std::move(run));
+    }
+    const base::CameraIntrinsics& k = agents[0]->intrinsics();
+    const double to_px = k.fx_px * spec.step_s;
+    // The estimators compare images a baseline apart: until they have one, they are not measured.
+    const int warmup_frames =
+        static_cast<int>(std::ceil(truth_options.optical_flow.baseline_s / spec.step_s));
+
+    log << "flow evaluation: " << spec.name << " at " << resolution << "x" << resolution << ", "
+        << options.frames << " frames\n";
+    std::vector<std::pair<double, double>> commands(spec.agents.size());
+    for (int frame = 0; frame < options.frames && !world.finished(); ++frame) {
+      for (std::size_t i = 0; i < agents.size(); ++i) {
+        pipeline::StageTimes times;
+        const servo::ControlOutput& out = agents[i]->step(times);
+        commands[i] = {out.command.accel_mps2, out.command.turn_rate};
+      }
+      const camera_io::Frame& view = agents[0]->frame();
+      const sim_camera::AgentState& state = world.agents()[0];
+      pipeline::StageTimes times;
+      truth.process(view, state.speed_mps, state.turn_rate, times);
+      const auto truth_objects = truth.objects();
+      for (MethodRun& run : runs) {
+        pipeline::StageTimes method_times;
+        if (run.perception->process(view, state.speed_mps, state.turn_rate, method_times) !=
+                servo::FlowStatus::ok ||
+            frame < warmup_frames) {
+          continue;
+        }
+        ++run.row.frames;
+        run.ms_sum += method_times.flow;
+        const auto estimated = run.perception->flow().flow();
+        const auto exact = truth.flow().flow();
+        for (std::size_t p = 0; p < estimated.size(); ++p) {
+          run.total_count += 1.0;
+          if (!estimated[p].allFinite() || !exact[p].allFinite())
+            continue;
+          run.valid_count += 1.0;
+          run.epe_sum += (estimated[p] - exact[p]).cast<double>().norm() * to_px;
+        }
+        cover_regions(run.perception->segmentation(), view.sim->object_ids, run.region_id_pairs,
+                      run.covers);
+        const auto estimated_objects = run.perception->objects();
+        for (const servo::ObjectFeatures& o : estimated_objects) {
+          const auto label = static_cast<std::size_t>(o.label);
+          if (o.kind == servo::RegionKind::visible &&
+              o.status == servo::MotionStatus::approaching &&
+              o.ttc_s <= options.phantom_horizon_s && label < run.covers.size() &&
+              (run.covers[label].id == servo::kGroundId || run.covers[label].id == servo::kSkyId)) {
+            ++run.row.phantom_objects;
+          }
+        }
+        for (const servo::ObjectFeatures& t : truth_objects) {
+          if (t.kind != servo::RegionKind::visible ||
+              t.status != servo::MotionStatus::approaching) {
+            continue;
+          }
+          if (t.pixel_count < options.min_object_px) {
+            ++run.row.small_objects;
+            continue;
+          }
+          int region = servo::Segmentation::kNoRegion;
+          for (std::size_t r = 0; r < run.covers.size(); ++r) {
+            if (run.covers[r].id == t.source_id &&
+                (region == servo::Segmentation::kNoRegion ||
+                 run.covers[r].object_px >
+                     run.covers[static_cast<std::size_t>(region)].object_px)) {
+              region = static_cast<int>(r);
+            }
+          }
+          // extract() gives one object per region, in label order.
+          const servo::ObjectFeatures* o =
+              region == servo::Segmentation::kNoRegion
+                  ? nullptr
+                  : &estimated_objects[static_cast<std::size_t>(region)];
+          if (o == nullptr || o->kind != servo::RegionKind::visible ||
+              o->status != servo::MotionStatus::approaching) {
+            ++run.row.missed_objects;
+            continue;
+          }
+          const RegionCover& cover = run.covers[static_cast<std::size_t>(region)];
+          ++run.row.approaching_objects;
+          run.recall_sum += static_cast<double>(cover.object_px) / t.pixel_count;
+          run.purity_sum += static_cast<double>(cover.object_px) / cover.region_px;
+          run.foe_errors.push_back(std::abs(o->foe.x() - t.foe.x()));
+          run.ttc_errors.push_back(std::abs(o->ttc_s - t.ttc_s) / t.ttc_s);
+        }
+      }
+      world.step(commands);
+    }
+    for (MethodRun& run : runs) {
+      FlowEvalRow& row = run.row;
+      row.endpoint_error_px = run.valid_count > 0 ? run.epe_sum / run.valid_count : 0.0;
+      row.valid_fraction = run.total_count > 0 ? run.valid_count / run.total_count : 0.0;
+      if (row.approaching_objects > 0) {
+        row.object_recall_mean = run.recall_sum / row.approaching_objects;
+        row.region_purity_mean = run.purity_sum / row.approaching_objects;
+      }
+      row.foe_error_median = median(run.foe_errors);
+      row.ttc_relative_error_median = median(run.ttc_errors);
+      row.ms_per_frame = row.frames > 0 ? run.ms_sum / row.frames : 0.0;
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
+void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
+  out << std::left << std::setw(15) << "method" << std::setw(16) << "segmentation" << std::right
+      << std::setw(6) << "res" << std::setw(8) << "frames" << std::setw(10) << "EPE px"
+      << std::setw(8) << "valid" << std::setw(9) << "objects" << std::setw(8) << "missed"
+      << std::setw(7) << "small" << std::setw(8) << "recall" << std::setw(8) << "purity"
+      << std::setw(9) << "phantoms" << std::setw(10) << "FOE err" << std::setw(10) << "TTC err"
+      << std::setw(12) << "ms/frame"
+      << "\n";
+  for (const FlowEvalRow& r : rows) {
+    out << std::left << std::setw(15) << servo::to_string(r.method) << std::setw(16)
+        << servo::to_string(r.segmentation) << std::right << std::fixed << std::setw(6)
+        << r.resolution << std::setw(8) << r.frames << std::setw(10) << std::setprecision(3)
+        << r.endpoint_error_px << std::setw(8) << std::setprecision(2) << r.valid_fraction
+        << std::setw(9) << r.approaching_objects << std::setw(8) << r.missed_objects << std::setw(7)
+        << r.small_objects << std::setw(8) << r.object_recall_mean << std::setw(8)
+        << r.region_purity_mean << std::setw(9) << r.phantom_objects << std::setw(10)
+        << std::setprecision(4) << r.foe_error_median << std::setw(9) << std::setprecision(1)
+        << 100.0 * r.ttc_relative_error_median << "%" << std::setw(12) << std::setprecision(2)
+        << r.ms_per_frame << "\n";
+  }
+}
+
+void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
+                           const std::filesystem::path& out_dir) {
+  OutputDir out(out_dir);
+  CsvTable csv({"method", "segmentation", "resolution", "frames", "endpoint_error_px",
+                "valid_fraction", "approaching_objects", "missed_objects", "small_objects",
+                "object_recall_mean", "region_purity_mean", "phantom_objects", "foe_error_median",
+                "ttc_relative_error_median", "ms_per_frame"});
+  for (const FlowEvalRow& r : rows) {
+    csv.add(
+        {std::string(servo::to_string(r.method)), std::string(servo::to_string(r.segmentation))},
+        {static_cast<double>(r.resolution), static_cast<double>(r.frames), r.endpoint_error_px,
+         r.valid_fraction, static_cast<double>(r.approaching_objects),
+         static_cast<double>(r.missed_objects), static_cast<double>(r.small_objects),
+         r.object_recall_mean, r.region_purity_mean, static_cast<double>(r.phantom_objects),
+         r.foe_error_median, r.ttc_relative_error_median, r.ms_per_frame});
+  }
+  csv.write(out.staging_path("flow_eval.csv"));
+  std::ostringstream table;
+  print_flow_table(rows, table);
+  write_text(out.staging_path("flow_eval.txt"), table.str());
+  out.commit();
+}
+
+}  // namespace flowsteer::eval

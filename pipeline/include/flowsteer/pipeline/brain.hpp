@@ -1,0 +1,108 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+
+#include "flowsteer/base/camera.hpp"
+#include "flowsteer/camera_io/frame_source.hpp"
+#include "flowsteer/pipeline/perception.hpp"
+#include "flowsteer/servo/control.hpp"
+#include "flowsteer/servo/steering.hpp"
+
+namespace flowsteer::pipeline {
+
+class MotionEnergySteering;
+
+// Features that come from elsewhere than the flow: the simulator's exact geometry, for the
+// geometric model (perfect perception, the reference the vision model is compared with).
+class FeatureOracle {
+ public:
+  virtual ~FeatureOracle() = default;
+  virtual std::span<const servo::ObjectFeatures> perceive(double speed_mps) = 0;
+};
+
+// What a brain is: how it steers and sees, and the body it steers.
+struct BrainConfig {
+  servo::ControllerConfig controller;
+  PerceptionOptions perception;
+  double agent_width_m = 0.5;  // its own width, without the controller's clearance margin
+  double preferred_speed_mps = 1.0;
+};
+
+// The perception a brain of this controller asks for, with a camera at `mount`: flow and
+// segmentation as chosen, dark regions when the controller weighs them (delta > 0), the
+// renderer's depth when the controller uses depth (a camera has none, whatever it says).
+PerceptionOptions perception_options(const servo::PerceptionConfig& perception,
+                                     const servo::ControllerConfig& controller,
+                                     const base::CameraMount& mount);
+
+// One frame's input: the frame and what the base measured while it was taken.
+struct BrainInput {
+  const camera_io::Frame& frame;
+  double speed_mps = 0.0;
+  double turn_rate = 0.0;  // ω, positive to the right
+  std::optional<double> goal_bearing_rad;  // positive to the right
+  std::optional<double> goal_distance_m;
+  std::optional<std::int32_t> leader_id;  // ObjectFeatures::source_id of the leader
+};
+
+// The bearing of a goal dx_m ahead and dy_m to the left (a frame with x forward, y left, such as
+// the world's or a start pose's) from a heading of yaw_rad (counter-clockwise from x), as
+// BrainInput::goal_bearing_rad wants it: positive to the right, in [-pi, pi].
+double goal_bearing_rad(double dx_m, double dy_m, double yaw_rad);
+
+// Everything from a frame to a command, for every steering model: the simulator's agents
+// (flowsteer sim, compare, the evaluations) and the robot (flowsteer run, replay) call this one
+// type, so that a clean simulation vouches for the robot.
+//
+// Blind frames: when the perception the model uses gives no features (the first frame of
+// numerical flow, a single-colour frame, a size change, no time elapsed) nothing is known about
+// obstacles, so the brain neither avoids nor keeps speed: it brakes at the controller's
+// max_accel_mps2 towards a stop (never below zero speed) and turns only by the goal term,
+// holding the goal's heading. The geometric model, and motion energy with mass from the
+// renderer's ids, perceive without flow and are never blind.
+class Brain {
+ public:
+  // `oracle` gives the features of the geometric model, which needs one (a simulator's).
+  // Throws std::invalid_argument when the model cannot run: geometric without an oracle,
+  // motion energy following a leader.
+  Brain(const base::CameraIntrinsics& intrinsics, const BrainConfig& config,
+        std::unique_ptr<FeatureOracle> oracle = nullptr);
+  ~Brain();
+  Brain(Brain&&) noexcept;
+  Brain& operator=(Brain&&) noexcept;
+
+  // Throws std::invalid_argument when the frame lacks what the perception needs (the renderer's
+  // channels for synthetic flow or semantic segmentation).
+  const servo::ControlOutput& step(const BrainInput& input);
+
+  servo::SteeringModel model() const { return config_.controller.model; }
+  const Perception& perception() const { return perception_; }
+  // The last step's perception status: FlowStatus::ok when the model had features to steer by.
+  servo::FlowStatus status() const { return status_; }
+  bool blind() const { return status_ != servo::FlowStatus::ok; }
+  // The features the controller saw: from the flow, or from the oracle (model geometric).
+  std::span<const servo::ObjectFeatures> objects() const { return percept_.objects; }
+  const servo::Percept& percept() const { return percept_; }
+  const servo::ControlOutput& output() const { return output_; }
+  // What each stage of the last step took (render stays 0: the caller times its camera).
+  const StageTimes& times() const { return times_; }
+  const base::CameraIntrinsics& intrinsics() const { return perception_.intrinsics(); }
+
+ private:
+  bool uses_flow() const;
+
+  BrainConfig config_;
+  Perception perception_;
+  servo::Controller controller_;
+  std::unique_ptr<FeatureOracle> oracle_;
+  std::unique_ptr<MotionEnergySteering> motion_energy_;
+  servo::Percept percept_;
+  servo::ControlOutput output_;
+  servo::FlowStatus status_ = servo::FlowStatus::ok;
+  StageTimes times_;
+};
+
+}  // namespace flowsteer::pipeline

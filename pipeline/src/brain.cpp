@@ -1,0 +1,94 @@
+#include "flowsteer/pipeline/brain.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "flowsteer/base/clock.hpp"
+#include "motion_energy_steering.hpp"
+
+namespace flowsteer::pipeline {
+
+PerceptionOptions perception_options(const servo::PerceptionConfig& perception,
+                                     const servo::ControllerConfig& controller,
+                                     const base::CameraMount& mount) {
+  PerceptionOptions options;
+  options.flow = perception.flow;
+  options.segmentation = perception.segmentation;
+  options.dark_regions = controller.delta > 0.0;
+  options.use_depth = controller.use_depth;
+  options.mount = mount;
+  return options;
+}
+
+double goal_bearing_rad(double dx_m, double dy_m, double yaw_rad) {
+  return -std::remainder(std::atan2(dy_m, dx_m) - yaw_rad, 2.0 * std::numbers::pi);
+}
+
+Brain::Brain(const base::CameraIntrinsics& intrinsics, const BrainConfig& config,
+             std::unique_ptr<FeatureOracle> oracle)
+    : config_(config),
+      perception_(intrinsics, config.perception),
+      controller_(
+          servo::make_controller(config.controller, config.agent_width_m, config.preferred_speed_mps)),
+      oracle_(std::move(oracle)) {
+  if (model() == servo::SteeringModel::geometric && !oracle_) {
+    throw std::invalid_argument(
+        "the geometric model takes its features from the simulator's exact geometry; a camera "
+        "has none (use vision)");
+  }
+  if (model() == servo::SteeringModel::motion_energy) {
+    motion_energy_ = std::make_unique<MotionEnergySteering>(
+        config.controller, intrinsics, config.perception.mount, config.preferred_speed_mps,
+        0.5 * (config.agent_width_m + config.controller.clearance_margin_m));
+  }
+}
+
+Brain::~Brain() = default;
+Brain::Brain(Brain&&) noexcept = default;
+Brain& Brain::operator=(Brain&&) noexcept = default;
+
+bool Brain::uses_flow() const {
+  switch (model()) {
+    case servo::SteeringModel::vision:
+      return true;
+    case servo::SteeringModel::geometric:
+      return false;
+    case servo::SteeringModel::motion_energy:
+      return config_.controller.mass_from == servo::MassSource::ground;
+  }
+  return true;
+}
+
+const servo::ControlOutput& Brain::step(const BrainInput& input) {
+  const base::Stopwatch total;
+  times_ = {};
+  status_ = servo::FlowStatus::ok;
+  // The geometric reference perceives by exact geometry: flow would only cost it time.
+  if (!oracle_) {
+    const servo::FlowStatus status =
+        perception_.process(input.frame, input.speed_mps, input.turn_rate, times_);
+    if (uses_flow()) {
+      status_ = status;
+    }
+  }
+  const base::Stopwatch control;
+  percept_ = servo::Percept{oracle_ ? oracle_->perceive(input.speed_mps) : perception_.objects(),
+                            input.goal_bearing_rad, input.goal_distance_m, input.leader_id};
+  if (motion_energy_) {
+    motion_energy_->step(input.frame, perception_.flow(), percept_, {input.speed_mps}, output_);
+  } else {
+    controller_.step(percept_, {input.speed_mps}, output_);
+  }
+  if (blind()) {
+    // A blind frame has no objects, so only the goal term turns; the speed term's acceleration
+    // gives way to braking, only while moving: the base never backs up, and a stopped one stays.
+    output_.command.accel_mps2 =
+        input.speed_mps > 0.0 ? -config_.controller.max_accel_mps2 : 0.0;
+  }
+  times_.control = control.elapsed_ms();
+  times_.total = total.elapsed_ms();
+  return output_;
+}
+
+}  // namespace flowsteer::pipeline

@@ -1,0 +1,191 @@
+#include "flowsteer/pipeline/perception.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "flowsteer/base/clock.hpp"
+#include "motion_history.hpp"
+
+namespace flowsteer::pipeline {
+
+namespace {
+
+bool synthetic(const PerceptionOptions& options) {
+  return options.flow == servo::FlowMethod::synthetic;
+}
+
+servo::FeatureOptions feature_options(const PerceptionOptions& options) {
+  servo::FeatureOptions features;
+  features.use_depth = synthetic(options) && options.use_depth;
+  features.static_foe = options.mount.forward_foe();
+  features.flow_noise_correlation_px = servo::noise_correlation_px(options.flow);
+  return features;
+}
+
+// Copies the simulator's flow and depth into the servo core's field.
+void copy_sim_channels(const camera_io::SimChannels& sim, servo::FlowField& field) {
+  auto flow = field.flow();
+  auto depth = field.depth();
+  for (int row = 0; row < field.height(); ++row) {
+    const auto* f = sim.flow.ptr<cv::Vec2f>(row);
+    const auto* d = sim.depth_m.ptr<float>(row);
+    for (int col = 0; col < field.width(); ++col) {
+      const std::size_t i = field.index(col, row);
+      flow[i] = Eigen::Vector2f(f[col][0], f[col][1]);
+      if (!depth.empty())
+        depth[i] = d[col];
+    }
+  }
+}
+
+}  // namespace
+
+StageTimes& StageTimes::operator+=(const StageTimes& other) {
+  render += other.render;
+  flow += other.flow;
+  segment += other.segment;
+  features += other.features;
+  control += other.control;
+  total += other.total;
+  return *this;
+}
+
+Perception::Perception(const base::CameraIntrinsics& intrinsics, const PerceptionOptions& options)
+    : options_(options),
+      field_(intrinsics, synthetic(options) && options.use_depth),
+      dark_finder_(options.dark),
+      extractor_(feature_options(options)),
+      motions_(std::make_unique<MotionHistory>(
+          static_cast<std::size_t>(options.optical_flow.max_kept_images) + 2)) {
+  if (!synthetic(options))
+    optical_flow_.emplace(options.flow, options.optical_flow);
+  if (options.segmentation != servo::SegmentationMethod::semantic) {
+    segmenter_.emplace(options.segmentation, options.flow_segmentation);
+  }
+}
+
+servo::FlowStatus Perception::process(const camera_io::Frame& frame, double speed_mps,
+                                      double turn_rate_cy, StageTimes& times) {
+  objects_ = {};
+  const bool needs_sim =
+      synthetic(options_) || options_.segmentation == servo::SegmentationMethod::semantic;
+  if (needs_sim && !frame.sim) {
+    throw std::invalid_argument(
+        std::string("Perception: ") +
+        (synthetic(options_) ? "synthetic flow" : "semantic segmentation") +
+        " needs a simulator's frames; a camera or a recording needs numerical flow and flow "
+        "segmentation");
+  }
+
+  base::Stopwatch stage;
+  const MotionHistory::Motion measured{speed_mps, turn_rate_cy};
+  motions_->remember(frame.timestamp_s, measured);
+  const cv::Mat& image = frame.image;
+  const bool frame_fits =
+      !image.empty() && image.cols == field_.width() && image.rows == field_.height();
+  // Grey for the dark regions only: OpticalFlow converts the frame into the grey image it keeps,
+  // and a grey image handed to it is copied (which costs less than converting twice).
+  if (!image.empty() && options_.dark_regions) {
+    if (image.channels() == 3) {
+      cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);
+    } else {
+      image.copyTo(grey_);
+    }
+  }
+  if (optical_flow_) {
+    const auto rotation = [&](double from_s, double to_s) {
+      return servo::rotation_over(
+          servo::camera_angular_velocity(motions_->mean(from_s, to_s, measured).turn_rate_cy,
+                                         options_.mount.pitch_rad),
+          to_s - from_s);
+    };
+    status_ = image.empty() ? servo::FlowStatus::empty_frame
+                            : optical_flow_->update(options_.dark_regions ? grey_ : image,
+                                                    frame.timestamp_s, field_, rotation);
+  } else if (!frame_fits) {
+    status_ = image.empty() ? servo::FlowStatus::empty_frame : servo::FlowStatus::size_changed;
+  } else {
+    copy_sim_channels(*frame.sim, field_);
+    status_ = servo::FlowStatus::ok;
+  }
+  if (status_ != servo::FlowStatus::ok) {
+    times.flow = stage.elapsed_ms();
+    return status_;
+  }
+  // Numerical flow comes out derotated: the estimator compared images of one orientation.
+  if (!optical_flow_) {
+    servo::derotate(field_, servo::camera_angular_velocity(turn_rate_cy, options_.mount.pitch_rad));
+  }
+  times.flow = stage.elapsed_ms();
+
+  stage.restart();
+  if (segmenter_) {
+    ground_mask_.assign(field_.size(), 0);
+    servo::GroundRemovalOptions ground = options_.ground;
+    // The ground's displacement flow follows the distance driven over the flow's interval: at
+    // the 1 m/s² an agent brakes or speeds up with, the speed at its end is 10% off that.
+    const double speed_mps =
+        motions_->mean(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, measured).speed_mps;
+    if (optical_flow_) {
+      ground.flow_floor =
+          std::max(ground.flow_floor, options_.numerical_flow_noise_px /
+                                          (field_.intrinsics().fx_px * field_.interval_s()));
+    }
+    servo::mark_ground(field_, options_.mount, speed_mps, ground, ground_mask_);
+    segmenter_->segment(field_, ground_mask_, segmentation_);
+    if (optical_flow_) {
+      ground_regions_.mark(field_, options_.mount, speed_mps, ground, segmentation_);
+    }
+  } else {
+    // The renderer's ground id already marks the ground.
+    const cv::Mat& ids = frame.sim->object_ids;
+    servo::segment_by_ids({ids.ptr<std::int32_t>(), ids.total()}, ids.cols, ids.rows, {},
+                          segmentation_);
+  }
+  if (options_.dark_regions)
+    dark_finder_.add_dark_regions(grey_, segmentation_);
+  times.segment = stage.elapsed_ms();
+
+  stage.restart();
+  objects_ = extractor_.extract(field_, segmentation_);
+  times.features = stage.elapsed_ms();
+  return status_;
+}
+
+void MotionHistory::remember(double timestamp_s, const Motion& motion) {
+  if (count_ == samples_.size()) {
+    begin_ = (begin_ + 1) % samples_.size();
+    --count_;
+  }
+  samples_[(begin_ + count_) % samples_.size()] = {timestamp_s, motion};
+  ++count_;
+}
+
+MotionHistory::Motion MotionHistory::mean(double from_s, double to_s,
+                                          const Motion& fallback) const {
+  Motion sum{0.0, 0.0};
+  double covered_s = 0.0;
+  for (std::size_t k = 1; k < count_; ++k) {
+    const double start = std::max(at(k - 1).timestamp_s, from_s);
+    const double end = std::min(at(k).timestamp_s, to_s);
+    if (end > start) {
+      sum.speed_mps += at(k).motion.speed_mps * (end - start);
+      sum.turn_rate_cy += at(k).motion.turn_rate_cy * (end - start);
+      covered_s += end - start;
+    }
+  }
+  if (!(covered_s > 0.0)) {
+    return fallback;
+  }
+  return {sum.speed_mps / covered_s, sum.turn_rate_cy / covered_s};
+}
+
+Perception::~Perception() = default;
+Perception::Perception(Perception&&) noexcept = default;
+Perception& Perception::operator=(Perception&&) noexcept = default;
+
+}  // namespace flowsteer::pipeline
