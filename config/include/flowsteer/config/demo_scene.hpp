@@ -18,7 +18,11 @@ struct DemoScene {
   servo::AnalyticScene scene;
   std::optional<Eigen::Vector2d> goal_m;
   // The demo's agent width is the whole width its avoidance keeps clear: no clearance margin.
-  servo::ControllerConfig controller{.clearance_margin_m = 0.0};
+  servo::ControllerConfig controller = [] {
+    servo::ControllerConfig c;
+    c.clearance_margin_m = 0.0;
+    return c;
+  }();
   double agent_width_m = 0.5;
   double preferred_speed_mps = 1.0;
   std::optional<std::int32_t> leader_id;  // following only

@@ -1,0 +1,53 @@
+#pragma once
+
+// The `flowsteer` command's subcommands, one file each. Each add_* function adds its
+// subcommand (and its options struct) to the app and returns what runs it once the command line
+// has been parsed; main runs the one the user chose.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "flowsteer/servo/flow_segmentation.hpp"
+#include "flowsteer/servo/optical_flow.hpp"
+#include "flowsteer/sim_camera/world_spec.hpp"
+
+namespace flowsteer::cli {
+
+struct Subcommand {
+  const CLI::App* app;
+  std::function<int()> run;  // returns the exit status
+};
+
+Subcommand add_demo(CLI::App& app);
+Subcommand add_sim(CLI::App& app);
+Subcommand add_compare(CLI::App& app);
+Subcommand add_scenarios(CLI::App& app);
+// `eval flow` and `eval robustness`.
+std::vector<Subcommand> add_eval(CLI::App& app);
+// `calibrate intrinsics`, `capture` and `mount`.
+std::vector<Subcommand> add_calibrate(CLI::App& app);
+Subcommand add_run(CLI::App& app);
+Subcommand add_replay(CLI::App& app);
+
+// The flow method `name`, the value of `option`; CLI::ValidationError "unknown <noun> 'NAME'
+// (known: <known>)" when no method has that name or, with refuse_synthetic, for synthetic.
+servo::FlowMethod flow_method_option(const std::string& option, const std::string& name,
+                                     const std::string& noun, const std::string& known,
+                                     bool refuse_synthetic = false);
+servo::SegmentationMethod segmentation_method_option(const std::string& option,
+                                                     const std::string& name);
+
+// The scenario a command runs: the scenario file or the built-in scenario `scenario` names (a
+// name of `flowsteer scenarios` first, else a file), or a SteerSuite test case; "room" when none
+// is given. CLI::ValidationError when more than one is.
+struct ScenarioChoice {
+  std::string file;        // positional SCENARIO_FILE
+  std::string name;        // --scenario
+  std::string steersuite;  // --steersuite, where the command has it
+};
+sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice);
+
+}  // namespace flowsteer::cli

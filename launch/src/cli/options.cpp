@@ -1,0 +1,43 @@
+#include <string>
+
+#include "commands.hpp"
+#include "flowsteer/config/scenario_file.hpp"
+
+namespace flowsteer::cli {
+
+servo::FlowMethod flow_method_option(const std::string& option, const std::string& name,
+                                     const std::string& noun, const std::string& known,
+                                     bool refuse_synthetic) {
+  const auto method = servo::parse_flow_method(name);
+  if (!method || (refuse_synthetic && *method == servo::FlowMethod::synthetic)) {
+    throw CLI::ValidationError(option,
+                               "unknown " + noun + " '" + name + "' (known: " + known + ")");
+  }
+  return *method;
+}
+
+servo::SegmentationMethod segmentation_method_option(const std::string& option,
+                                                     const std::string& name) {
+  const auto method = servo::parse_segmentation_method(name);
+  if (!method) {
+    throw CLI::ValidationError(option, "unknown method '" + name +
+                                           "' (known: " + servo::segmentation_method_names() + ")");
+  }
+  return *method;
+}
+
+sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice) {
+  const int given = !choice.file.empty() + !choice.name.empty() + !choice.steersuite.empty();
+  if (given > 1) {
+    throw CLI::ValidationError(command, "give one of SCENARIO_FILE, --scenario, --steersuite");
+  }
+  if (!choice.file.empty()) {
+    return config::load_scenario(choice.file);
+  }
+  if (!choice.steersuite.empty()) {
+    return config::load_steersuite(choice.steersuite);
+  }
+  return config::builtin_scenario(choice.name.empty() ? "room" : choice.name);
+}
+
+}  // namespace flowsteer::cli

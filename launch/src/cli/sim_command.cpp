@@ -1,0 +1,101 @@
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <string>
+
+#include "commands.hpp"
+#include "flowsteer/eval/simulation.hpp"
+
+namespace flowsteer::cli {
+
+namespace {
+
+struct SimCommand {
+  ScenarioChoice scenario;
+  std::string out_dir = "flowsteer_out";
+  std::optional<int> resolution;
+  std::optional<int> steps;
+  bool video = false;
+  std::string flow;
+  std::string segmentation;
+};
+
+// Seconds and metres with two decimals, the unit after the number.
+std::string measure(double value, const char* unit) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.2f %s", value, unit);
+  return text;
+}
+
+void print_summary(const eval::SimResult& result, std::ostream& out) {
+  out << "scenario " << result.scenario << ": " << result.steps << " steps, "
+      << measure(result.duration_s, "s") << " simulated, " << result.collisions.size()
+      << " collisions\n";
+  for (const eval::AgentResult& a : result.agents) {
+    out << "  " << a.name << ": "
+        << (a.reached_goal ? "reached its goal in " + measure(a.time_to_goal_s, "s")
+            : a.final_distance_to_leader_m >= 0.0
+                ? "ended " + measure(a.final_distance_to_leader_m, "m") + " from its leader"
+                : std::string("did not reach its goal"))
+        << ", path " << measure(a.path_length_m, "m") << ", min clearance "
+        << measure(a.min_clearance_m, "m") << ", " << a.collisions << " collisions\n";
+  }
+  for (const sim_camera::Collision& c : result.collisions) {
+    out << "  collision at t = " << measure(c.time_s, "s") << ": " << result.agents[c.agent].name
+        << " with " << c.with << " at (" << measure(c.position_m.x(), "m") << ", "
+        << measure(c.position_m.y(), "m") << ")\n";
+  }
+  const pipeline::StageTimes& t = result.per_agent_step_ms;
+  out << "per agent step: " << measure(t.total, "ms") << " (render " << measure(t.render, "ms")
+      << ", flow " << measure(t.flow, "ms") << ", segment " << measure(t.segment, "ms")
+      << ", features " << measure(t.features, "ms") << ", control " << measure(t.control, "ms")
+      << ")\n";
+}
+
+int run_sim(const SimCommand& command) {
+  const sim_camera::WorldSpec world = load_world("sim", command.scenario);
+  eval::SimOptions options;
+  options.out_dir = command.out_dir;
+  options.resolution = command.resolution;
+  options.steps = command.steps;
+  if (!command.flow.empty()) {
+    options.flow =
+        flow_method_option("--flow", command.flow, "method", servo::flow_method_names());
+  }
+  if (!command.segmentation.empty()) {
+    options.segmentation = segmentation_method_option("--segmentation", command.segmentation);
+  }
+  options.video = command.video;
+  options.progress_bar = isatty(STDERR_FILENO) != 0;
+  std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size() << " agents) -> "
+            << command.out_dir << "\n";
+  print_summary(eval::run_simulation(world, options, std::cerr), std::cout);
+  return 0;
+}
+
+}  // namespace
+
+Subcommand add_sim(CLI::App& app) {
+  auto command = std::make_shared<SimCommand>();
+  CLI::App* sim = app.add_subcommand(
+      "sim", "Run agents that see a rendered world and steer by its optical flow");
+  sim->add_option("scenario_file", command->scenario.file,
+                  "scenario YAML (see launch/scenarios/room.yaml)");
+  sim->add_option("--scenario", command->scenario.name,
+                  "a built-in scenario (flowsteer scenarios lists them)");
+  sim->add_option("--steersuite", command->scenario.steersuite, "a SteerSuite test case (XML)");
+  sim->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
+  sim->add_option("--resolution", command->resolution, "every agent's camera: N x N pixels")
+      ->check(CLI::Range(8, 4096));
+  sim->add_option("--steps", command->steps, "stop after N control steps")
+      ->check(CLI::PositiveNumber);
+  sim->add_flag("--video", command->video, "an MP4 per agent: its view, the flow and the features");
+  sim->add_option("--flow", command->flow, "every agent's flow: " + servo::flow_method_names());
+  sim->add_option("--segmentation", command->segmentation,
+                  "every agent's segmentation: " + servo::segmentation_method_names());
+  return {sim, [command] { return run_sim(*command); }};
+}
+
+}  // namespace flowsteer::cli
