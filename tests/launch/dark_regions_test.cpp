@@ -287,9 +287,11 @@ TEST(DarkRegions, CarriedLightAgentReactsLaterThanInDaylight) {
             << " m\n";
   // In daylight the obstacle is seen from the start, beyond the avoidance horizon.
   EXPECT_GT(first_seen_gap_m(in_daylight), day_reaction + 1.0);
-  // With the carried light it comes out of the dark only inside the distance at which the agent
-  // reacts in daylight, and the agent reacts only once it has seen it: half a metre later or more.
-  EXPECT_LT(carried_seen, day_reaction);
+  // With the carried light it comes out of the dark metres later, and the agent reacts only once
+  // it has seen it: half a metre later than in daylight or more. (Where it comes out of the dark,
+  // 2.7 m ahead, is about where the agent reacts in daylight, so the order of the two depends on
+  // the route: it changed when agents began to wait for their first flow before setting off.)
+  EXPECT_LT(carried_seen, first_seen_gap_m(in_daylight) - 3.0);
   EXPECT_LE(carried_reaction, carried_seen);
   EXPECT_LT(carried_reaction, day_reaction - 0.5);
   EXPECT_GT(carried_reaction, 0.0);  // it does react before touching it
