@@ -6,6 +6,7 @@
 #include <benchmark/benchmark.h>
 
 #include "flowsteer/servo/servo.hpp"
+#include "radial_fit.hpp"
 
 namespace {
 

@@ -9,6 +9,8 @@
 #include <ceres/tiny_solver.h>
 #include <Eigen/Dense>
 
+#include "radial_fit.hpp"
+
 namespace flowsteer::servo {
 
 const char* to_string(MotionStatus status) {
@@ -415,7 +417,8 @@ struct FeatureExtractor::Accumulator {
   }
 };
 
-FeatureExtractor::FeatureExtractor(const FeatureOptions& options) : options_(options) {
+FeatureExtractor::FeatureExtractor(const FeatureOptions& options)
+    : options_(options), fit_workspace_(std::make_unique<RadialFitWorkspace>()) {
   if (options_.min_pixels < 3) {
     throw std::invalid_argument("FeatureOptions::min_pixels must be at least 3, got " +
                                 std::to_string(options_.min_pixels));
@@ -589,7 +592,7 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     if (region_samples.empty()) {
       continue;
     }
-    RadialFit fit = fit_radial_flow(region_samples, options_.fit, fit_workspace_);
+    RadialFit fit = fit_radial_flow(region_samples, options_.fit, *fit_workspace_);
     if (options_.static_foe) {
       const double area_px =
           options_.flow_noise_correlation_px * options_.flow_noise_correlation_px;
@@ -610,7 +613,7 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
               options_.static_foe_chi2 ||
           looks_like_static_surface()) {
         fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit,
-                                    fit_workspace_);
+                                    *fit_workspace_);
         fit.quality.static_foe = true;
       }
     }

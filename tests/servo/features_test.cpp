@@ -8,6 +8,7 @@
 
 #include "flowsteer/servo/analytic_scene.hpp"
 #include "flowsteer/servo/segmentation.hpp"
+#include "radial_fit.hpp"
 
 namespace flowsteer::servo {
 namespace {

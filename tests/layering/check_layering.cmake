@@ -1,0 +1,59 @@
+# The layering check (docs/ARCHITECTURE.md): each module includes and links only the modules below
+# it. Run as `cmake -DSOURCE_DIR=<tree> -P check_layering.cmake`; it prints every violation, as
+# file:line or CMakeLists.txt and the module it reaches, and fails when there is one.
+
+# What each module may use besides itself. Data flows camera -> flow -> features -> control ->
+# drive: the stages (camera_io, servo, drivers) know only base; pipeline joins camera and servo;
+# the simulator, the experiments, the file readers and launch sit above.
+set(allowed_base "")
+set(allowed_camera_io base)
+set(allowed_servo base)
+set(allowed_drivers base)
+set(allowed_calibration base camera_io)
+set(allowed_sim_camera base camera_io servo)
+set(allowed_pipeline base camera_io servo)
+set(allowed_eval base camera_io servo sim_camera pipeline)
+set(allowed_config base camera_io servo sim_camera drivers calibration)
+set(allowed_launch base camera_io servo sim_camera drivers calibration pipeline eval config)
+set(modules base camera_io servo drivers calibration sim_camera pipeline eval config launch)
+
+cmake_policy(VERSION 3.25)
+
+if(NOT SOURCE_DIR)
+  message(FATAL_ERROR "check_layering: give -DSOURCE_DIR=<source tree>")
+endif()
+
+set(violations 0)
+foreach(module IN LISTS modules)
+  set(ok ${module} ${allowed_${module}})
+  file(GLOB_RECURSE sources "${SOURCE_DIR}/${module}/*.hpp" "${SOURCE_DIR}/${module}/*.cpp"
+       "${SOURCE_DIR}/${module}/*.h")
+  foreach(source IN LISTS sources)
+    file(STRINGS "${source}" includes REGEX "^[ \t]*#[ \t]*include[ \t]*[\"<]flowsteer/")
+    foreach(line IN LISTS includes)
+      string(REGEX REPLACE ".*flowsteer/([a-z_]+)/.*" "\\1" used "${line}")
+      if(NOT used IN_LIST ok)
+        file(RELATIVE_PATH where "${SOURCE_DIR}" "${source}")
+        message("${where}: ${module} includes from ${used}: ${line}")
+        math(EXPR violations "${violations} + 1")
+      endif()
+    endforeach()
+  endforeach()
+  set(cmake_file "${SOURCE_DIR}/${module}/CMakeLists.txt")
+  if(EXISTS "${cmake_file}")
+    file(READ "${cmake_file}" text)
+    string(REGEX MATCHALL "flowsteer::[a-z_]+" links "${text}")
+    foreach(link IN LISTS links)
+      string(REPLACE "flowsteer::" "" used "${link}")
+      if(NOT used IN_LIST ok)
+        message("${module}/CMakeLists.txt: ${module} links ${link}")
+        math(EXPR violations "${violations} + 1")
+      endif()
+    endforeach()
+  endif()
+endforeach()
+
+if(violations GREATER 0)
+  message(FATAL_ERROR "check_layering: ${violations} violation(s) of the module layers")
+endif()
+message("check_layering: every module uses only the modules below it")
