@@ -16,8 +16,8 @@ namespace base = flowsteer::base;
 
 AnalyticScene five_objects(int resolution) {
   AnalyticScene scene;
-  scene.intrinsics =
-      base::CameraIntrinsics::from_horizontal_fov(resolution, resolution, 90.0 * std::numbers::pi / 180);
+  scene.intrinsics = base::CameraIntrinsics::from_horizontal_fov(resolution, resolution,
+                                                                 90.0 * std::numbers::pi / 180);
   scene.mount = {1.6, 0.0};
   scene.agent_speed_mps = 1.0;
   const Eigen::Vector2d positions[] = {{5, -0.5}, {7, 1.5}, {9, -2.5}, {12, 4.5}, {6, 3}};

@@ -9,7 +9,7 @@
 //     objects found in it (flow_graph_fast). MIG 2019's FlowNet2 step took 100 ms at 256² and
 //     200 ms at 512² on a GPU; targets here ≤ 10 ms and ≤ 25 ms.
 //   RobotStepNumerical/<flow>/<resolution>: the same step without the renderer, on the same
-//     views rendered beforehand: what a robot runs per frame (PerceptionBrain: flow,
+//     views rendered beforehand: what a robot runs per frame (RobotBrain: flow,
 //     segmentation, features, control).
 // Counters: each stage's mean milliseconds.
 //   build/bench/sim_bench --benchmark_filter=Numerical
@@ -21,9 +21,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/eval/simulated_agent.hpp"
 #include "flowsteer/launch/robot_brain.hpp"
-#include "flowsteer/config/scenario_file.hpp"
 
 namespace {
 
@@ -60,8 +60,7 @@ void report(benchmark::State& state, const pipeline::StageTimes& sum) {
   state.counters["control_ms"] = sum.control / n;
 }
 
-void run_steps(benchmark::State& state, int resolution,
-               const servo::PerceptionConfig& perception) {
+void run_steps(benchmark::State& state, int resolution, const servo::PerceptionConfig& perception) {
   const sim_camera::WorldSpec spec = room(resolution, perception);
   const auto renderer = sim_camera::Renderer::create();
   std::optional<sim_camera::World> world;

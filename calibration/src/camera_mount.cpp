@@ -21,7 +21,8 @@ double degrees(double rad) {
 
 MountCalibration read_camera_mount(const std::filesystem::path& path) {
   const std::string source = path.string();
-  const YAML::Node root = base::load_yaml(base::read_text_file(source, "camera mount file"), source);
+  const YAML::Node root =
+      base::load_yaml(base::read_text_file(source, "camera mount file"), source);
   const base::YamlReader reader(source);
   if (!root.IsMap()) {
     reader.fail(root, "", "expected a camera mount mapping (height_m, pitch_rad, roll_rad)");

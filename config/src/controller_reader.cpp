@@ -77,7 +77,8 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
 }
 
 servo::PerceptionConfig read_perception(const base::YamlReader& r, const YAML::Node& node,
-                                        const std::string& field, servo::PerceptionConfig perception) {
+                                        const std::string& field,
+                                        servo::PerceptionConfig perception) {
   if (!node) {
     return perception;
   }

@@ -83,9 +83,8 @@ void read_controller(const base::YamlReader& r, const YAML::Node& node, DemoScen
   r.only_keys(node, "controller",
               {"kind", "alpha", "beta", "gamma", "delta", "preferred_speed_mps", "lambda",
                "max_accel_mps2", "max_turn_rate", "use_depth", "leader"});
-  const bool following =
-      r.word(node, "controller", "kind", {"goal_reaching", "following"}, "goal_reaching") ==
-      "following";
+  const bool following = r.word(node, "controller", "kind", {"goal_reaching", "following"},
+                                "goal_reaching") == "following";
   if (following) {
     d.controller.beta = 1.0;
     for (const char* key : {"delta", "preferred_speed_mps"}) {
@@ -141,7 +140,7 @@ DemoScene default_demo_scene() {
 DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& source_name) {
   const base::YamlReader r(source_name);
   const YAML::Node root = base::load_yaml_map(yaml_text, source_name, "camera, agent, objects",
-                                        {"camera", "agent", "goal", "controller", "objects"});
+                                              {"camera", "agent", "goal", "controller", "objects"});
 
   DemoScene d;
   servo::AnalyticScene& s = d.scene;
@@ -179,9 +178,7 @@ DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& sour
       }
     }
   }
-  const auto is_leader = [&](const servo::SceneObject& o) {
-    return o.id == *d.leader_id;
-  };
+  const auto is_leader = [&](const servo::SceneObject& o) { return o.id == *d.leader_id; };
   if (d.leader_id && std::none_of(s.objects.begin(), s.objects.end(), is_leader)) {
     r.fail(root["controller"]["leader"], "controller.leader",
            "no object has id " + std::to_string(*d.leader_id));

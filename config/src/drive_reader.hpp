@@ -1,7 +1,7 @@
 #pragma once
 
-#include "flowsteer/config/drive_config.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
+#include "flowsteer/config/drive_config.hpp"
 
 namespace flowsteer::config {
 

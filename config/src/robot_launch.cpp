@@ -4,11 +4,11 @@
 #include <filesystem>
 #include <numbers>
 
-#include "flowsteer/config/controller_reader.hpp"
 #include "drive_reader.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/calibration/camera_mount.hpp"
-#include "flowsteer/base/yaml_reader.hpp"
+#include "flowsteer/config/controller_reader.hpp"
 
 namespace flowsteer::config {
 namespace {
@@ -191,8 +191,9 @@ ControllerSection read_robot_controller(const base::YamlReader& r, const YAML::N
 RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& source_name,
                                const std::string& base_dir) {
   const base::YamlReader r(source_name);
-  const YAML::Node root = base::load_yaml_map(yaml_text, source_name, "camera, drive and goal",
-                                        {"camera", "drive", "goal", "perception", "controller"});
+  const YAML::Node root =
+      base::load_yaml_map(yaml_text, source_name, "camera, drive and goal",
+                          {"camera", "drive", "goal", "perception", "controller"});
   RobotLaunch launch;
   if (!root["camera"]) {
     throw base::ConfigError(source_name, 1, 1, "camera", "missing: the launch file has no camera");

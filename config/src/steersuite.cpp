@@ -8,8 +8,8 @@
 #include <tinyxml2.h>
 
 #include "flowsteer/base/config_error.hpp"
-#include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
+#include "flowsteer/config/scenario_file.hpp"
 
 namespace flowsteer::config {
 
@@ -23,7 +23,7 @@ class XmlReader {
 
   [[noreturn]] void fail(const XMLElement* at, const std::string& message) const {
     throw base::ConfigError(source_, at != nullptr ? at->GetLineNum() : 1, 1,
-                      at != nullptr ? at->Name() : "", message);
+                            at != nullptr ? at->Name() : "", message);
   }
 
   const XMLElement* child(const XMLElement* parent, const char* name) const {

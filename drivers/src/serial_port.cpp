@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <cstring>
 
-#include "flowsteer/drivers/drive.hpp"
 #include "flowsteer/base/clock.hpp"
+#include "flowsteer/drivers/drive.hpp"
 
 namespace flowsteer::drivers {
 

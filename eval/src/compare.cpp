@@ -22,8 +22,8 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 void check_controllers(const std::vector<servo::SteeringModel>& models) {
   if (models.empty()) {
-    throw base::ConfigError("--controllers", "no controller given (known ones: " +
-                                                 servo::steering_model_names() + ")");
+    throw base::ConfigError(
+        "--controllers", "no controller given (known ones: " + servo::steering_model_names() + ")");
   }
   for (auto it = models.begin(); it != models.end(); ++it) {
     if (std::find(models.begin(), it, *it) != it) {
@@ -179,7 +179,8 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
                     a.path_length_m, a.min_clearance_m, static_cast<double>(a.collisions)});
       }
       histogram_header.emplace_back(servo::to_string(run.controller));
-      topviews.push_back(with_title(run.result.topview, std::string(servo::to_string(run.controller))));
+      topviews.push_back(
+          with_title(run.result.topview, std::string(servo::to_string(run.controller))));
       int total = 0;
       for (const int c : run.turn_rate_counts) {
         total += c;
@@ -249,8 +250,9 @@ void print_compare_table(const std::vector<CompareRow>& rows, std::ostream& out)
   };
   for (const CompareRow& r : rows) {
     const RunSummary& s = r.summary;
-    out << std::left << std::setw(15) << servo::to_string(r.controller) << std::right << std::setw(11) << s.collisions
-        << std::setw(8) << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents));
+    out << std::left << std::setw(15) << servo::to_string(r.controller) << std::right
+        << std::setw(11) << s.collisions << std::setw(8)
+        << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents));
     cell(s.mean_time_to_goal_s, " s", 14);
     cell(s.mean_path_length_m, " m", 13);
     cell(s.min_clearance_m, " m", 15);

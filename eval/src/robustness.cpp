@@ -51,8 +51,8 @@ std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
       const int n = options.resolutions[i];
       if (n < kMinResolution || n > kMaxResolution) {
         throw base::ConfigError("--resolution " + std::to_string(n),
-                          "must be from " + std::to_string(kMinResolution) + " to " +
-                              std::to_string(kMaxResolution) + " pixels");
+                                "must be from " + std::to_string(kMinResolution) + " to " +
+                                    std::to_string(kMaxResolution) + " pixels");
       }
       if (std::find(options.resolutions.begin(), options.resolutions.begin() + static_cast<long>(i),
                     n) != options.resolutions.begin() + static_cast<long>(i)) {

@@ -54,8 +54,8 @@ pipeline::Brain make_brain(const sim_camera::World& world, std::size_t agent,
 pipeline::BrainConfig brain_config(const sim_camera::AgentSpec& agent) {
   pipeline::BrainConfig config;
   config.controller = agent.controller;
-  config.perception = pipeline::perception_options(
-      agent.perception, agent.controller, {agent.camera.height_m, agent.camera.pitch_rad});
+  config.perception = pipeline::perception_options(agent.perception, agent.controller,
+                                                   {agent.camera.height_m, agent.camera.pitch_rad});
   config.agent_width_m = 2.0 * agent.radius_m;
   config.preferred_speed_mps = agent.preferred_speed_mps;
   return config;

@@ -9,10 +9,10 @@
 
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/camera_io/replay_source.hpp"
-#include "flowsteer/launch/robot_brain.hpp"
 #include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/eval/output_files.hpp"
 #include "flowsteer/eval/overlay.hpp"
+#include "flowsteer/launch/robot_brain.hpp"
 
 namespace flowsteer::launch {
 
@@ -45,7 +45,8 @@ class TeeBuffer final : public std::streambuf {
   std::streambuf* b_;
 };
 
-std::optional<config::GoalSection> goal_of(const RunCommand& command, std::optional<config::GoalSection> goal) {
+std::optional<config::GoalSection> goal_of(const RunCommand& command,
+                                           std::optional<config::GoalSection> goal) {
   if (!command.goal_bearing_deg && !command.goal_distance_m) {
     return goal;
   }
@@ -98,8 +99,8 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   if (launch.drive) {
     robot_base = config::make_base(*launch.drive);
   }
-  RobotBrain brain(camera->intrinsics(),
-                   robot_brain_config(launch.perception, launch.controller), events, frame_log);
+  RobotBrain brain(camera->intrinsics(), robot_brain_config(launch.perception, launch.controller),
+                   events, frame_log);
 
   RobotLoopOptions options;
   options.camera_timeout_s = launch.camera.timeout_s;
@@ -112,7 +113,7 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   events << "flowsteer run: " << options.camera_name << " (" << k.width_px << "x" << k.height_px
          << "), "
          << (robot_base ? "drive " + std::string(robot_base->drive().name())
-                  : std::string("no drive: commands are logged, not sent"))
+                        : std::string("no drive: commands are logged, not sent"))
          << ", flow " << servo::to_string(launch.perception.flow) << ", segmentation "
          << servo::to_string(launch.perception.segmentation);
   if (goal) {
@@ -168,10 +169,10 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
   std::unique_ptr<cv::VideoWriter> video =
       eval::open_video(out.staging_path("overlay.mp4"), eval::overlay_size(size), fps);
 
-  eval::CsvTable features({"status", "kind", "frame", "t_s", "label", "centre_x", "centre_y", "width",
-                     "foe_x", "foe_y", "ttc_s", "pixels"});
-  eval::CsvTable commands({"flow_status", "frame", "t_s", "objects", "goal_bearing_rad", "accel_mps2",
-                     "turn_rate", "cost"});
+  eval::CsvTable features({"status", "kind", "frame", "t_s", "label", "centre_x", "centre_y",
+                           "width", "foe_x", "foe_y", "ttc_s", "pixels"});
+  eval::CsvTable commands({"flow_status", "frame", "t_s", "objects", "goal_bearing_rad",
+                           "accel_mps2", "turn_rate", "cost"});
   const std::optional<double> bearing =
       command.goal_bearing_deg ? std::optional<double>(*command.goal_bearing_deg * kDeg)
                                : std::nullopt;
@@ -200,7 +201,7 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
                  {seq, frame.timestamp_s, static_cast<double>(brain.objects().size()),
                   bearing.value_or(nan), c.accel_mps2, c.turn_rate, brain.output().cost});
     video->write(eval::draw_overlay(frame.image, brain.perception().flow(), brain.objects(),
-                              source.intrinsics(), bearing));
+                                    source.intrinsics(), bearing));
   }
   video->release();
   features.write(out.staging_path("features.csv"));

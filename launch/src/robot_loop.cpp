@@ -5,8 +5,8 @@
 #include <iomanip>
 #include <sstream>
 
-#include "flowsteer/pipeline/brain.hpp"
 #include "flowsteer/base/clock.hpp"
+#include "flowsteer/pipeline/brain.hpp"
 
 namespace flowsteer::launch {
 namespace {
@@ -72,8 +72,8 @@ const char* stop_reason_name(StopReason reason) {
   return "?";
 }
 
-RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* robot_base, FrameHandler& brain,
-                               const RobotLoopOptions& options,
+RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* robot_base,
+                               FrameHandler& brain, const RobotLoopOptions& options,
                                const std::atomic<bool>& stop_requested, std::ostream& log) {
   RobotLoopResult result;
   const double start_s = base::monotonic_now_s();

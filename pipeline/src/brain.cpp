@@ -29,8 +29,8 @@ Brain::Brain(const base::CameraIntrinsics& intrinsics, const BrainConfig& config
              std::unique_ptr<FeatureOracle> oracle)
     : config_(config),
       perception_(intrinsics, config.perception),
-      controller_(
-          servo::make_controller(config.controller, config.agent_width_m, config.preferred_speed_mps)),
+      controller_(servo::make_controller(config.controller, config.agent_width_m,
+                                         config.preferred_speed_mps)),
       oracle_(std::move(oracle)) {
   if (model() == servo::SteeringModel::geometric && !oracle_) {
     throw std::invalid_argument(
@@ -83,8 +83,7 @@ const servo::ControlOutput& Brain::step(const BrainInput& input) {
   if (blind()) {
     // A blind frame has no objects, so only the goal term turns; the speed term's acceleration
     // gives way to braking, only while moving: the base never backs up, and a stopped one stays.
-    output_.command.accel_mps2 =
-        input.speed_mps > 0.0 ? -config_.controller.max_accel_mps2 : 0.0;
+    output_.command.accel_mps2 = input.speed_mps > 0.0 ? -config_.controller.max_accel_mps2 : 0.0;
   }
   times_.control = control.elapsed_ms();
   times_.total = total.elapsed_ms();

@@ -19,9 +19,9 @@ MotionEnergySteering::MotionEnergySteering(const servo::ControllerConfig& config
                                            double preferred_speed_mps, double body_radius_m)
     : mass_from_ground_(config.mass_from == servo::MassSource::ground),
       mount_(mount),
-      controller_(intrinsics, mount_, config.motion_energy,
-                  {preferred_speed_mps, config.max_accel_mps2, config.max_turn_rate,
-                   body_radius_m}),
+      controller_(
+          intrinsics, mount_, config.motion_energy,
+          {preferred_speed_mps, config.max_accel_mps2, config.max_turn_rate, body_radius_m}),
       intensity_(static_cast<std::size_t>(intrinsics.width_px) *
                  static_cast<std::size_t>(intrinsics.height_px)),
       classes_(intensity_.size()),

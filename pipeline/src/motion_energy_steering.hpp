@@ -15,9 +15,9 @@ class MotionEnergySteering {
  public:
   // body_radius_m: the agent's half width with half its clearance margin, which the danger zone
   // keeps clear.
-  MotionEnergySteering(const servo::ControllerConfig& config, const base::CameraIntrinsics& intrinsics,
-                       const base::CameraMount& mount, double preferred_speed_mps,
-                       double body_radius_m);
+  MotionEnergySteering(const servo::ControllerConfig& config,
+                       const base::CameraIntrinsics& intrinsics, const base::CameraMount& mount,
+                       double preferred_speed_mps, double body_radius_m);
 
   // `derotated` is used with mass_from ground only. Fills out.command (and out.unclamped);
   // the navigation function's cost and terms stay empty.

@@ -129,7 +129,8 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     // The ground's displacement flow follows the distance driven over the flow's interval: at
     // the 1 m/s² an agent brakes or speeds up with, the speed at its end is 10% off that.
     const double speed_mps =
-        motions_->mean(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, measured).speed_mps;
+        motions_->mean(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, measured)
+            .speed_mps;
     if (optical_flow_) {
       ground.flow_floor =
           std::max(ground.flow_floor, options_.numerical_flow_noise_px /

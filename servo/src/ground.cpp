@@ -125,8 +125,9 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const base::CameraMo
   return result;
 }
 
-int GroundRegionMarker::mark(const FlowField& derotated, const base::CameraMount& mount, double speed_mps,
-                             const GroundRemovalOptions& options, Segmentation& segmentation) {
+int GroundRegionMarker::mark(const FlowField& derotated, const base::CameraMount& mount,
+                             double speed_mps, const GroundRemovalOptions& options,
+                             Segmentation& segmentation) {
   if (segmentation.labels.size() != derotated.size()) {
     throw std::invalid_argument("GroundRegionMarker::mark: segmentation has " +
                                 std::to_string(segmentation.labels.size()) +

@@ -59,8 +59,8 @@ void classify_by_ids(std::span<const std::int32_t> ids, std::span<PixelClass> ou
   }
 }
 
-void classify_by_ground(const FlowField& derotated, const base::CameraMount& mount, double speed_mps,
-                        const GroundRemovalOptions& ground, double still_flow,
+void classify_by_ground(const FlowField& derotated, const base::CameraMount& mount,
+                        double speed_mps, const GroundRemovalOptions& ground, double still_flow,
                         std::span<std::uint8_t> ground_mask, std::span<PixelClass> out) {
   check_size(out.size(), derotated.size(), "the class image");
   check_size(ground_mask.size(), derotated.size(), "the ground mask");
@@ -201,8 +201,8 @@ void MotionEnergyController::find_openings() {
 }
 
 base::Command MotionEnergyController::step(std::span<const float> intensity,
-                                     std::span<const PixelClass> classes, const Percept& percept,
-                                     const AgentState& agent) {
+                                           std::span<const PixelClass> classes,
+                                           const Percept& percept, const AgentState& agent) {
   check_size(intensity.size(), previous_.size(), "the image");
   check_size(classes.size(), previous_.size(), "the class image");
   const int width = intrinsics_.width_px;

@@ -10,16 +10,16 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/calibration/camera_mount.hpp"
-#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/camera_io/camera_model.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-using flowsteer::calibration::CameraInfo;
 using flowsteer::base::ConfigError;
+using flowsteer::calibration::CameraInfo;
 using flowsteer::camera_io::CameraModel;
 using flowsteer::camera_io::DistortionModel;
 

@@ -10,10 +10,10 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "flowsteer/eval/simulated_agent.hpp"
-#include "flowsteer/eval/compare.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/compare.hpp"
+#include "flowsteer/eval/simulated_agent.hpp"
 
 namespace flowsteer::eval {
 namespace {
@@ -87,7 +87,8 @@ TEST(GeometricReference, ComputesNoFlow) {
   }
   EXPECT_EQ(geometric.brain().perception().status(), servo::FlowStatus::no_previous_frame);
   EXPECT_EQ(vision.brain().perception().status(), servo::FlowStatus::ok);
-  EXPECT_FALSE(geometric.brain().objects().empty());  // the walls and the other agents, from geometry
+  EXPECT_FALSE(
+      geometric.brain().objects().empty());  // the walls and the other agents, from geometry
 }
 
 class VisionAgainstReference : public ::testing::TestWithParam<const char*> {};

@@ -15,8 +15,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "flowsteer/eval/simulated_agent.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/simulated_agent.hpp"
 #include "flowsteer/eval/simulation.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 

@@ -13,11 +13,11 @@
 #include <opencv2/videoio.hpp>
 
 #include "flowsteer/camera_io/replay_source.hpp"
-#include "flowsteer/eval/simulated_agent.hpp"
-#include "flowsteer/pipeline/perception.hpp"
-#include "flowsteer/launch/robot_brain.hpp"
 #include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/launch/robot_brain.hpp"
+#include "flowsteer/pipeline/perception.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 #include "robot_launch_errors.hpp"
@@ -277,8 +277,11 @@ std::vector<Recorded> record_simulated_agent(sim_camera::WorldSpec spec, int fra
     const sim_camera::AgentState state = world.agents()[0];
     pipeline::StageTimes times;
     const servo::ControlOutput& out = agent.step(times);
-    Recorded r{agent.frame(), state.speed_mps, state.turn_rate,
-               agent.brain().percept().goal_bearing_rad, agent.brain().percept().goal_distance_m,
+    Recorded r{agent.frame(),
+               state.speed_mps,
+               state.turn_rate,
+               agent.brain().percept().goal_bearing_rad,
+               agent.brain().percept().goal_distance_m,
                out.command};
     r.frame.image = r.frame.image.clone();
     r.frame.sim.reset();  // as a camera gives it
@@ -322,8 +325,8 @@ TEST_P(OneBrain, SimulatorAndRobotPathsGiveTheSameCommands) {
   for (std::size_t f = 0; f < recorded.size(); ++f) {
     SCOPED_TRACE("frame " + std::to_string(f));
     const Recorded& r = recorded[f];
-    const base::Command c = robot.step(
-        {r.frame, {r.speed_mps, r.turn_rate}, r.goal_bearing_rad, r.goal_distance_m});
+    const base::Command c =
+        robot.step({r.frame, {r.speed_mps, r.turn_rate}, r.goal_bearing_rad, r.goal_distance_m});
     EXPECT_EQ(c.accel_mps2, r.command.accel_mps2);
     EXPECT_EQ(c.turn_rate, r.command.turn_rate);
     blind += robot.brain().blind() ? 1 : 0;
@@ -337,7 +340,9 @@ TEST_P(OneBrain, SimulatorAndRobotPathsGiveTheSameCommands) {
 INSTANTIATE_TEST_SUITE_P(CameraModels, OneBrain,
                          ::testing::Values(servo::SteeringModel::vision,
                                            servo::SteeringModel::motion_energy),
-                         [](const auto& info) { return std::string(servo::to_string(info.param)); });
+                         [](const auto& info) {
+                           return std::string(servo::to_string(info.param));
+                         });
 
 TEST(OneBrain, TheGeometricModelNeedsTheSimulatorsGeometry) {
   config::ControllerSection controller;

@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 
 #include "flowsteer/base/config_error.hpp"
-#include "flowsteer/eval/robustness.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/robustness.hpp"
 
 namespace flowsteer::eval {
 namespace {

@@ -65,7 +65,8 @@ TEST(DarkRegionFinder, DarkBlockInTheLowerHalfBecomesADarkRegion) {
   EXPECT_EQ(dark_pixels, block.area());
 
   // The extractor gives the dark region its place and width (and no flow fit).
-  const base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(kSide, kSide, 1.5707963);
+  const base::CameraIntrinsics k =
+      base::CameraIntrinsics::from_horizontal_fov(kSide, kSide, 1.5707963);
   FlowField field(k);
   FeatureExtractor extractor;
   const auto objects = extractor.extract(field, s);
@@ -150,7 +151,8 @@ TEST(DarkRegionFinder, DarkAcrossTheWholeWidthIsSplitAtTheHeading) {
           << col << "," << row;
     }
   }
-  const base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(kSide, kSide, 1.5707963);
+  const base::CameraIntrinsics k =
+      base::CameraIntrinsics::from_horizontal_fov(kSide, kSide, 1.5707963);
   FlowField field(k);
   FeatureExtractor extractor;
   const auto objects = extractor.extract(field, s);
@@ -167,7 +169,8 @@ double dark_turn(const cv::Mat& grey) {
   Segmentation s = with_visible_lower_half();
   DarkRegionFinder finder;
   finder.add_dark_regions(grey, s);
-  const base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(kSide, kSide, 1.5707963);
+  const base::CameraIntrinsics k =
+      base::CameraIntrinsics::from_horizontal_fov(kSide, kSide, 1.5707963);
   FlowField field(k);
   FeatureExtractor extractor;
   const auto objects = extractor.extract(field, s);

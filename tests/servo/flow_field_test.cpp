@@ -41,8 +41,10 @@ TEST(Intrinsics, InvalidValuesAreNamed) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("fx_px"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(base::CameraIntrinsics::from_horizontal_fov(64, 48, 190.0 * kDeg), std::invalid_argument);
-  EXPECT_THROW(base::CameraIntrinsics::from_horizontal_fov(0, 48, 60.0 * kDeg), std::invalid_argument);
+  EXPECT_THROW(base::CameraIntrinsics::from_horizontal_fov(64, 48, 190.0 * kDeg),
+               std::invalid_argument);
+  EXPECT_THROW(base::CameraIntrinsics::from_horizontal_fov(0, 48, 60.0 * kDeg),
+               std::invalid_argument);
 }
 
 TEST(Derotation, RotationalFlowIsTheOmegaTermOfEq1) {

@@ -15,9 +15,9 @@
 #include <string>
 #include <thread>
 
+#include "flowsteer/base/clock.hpp"
 #include "flowsteer/drivers/base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
-#include "flowsteer/base/clock.hpp"
 
 namespace {
 

@@ -17,17 +17,17 @@
 
 #include <opencv2/core.hpp>
 
-#include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "flowsteer/base/clock.hpp"
+#include "flowsteer/camera_io/v4l2_camera.hpp"
 
 namespace {
 
+using flowsteer::base::monotonic_now_s;
 using flowsteer::camera_io::Frame;
 using flowsteer::camera_io::PixelFormat;
 using flowsteer::camera_io::ReadStatus;
 using flowsteer::camera_io::V4l2Camera;
 using flowsteer::camera_io::V4l2Options;
-using flowsteer::base::monotonic_now_s;
 
 std::uint32_t device_caps(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDWR | O_NONBLOCK);

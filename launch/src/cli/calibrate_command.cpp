@@ -23,8 +23,7 @@ Subcommand add_intrinsics(CLI::App& calibrate) {
   intrinsics->add_option("--images", command->images, "images, a quoted glob")->required();
   intrinsics->add_option("--board", command->board, kBoardHelp)->required();
   intrinsics->add_option("--model", command->model, kModelHelp)->capture_default_str();
-  intrinsics->add_option("--out", command->out, "camera_info file to write")
-      ->capture_default_str();
+  intrinsics->add_option("--out", command->out, "camera_info file to write")->capture_default_str();
   intrinsics->add_option("--camera-name", command->camera_name, "camera_name field")
       ->capture_default_str();
   intrinsics->add_option("--min-views", command->min_views, "fewest usable views")

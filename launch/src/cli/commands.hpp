@@ -49,5 +49,7 @@ struct ScenarioChoice {
   std::string steersuite;  // --steersuite, where the command has it
 };
 sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice);
+// Adds SCENARIO_FILE, --scenario and --steersuite to a command that runs a scenario.
+void add_scenario_options(CLI::App& command, ScenarioChoice& choice);
 
 }  // namespace flowsteer::cli

@@ -39,10 +39,7 @@ Subcommand add_compare(CLI::App& app) {
       "compare",
       "Run one scenario once per steering model and write the runs side by side: top views, a "
       "table of collisions, goals, path lengths and clearances, turn-rate histograms");
-  compare->add_option("scenario_file", command->scenario.file, "scenario YAML");
-  compare->add_option("--scenario", command->scenario.name,
-                      "a built-in scenario (flowsteer scenarios)");
-  compare->add_option("--steersuite", command->scenario.steersuite, "a SteerSuite test case (XML)");
+  add_scenario_options(*compare, command->scenario);
   compare
       ->add_option("--controllers", command->controllers,
                    "comma-separated steering models: " + servo::steering_model_names())

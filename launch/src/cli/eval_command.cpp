@@ -50,9 +50,9 @@ int run_eval_flow(const EvalFlowCommand& command) {
   options.resolutions = command.resolutions;
   options.frames = command.frames;
   for (const std::string& name : command.methods) {
-    options.methods.push_back(flow_method_option(
-        "--method", name, "estimator", servo::flow_method_names() + "; synthetic is the truth",
-        true));
+    options.methods.push_back(
+        flow_method_option("--method", name, "estimator",
+                           servo::flow_method_names() + "; synthetic is the truth", true));
   }
   options.segmentation = segmentation_method_option("--segmentation", command.segmentation);
   const auto rows = eval::evaluate_flow(scenario_named(command.scenario), options, std::cerr);
@@ -90,9 +90,9 @@ Subcommand add_eval_flow(CLI::App& eval) {
   flow->add_option("--frames", command->frames, "frames rendered per resolution")
       ->check(CLI::Range(2, 10000))
       ->capture_default_str();
-  flow->add_option("--method", command->methods,
-                   "an estimator (default: all); repeat for several: " +
-                       servo::flow_method_names());
+  flow->add_option(
+      "--method", command->methods,
+      "an estimator (default: all); repeat for several: " + servo::flow_method_names());
   flow->add_option("--segmentation", command->segmentation,
                    "how objects are found: " + servo::segmentation_method_names() +
                        " (semantic measures the flow alone)")
@@ -108,10 +108,7 @@ Subcommand add_eval_robustness(CLI::App& eval) {
       "robustness",
       "Run a scenario at several camera resolutions, with each flow and segmentation given, and "
       "count the runs with no collision and every goal reached");
-  robustness->add_option("scenario_file", command->scenario.file, "scenario YAML");
-  robustness->add_option("--scenario", command->scenario.name,
-                         "a built-in scenario (flowsteer scenarios)");
-  robustness->add_option("--steersuite", command->scenario.steersuite, "a SteerSuite test case (XML)");
+  add_scenario_options(*robustness, command->scenario);
   robustness->add_option("--resolution", command->resolutions,
                          "N x N pixels; repeat for several (default: the scenario's own and 8, "
                          "16, 24, 32 pixels either side)");

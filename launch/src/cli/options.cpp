@@ -40,4 +40,12 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
   return config::builtin_scenario(choice.name.empty() ? "room" : choice.name);
 }
 
+void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
+  command.add_option("scenario_file", choice.file,
+                     "scenario YAML (see launch/scenarios/room.yaml)");
+  command.add_option("--scenario", choice.name,
+                     "a built-in scenario (flowsteer scenarios lists them)");
+  command.add_option("--steersuite", choice.steersuite, "a SteerSuite test case (XML)");
+}
+
 }  // namespace flowsteer::cli

@@ -61,8 +61,7 @@ int run_sim(const SimCommand& command) {
   options.resolution = command.resolution;
   options.steps = command.steps;
   if (!command.flow.empty()) {
-    options.flow =
-        flow_method_option("--flow", command.flow, "method", servo::flow_method_names());
+    options.flow = flow_method_option("--flow", command.flow, "method", servo::flow_method_names());
   }
   if (!command.segmentation.empty()) {
     options.segmentation = segmentation_method_option("--segmentation", command.segmentation);
@@ -81,11 +80,7 @@ Subcommand add_sim(CLI::App& app) {
   auto command = std::make_shared<SimCommand>();
   CLI::App* sim = app.add_subcommand(
       "sim", "Run agents that see a rendered world and steer by its optical flow");
-  sim->add_option("scenario_file", command->scenario.file,
-                  "scenario YAML (see launch/scenarios/room.yaml)");
-  sim->add_option("--scenario", command->scenario.name,
-                  "a built-in scenario (flowsteer scenarios lists them)");
-  sim->add_option("--steersuite", command->scenario.steersuite, "a SteerSuite test case (XML)");
+  add_scenario_options(*sim, command->scenario);
   sim->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   sim->add_option("--resolution", command->resolution, "every agent's camera: N x N pixels")
       ->check(CLI::Range(8, 4096));

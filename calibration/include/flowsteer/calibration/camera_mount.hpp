@@ -21,7 +21,8 @@ struct MountCalibration {
 //   height_m: 0.42    # optical centre above the floor, > 0
 //   pitch_rad: 0.35   # optical axis below the horizon (positive looks down), |pitch| < 90°
 //   roll_rad: 0.01    # optional, 0 when absent
-// Throws base::ConfigError ("file:line:col: field: ...") for a missing, unknown or out-of-range field.
+// Throws base::ConfigError ("file:line:col: field: ...") for a missing, unknown or out-of-range
+// field.
 MountCalibration read_camera_mount(const std::filesystem::path& path);
 
 // The file's text, with comments that say what each field means; exact round trip.

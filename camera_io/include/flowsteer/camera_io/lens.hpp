@@ -5,8 +5,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "flowsteer/camera_io/camera_model.hpp"
 #include "flowsteer/base/camera.hpp"
+#include "flowsteer/camera_io/camera_model.hpp"
 
 namespace flowsteer::camera_io {
 

@@ -18,6 +18,7 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
 
 // The flow method and the segmentation method, by name.
 servo::PerceptionConfig read_perception(const base::YamlReader& r, const YAML::Node& node,
-                                        const std::string& field, servo::PerceptionConfig perception);
+                                        const std::string& field,
+                                        servo::PerceptionConfig perception);
 
 }  // namespace flowsteer::config

@@ -6,12 +6,12 @@
 #include <variant>
 #include <vector>
 
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/camera_io/libcamera_camera.hpp"
 #include "flowsteer/camera_io/replay_source.hpp"
 #include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "flowsteer/config/drive_config.hpp"
-#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/steering.hpp"
@@ -69,8 +69,8 @@ struct RobotLaunch {
   std::vector<std::string> warnings;  // from the camera_info reader
 };
 
-// Reads a robot launch file. Throws base::ConfigError naming the file, line, column and field of the
-// first problem: an unknown key or type, a value out of range, a calibration file that cannot
+// Reads a robot launch file. Throws base::ConfigError naming the file, line, column and field of
+// the first problem: an unknown key or type, a value out of range, a calibration file that cannot
 // be read (its own file:line:col) or is for another image size.
 RobotLaunch read_robot_launch(const std::string& path);
 // The same for launch-file text; relative paths resolve against base_dir.

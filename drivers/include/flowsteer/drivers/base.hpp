@@ -4,9 +4,9 @@
 #include <optional>
 #include <string>
 
+#include "flowsteer/base/command.hpp"
 #include "flowsteer/drivers/command_stage.hpp"
 #include "flowsteer/drivers/drive.hpp"
-#include "flowsteer/base/command.hpp"
 
 namespace flowsteer::drivers {
 

@@ -3,8 +3,8 @@
 #include <optional>
 #include <string>
 
-#include "flowsteer/drivers/drive.hpp"
 #include "flowsteer/base/command.hpp"
+#include "flowsteer/drivers/drive.hpp"
 
 namespace flowsteer::drivers {
 

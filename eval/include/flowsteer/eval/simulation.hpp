@@ -46,7 +46,7 @@ struct SimResult {
   std::vector<AgentResult> agents;
   std::vector<sim_camera::Collision> collisions;
   pipeline::StageTimes per_agent_step_ms;  // mean over agents and steps
-  cv::Mat topview;               // the run from above, as topview.png (draw_topview)
+  cv::Mat topview;                         // the run from above, as topview.png (draw_topview)
 };
 
 // What one run came to, over its agents.

@@ -22,10 +22,10 @@ struct RunCommand {
 };
 
 // Builds the camera, the base (none without a drive: commands are only logged), the
-// PerceptionBrain, and runs the loop until the recording ends, the camera times out or
-// stop_requested becomes true. Throws base::ConfigError for a bad launch file (file:line:col) and
-// std::runtime_error for a camera, drive or log file that cannot be opened; the base is left
-// stopped either way.
+// RobotBrain (the pipeline::Brain every command runs), and runs the loop until the recording ends,
+// the camera times out or stop_requested becomes true. Throws base::ConfigError for a bad launch
+// file (file:line:col) and std::runtime_error for a camera, drive or log file that cannot be
+// opened; the base is left stopped either way.
 RobotLoopResult run_robot_command(const RunCommand& command,
                                   const std::atomic<bool>& stop_requested, std::ostream& log);
 

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "flowsteer/camera_io/frame_source.hpp"
-#include "flowsteer/drivers/base.hpp"
 #include "flowsteer/config/robot_launch.hpp"
+#include "flowsteer/drivers/base.hpp"
 #include "flowsteer/servo/control.hpp"
 
 namespace flowsteer::launch {
@@ -74,8 +74,8 @@ struct RobotLoopResult {
 // recording, when the camera delivers nothing for camera_timeout_s, when stop_requested
 // becomes true (a signal handler sets it), and when anything throws (the exception then
 // reaches the caller after the stop). Each stop is logged with its reason.
-RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* robot_base, FrameHandler& brain,
-                               const RobotLoopOptions& options,
+RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* robot_base,
+                               FrameHandler& brain, const RobotLoopOptions& options,
                                const std::atomic<bool>& stop_requested, std::ostream& log);
 
 }  // namespace flowsteer::launch

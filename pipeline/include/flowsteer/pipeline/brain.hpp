@@ -42,7 +42,7 @@ PerceptionOptions perception_options(const servo::PerceptionConfig& perception,
 struct BrainInput {
   const camera_io::Frame& frame;
   double speed_mps = 0.0;
-  double turn_rate = 0.0;  // ω, positive to the right
+  double turn_rate = 0.0;                  // ω, positive to the right
   std::optional<double> goal_bearing_rad;  // positive to the right
   std::optional<double> goal_distance_m;
   std::optional<std::int32_t> leader_id;  // ObjectFeatures::source_id of the leader

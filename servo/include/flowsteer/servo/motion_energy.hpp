@@ -30,8 +30,8 @@ void classify_by_ids(std::span<const std::int32_t> ids, std::span<PixelClass> ou
 // pixel whose derotated flow is slower than still_flow (normalised units per second: far
 // background, sky) is empty; every other pixel is mass. `ground_mask` is scratch with one entry
 // per pixel.
-void classify_by_ground(const FlowField& derotated, const base::CameraMount& mount, double speed_mps,
-                        const GroundRemovalOptions& ground, double still_flow,
+void classify_by_ground(const FlowField& derotated, const base::CameraMount& mount,
+                        double speed_mps, const GroundRemovalOptions& ground, double still_flow,
                         std::span<std::uint8_t> ground_mask, std::span<PixelClass> out);
 
 struct MotionEnergyOptions {
@@ -99,8 +99,8 @@ struct MotionEnergyLimits {
 // difference of the halves, the head-on case, and the ridge giving openings, a free-path test
 // to the goal and the danger zone. The paper leaves the action selection to Silas's behaviour
 // system; here the cases are taken in order of urgency: danger, head-on, free path to the goal,
-// opening, energy. Its output is the same base::Command as the vision controller's (positive turn rate
-// turns right). Keeps the previous image and every buffer between steps: no allocation per
+// opening, energy. Its output is the same base::Command as the vision controller's (positive turn
+// rate turns right). Keeps the previous image and every buffer between steps: no allocation per
 // step once constructed.
 class MotionEnergyController {
  public:
@@ -111,7 +111,7 @@ class MotionEnergyController {
   // of the intrinsics' size, row-major. Uses the percept's goal bearing and distance (its
   // objects are not used). Throws std::invalid_argument on a size mismatch.
   base::Command step(std::span<const float> intensity, std::span<const PixelClass> classes,
-               const Percept& percept, const AgentState& agent);
+                     const Percept& percept, const AgentState& agent);
 
   const MotionEnergyState& state() const { return state_; }
   // Per column, the row of the first non-floor pixel from the bottom, −1 when the whole

@@ -13,8 +13,8 @@
 // The same controller on features from exact geometry: geometric_features.hpp. Blumberg's
 // motion-energy steering, from the image alone: motion_energy.hpp.
 
-#include "flowsteer/servo/analytic_scene.hpp"
 #include "flowsteer/base/camera.hpp"
+#include "flowsteer/servo/analytic_scene.hpp"
 #include "flowsteer/servo/control.hpp"
 #include "flowsteer/servo/dynamics.hpp"
 #include "flowsteer/servo/features.hpp"

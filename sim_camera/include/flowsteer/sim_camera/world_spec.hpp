@@ -85,7 +85,7 @@ struct AgentSpec {
   double height_m = 1.8;
   std::vector<Eigen::Vector2d> goals;  // visited in order
   double goal_radius_m = 0.5;
-  std::optional<int> leader;  // index of the agent to follow
+  std::optional<int> leader;           // index of the agent to follow
   servo::ControllerConfig controller;  // how it steers
   CameraSpec camera;
   servo::PerceptionConfig perception;  // how it sees
