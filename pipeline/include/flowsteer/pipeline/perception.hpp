@@ -46,11 +46,11 @@ struct PerceptionOptions {
   double numerical_flow_noise_px = 0.3;
 };
 
+class MotionHistory;
+
 // One frame through the servo core's perception: flow (from the simulator or computed from this
 // frame and the previous one), derotation with the measured turn rate, ground removal,
 // segmentation, dark regions and per-object features.
-class MotionHistory;
-
 class Perception {
  public:
   Perception(const base::CameraIntrinsics& intrinsics, const PerceptionOptions& options);
