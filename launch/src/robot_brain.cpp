@@ -8,11 +8,12 @@ pipeline::BrainConfig robot_brain_config(const config::PerceptionSection& percep
                                          const config::ControllerSection& controller) {
   pipeline::BrainConfig config;
   config.controller = controller.spec;
-  // Without a mount there is no drive, so the speed is zero and the ground test is skipped.
+  // Without a mount there is no drive, so the speed is zero and the ground test is skipped. Dark
+  // regions follow controller.delta > 0, as in the simulator; the reader has checked that
+  // perception.dark_regions says the same.
   config.perception =
       pipeline::perception_options({perception.flow, perception.segmentation}, controller.spec,
                                    perception.mount.value_or(base::CameraMount{}));
-  config.perception.dark_regions = perception.dark_regions;
   config.agent_width_m = controller.robot_width_m;
   config.preferred_speed_mps = controller.preferred_speed_mps;
   return config;
