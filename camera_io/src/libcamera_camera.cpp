@@ -59,6 +59,17 @@ struct LibcameraCamera::Impl {
   std::uint64_t dropped = 0;
   std::uint64_t sequence = 0;
 
+  // Opening the camera, phase by phase; each throws std::runtime_error where it fails, and the
+  // destructor undoes what the phases before it did.
+  void start_manager();
+  void select_camera(const std::string& camera_id);
+  void acquire_camera();
+  void configure(const LibcameraOptions& options);
+  void choose_pixel_format(libcamera::StreamConfiguration& stream_config);
+  void create_requests();
+  PlaneMapping map_plane(const libcamera::FrameBuffer::Plane& plane, long page) const;
+  void start(double frame_rate_hz);
+
   void on_complete(libcamera::Request* request) {
     if (request->status() == libcamera::Request::RequestCancelled) {
       return;  // stop() cancels what is queued
@@ -92,130 +103,172 @@ struct LibcameraCamera::Impl {
   }
 };
 
-LibcameraCamera::LibcameraCamera(const LibcameraOptions& options)
-    : impl_(std::make_unique<Impl>()) {
-  Impl& c = *impl_;
+namespace {
+
+void check_options(const LibcameraOptions& options) {
   if (options.buffer_count < 2 || options.width_px <= 0 || options.height_px <= 0 ||
       !(options.frame_rate_hz >= 0.0)) {
     throw std::invalid_argument(
         "libcamera: need a positive size, a frame rate >= 0 and at least 2 buffers");
   }
-  if (const int error = c.manager.start(); error != 0) {
+}
+
+}  // namespace
+
+void LibcameraCamera::Impl::start_manager() {
+  if (const int error = manager.start(); error != 0) {
     throw std::runtime_error("libcamera: the camera manager did not start: " +
                              std::string(std::strerror(-error)));
   }
-  const auto cameras = c.manager.cameras();
+}
+
+// The camera with `camera_id`, or the first camera when that is empty.
+void LibcameraCamera::Impl::select_camera(const std::string& camera_id) {
+  const auto cameras = manager.cameras();
   if (cameras.empty()) {
     throw std::runtime_error(
         "libcamera: no camera found (libcamera lists the cameras its pipeline handlers support; "
         "a plain V4L2 device is better opened with the v4l2 camera type)");
   }
-  if (options.camera_id.empty()) {
-    c.camera = cameras.front();
+  if (camera_id.empty()) {
+    camera = cameras.front();
   } else {
-    c.camera = c.manager.get(options.camera_id);
-    if (!c.camera) {
+    camera = manager.get(camera_id);
+    if (!camera) {
       std::string ids;
-      for (const auto& camera : cameras) {
-        ids += (ids.empty() ? "" : ", ") + camera->id();
+      for (const auto& found : cameras) {
+        ids += (ids.empty() ? "" : ", ") + found->id();
       }
-      throw std::runtime_error("libcamera: no camera with id '" + options.camera_id +
-                               "' (found: " + ids + ")");
+      throw std::runtime_error("libcamera: no camera with id '" + camera_id + "' (found: " + ids +
+                               ")");
     }
   }
-  c.name = "libcamera camera " + c.camera->id();
-  if (const int error = c.camera->acquire(); error != 0) {
-    throw std::runtime_error(
-        c.name + ": cannot acquire it (in use by another program?): " + std::strerror(-error));
-  }
-  c.acquired = true;
+  name = "libcamera camera " + camera->id();
+}
 
-  c.config = c.camera->generateConfiguration({libcamera::StreamRole::VideoRecording});
-  if (!c.config || c.config->size() != 1) {
-    throw std::runtime_error(c.name + ": offers no video stream");
+void LibcameraCamera::Impl::acquire_camera() {
+  if (const int error = camera->acquire(); error != 0) {
+    throw std::runtime_error(
+        name + ": cannot acquire it (in use by another program?): " + std::strerror(-error));
   }
-  libcamera::StreamConfiguration& stream_config = c.config->at(0);
+  acquired = true;
+}
+
+// One video stream of exactly the size asked for, in a format read() converts.
+void LibcameraCamera::Impl::configure(const LibcameraOptions& options) {
+  config = camera->generateConfiguration({libcamera::StreamRole::VideoRecording});
+  if (!config || config->size() != 1) {
+    throw std::runtime_error(name + ": offers no video stream");
+  }
+  libcamera::StreamConfiguration& stream_config = config->at(0);
   stream_config.size = {static_cast<unsigned int>(options.width_px),
                         static_cast<unsigned int>(options.height_px)};
   stream_config.bufferCount = static_cast<unsigned int>(options.buffer_count);
-  const std::array<libcamera::PixelFormat, 3> wanted = {
-      libcamera::formats::RGB888, libcamera::formats::XRGB8888, libcamera::formats::YUYV};
-  bool format_ok = false;
-  for (const libcamera::PixelFormat& format : wanted) {
-    stream_config.pixelFormat = format;
-    if (c.config->validate() != libcamera::CameraConfiguration::Invalid &&
-        stream_config.pixelFormat == format) {
-      format_ok = true;
-      break;
-    }
-  }
-  if (!format_ok) {
-    throw std::runtime_error(c.name + ": offers none of RGB888, XRGB8888, YUYV (it offers " +
-                             stream_config.toString() + ")");
-  }
+  choose_pixel_format(stream_config);
   if (stream_config.size.width != static_cast<unsigned int>(options.width_px) ||
       stream_config.size.height != static_cast<unsigned int>(options.height_px)) {
-    throw std::runtime_error(c.name + ": does not offer " + std::to_string(options.width_px) + "x" +
+    throw std::runtime_error(name + ": does not offer " + std::to_string(options.width_px) + "x" +
                              std::to_string(options.height_px) + ": it chose " +
                              stream_config.size.toString());
   }
-  if (const int error = c.camera->configure(c.config.get()); error != 0) {
-    throw std::runtime_error(c.name + ": configure failed: " + std::strerror(-error));
+  if (const int error = camera->configure(config.get()); error != 0) {
+    throw std::runtime_error(name + ": configure failed: " + std::strerror(-error));
   }
-  c.stream = stream_config.stream();
-  c.format = stream_config.pixelFormat;
-  c.stride = stream_config.stride;
-  c.width_px = static_cast<int>(stream_config.size.width);
-  c.height_px = static_cast<int>(stream_config.size.height);
-  c.lens.emplace(options.lens, c.width_px, c.height_px, c.name);
+  stream = stream_config.stream();
+  format = stream_config.pixelFormat;
+  stride = stream_config.stride;
+  width_px = static_cast<int>(stream_config.size.width);
+  height_px = static_cast<int>(stream_config.size.height);
+}
 
-  c.allocator = std::make_unique<libcamera::FrameBufferAllocator>(c.camera);
-  if (c.allocator->allocate(c.stream) < 0) {
-    throw std::runtime_error(c.name + ": cannot allocate frame buffers");
+// The first of the formats read() converts that the camera keeps when the configuration is
+// validated (validate() replaces a format the camera lacks with one it has).
+void LibcameraCamera::Impl::choose_pixel_format(libcamera::StreamConfiguration& stream_config) {
+  const std::array<libcamera::PixelFormat, 3> wanted = {
+      libcamera::formats::RGB888, libcamera::formats::XRGB8888, libcamera::formats::YUYV};
+  for (const libcamera::PixelFormat& wanted_format : wanted) {
+    stream_config.pixelFormat = wanted_format;
+    if (config->validate() != libcamera::CameraConfiguration::Invalid &&
+        stream_config.pixelFormat == wanted_format) {
+      return;
+    }
+  }
+  throw std::runtime_error(name + ": offers none of RGB888, XRGB8888, YUYV (it offers " +
+                           stream_config.toString() + ")");
+}
+
+// Allocates the stream's buffers, maps each into memory (read() finds a buffer's mapping by its
+// cookie) and makes a capture request of each.
+void LibcameraCamera::Impl::create_requests() {
+  allocator = std::make_unique<libcamera::FrameBufferAllocator>(camera);
+  if (allocator->allocate(stream) < 0) {
+    throw std::runtime_error(name + ": cannot allocate frame buffers");
   }
   const long page = ::sysconf(_SC_PAGESIZE);
-  const auto& buffers = c.allocator->buffers(c.stream);
+  const auto& buffers = allocator->buffers(stream);
   for (std::size_t i = 0; i < buffers.size(); ++i) {
     libcamera::FrameBuffer* buffer = buffers[i].get();
     buffer->setCookie(i);
-    const libcamera::FrameBuffer::Plane& plane = buffer->planes().front();
-    PlaneMapping m;
-    const std::size_t aligned = plane.offset - plane.offset % static_cast<std::size_t>(page);
-    m.mapped_length = plane.offset - aligned + plane.length;
-    m.base = ::mmap(nullptr, m.mapped_length, PROT_READ, MAP_SHARED, plane.fd.get(),
-                    static_cast<off_t>(aligned));
-    if (m.base == MAP_FAILED) {
-      throw std::runtime_error(c.name + ": mmap of a frame buffer failed: " + std::strerror(errno));
+    mappings.push_back(map_plane(buffer->planes().front(), page));
+    std::unique_ptr<libcamera::Request> request = camera->createRequest(i);
+    if (!request || request->addBuffer(stream, buffer) != 0) {
+      throw std::runtime_error(name + ": cannot create a capture request");
     }
-    m.data = static_cast<const std::uint8_t*>(m.base) + (plane.offset - aligned);
-    m.length = plane.length;
-    c.mappings.push_back(m);
-    std::unique_ptr<libcamera::Request> request = c.camera->createRequest(i);
-    if (!request || request->addBuffer(c.stream, buffer) != 0) {
-      throw std::runtime_error(c.name + ": cannot create a capture request");
-    }
-    c.requests.push_back(std::move(request));
+    requests.push_back(std::move(request));
   }
-  c.completed.reserve(c.requests.size());
-  c.camera->requestCompleted.connect(&c, &Impl::on_complete);
+}
 
-  libcamera::ControlList controls(c.camera->controls());
-  if (options.frame_rate_hz > 0.0 &&
-      c.camera->controls().count(&libcamera::controls::FrameDurationLimits) != 0) {
-    const auto period_us = static_cast<std::int64_t>(std::lround(1e6 / options.frame_rate_hz));
+PlaneMapping LibcameraCamera::Impl::map_plane(const libcamera::FrameBuffer::Plane& plane,
+                                              long page) const {
+  PlaneMapping m;
+  const std::size_t aligned = plane.offset - plane.offset % static_cast<std::size_t>(page);
+  m.mapped_length = plane.offset - aligned + plane.length;
+  m.base = ::mmap(nullptr, m.mapped_length, PROT_READ, MAP_SHARED, plane.fd.get(),
+                  static_cast<off_t>(aligned));
+  if (m.base == MAP_FAILED) {
+    throw std::runtime_error(name + ": mmap of a frame buffer failed: " + std::strerror(errno));
+  }
+  m.data = static_cast<const std::uint8_t*>(m.base) + (plane.offset - aligned);
+  m.length = plane.length;
+  return m;
+}
+
+// Starts streaming, at frame_rate_hz where that is not 0 and the camera has FrameDurationLimits,
+// with every request queued.
+void LibcameraCamera::Impl::start(double frame_rate_hz) {
+  completed.reserve(requests.size());
+  camera->requestCompleted.connect(this, &Impl::on_complete);
+
+  libcamera::ControlList controls(camera->controls());
+  if (frame_rate_hz > 0.0 &&
+      camera->controls().count(&libcamera::controls::FrameDurationLimits) != 0) {
+    const auto period_us = static_cast<std::int64_t>(std::lround(1e6 / frame_rate_hz));
     const std::array<std::int64_t, 2> limits = {period_us, period_us};
     controls.set(libcamera::controls::FrameDurationLimits,
                  libcamera::Span<const std::int64_t, 2>(limits));
   }
-  if (const int error = c.camera->start(&controls); error != 0) {
-    throw std::runtime_error(c.name + ": start failed: " + std::strerror(-error));
+  if (const int error = camera->start(&controls); error != 0) {
+    throw std::runtime_error(name + ": start failed: " + std::strerror(-error));
   }
-  c.started = true;
-  for (const auto& request : c.requests) {
-    if (const int error = c.camera->queueRequest(request.get()); error != 0) {
-      throw std::runtime_error(c.name + ": queueing a request failed: " + std::strerror(-error));
+  started = true;
+  for (const auto& request : requests) {
+    if (const int error = camera->queueRequest(request.get()); error != 0) {
+      throw std::runtime_error(name + ": queueing a request failed: " + std::strerror(-error));
     }
   }
+}
+
+LibcameraCamera::LibcameraCamera(const LibcameraOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  check_options(options);
+  Impl& c = *impl_;
+  c.start_manager();
+  c.select_camera(options.camera_id);
+  c.acquire_camera();
+  c.configure(options);
+  c.lens.emplace(options.lens, c.width_px, c.height_px, c.name);
+  c.create_requests();
+  c.start(options.frame_rate_hz);
 }
 
 LibcameraCamera::~LibcameraCamera() = default;

@@ -38,13 +38,146 @@ drivers::OdriveAxisConfig read_axis(const base::YamlReader& r, const YAML::Node&
   return axis;
 }
 
+// The section with a drive type's own settings: `odrive` for odrive_can.
+std::string own_section(const std::string& type) {
+  return type == "odrive_can" ? "odrive" : type;
+}
+
+// The drive's type. Settings of another drive than the chosen one are a mistake, not something
+// to ignore.
+std::string read_type(const base::YamlReader& r, const YAML::Node& drive) {
+  const std::string type =
+      r.word(drive, "drive", "type", {"sim", "odrive_can", "arduino_bridge", "roboclaw"}, "");
+  if (type.empty()) {
+    r.fail(drive, "drive.type", "missing: sim, odrive_can, arduino_bridge or roboclaw");
+  }
+  const std::string own = own_section(type);
+  for (const char* other : {"sim", "odrive", "arduino_bridge", "roboclaw"}) {
+    if (drive[other] && own != other) {
+      r.fail(drive[other], std::string("drive.") + other,
+             "settings for another drive than type '" + type + "'");
+    }
+  }
+  return type;
+}
+
+void read_geometry(const base::YamlReader& r, const YAML::Node& g,
+                   drivers::WheelGeometry& geometry) {
+  r.only_keys(g, "drive.geometry", {"wheel_separation_m", "wheel_radius_m"});
+  geometry.wheel_separation_m =
+      r.positive(g, "drive.geometry", "wheel_separation_m", geometry.wheel_separation_m);
+  geometry.wheel_radius_m =
+      r.positive(g, "drive.geometry", "wheel_radius_m", geometry.wheel_radius_m);
+}
+
+void read_limits(const base::YamlReader& r, const YAML::Node& l, drivers::CommandLimits& lim) {
+  r.only_keys(l, "drive.limits",
+              {"max_speed_mps", "max_reverse_speed_mps", "max_accel_mps2", "max_turn_rate",
+               "max_wheel_speed_radps"});
+  lim.max_speed_mps = r.positive(l, "drive.limits", "max_speed_mps", lim.max_speed_mps);
+  lim.max_reverse_speed_mps =
+      r.non_negative(l, "drive.limits", "max_reverse_speed_mps", lim.max_reverse_speed_mps);
+  lim.max_accel_mps2 = r.positive(l, "drive.limits", "max_accel_mps2", lim.max_accel_mps2);
+  lim.max_turn_rate = r.positive(l, "drive.limits", "max_turn_rate", lim.max_turn_rate);
+  lim.max_wheel_speed_radps =
+      r.positive(l, "drive.limits", "max_wheel_speed_radps", lim.max_wheel_speed_radps);
+}
+
+void read_watchdog(const base::YamlReader& r, const YAML::Node& w,
+                   drivers::WatchdogConfig& watchdog) {
+  r.only_keys(w, "drive.watchdog", {"timeout_s", "ramp_s"});
+  watchdog.timeout_s = r.positive(w, "drive.watchdog", "timeout_s", watchdog.timeout_s);
+  watchdog.ramp_s = r.non_negative(w, "drive.watchdog", "ramp_s", watchdog.ramp_s);
+  if (watchdog.ramp_s > watchdog.timeout_s) {
+    r.fail(w["ramp_s"], "drive.watchdog.ramp_s", "must not exceed timeout_s");
+  }
+}
+
+drivers::SimBaseConfig read_sim(const base::YamlReader& r, const YAML::Node& node,
+                                const std::string& field, const drivers::WheelGeometry& geometry) {
+  drivers::SimBaseConfig c;
+  c.geometry = geometry;
+  if (node) {
+    r.only_keys(node, field, {"wheel_time_constant_s"});
+    c.wheel_time_constant_s = r.non_negative(node, field, "wheel_time_constant_s", 0.0);
+  }
+  return c;
+}
+
+drivers::OdriveCanConfig read_odrive_can(const base::YamlReader& r, const YAML::Node& node,
+                                         const std::string& field) {
+  drivers::OdriveCanConfig c;
+  if (!node) {
+    return c;
+  }
+  r.only_keys(node, field,
+              {"can_interface", "left", "right", "motor_turns_per_wheel_turn", "timeout_s"});
+  c.interface = r.text(node, field, "can_interface", c.interface, true);
+  c.left = read_axis(r, node["left"], field + ".left", c.left);
+  c.right = read_axis(r, node["right"], field + ".right", c.right);
+  if (c.left.node_id == c.right.node_id) {
+    r.fail(node, field, "left and right need different node ids");
+  }
+  c.motor_turns_per_wheel_turn =
+      r.positive(node, field, "motor_turns_per_wheel_turn", c.motor_turns_per_wheel_turn);
+  c.timeout_s = r.positive(node, field, "timeout_s", c.timeout_s);
+  return c;
+}
+
+// What every serial drive needs: its section, with the encoder's ticks.
+void require_serial_settings(const base::YamlReader& r, const YAML::Node& drive,
+                             const YAML::Node& node, const std::string& field) {
+  if (!node) {
+    r.fail(drive, field, "missing: the serial drive's settings (device, ticks_per_wheel_rev)");
+  }
+  if (!node["ticks_per_wheel_rev"]) {
+    r.fail(node, field + ".ticks_per_wheel_rev", "missing: encoder ticks per wheel turn");
+  }
+}
+
+drivers::ArduinoBridgeConfig read_arduino_bridge(const base::YamlReader& r, const YAML::Node& node,
+                                                 const std::string& field) {
+  r.only_keys(node, field,
+              {"device", "baud", "timeout_s", "ticks_per_wheel_rev", "pid_rate_hz", "boot_wait_s"});
+  drivers::ArduinoBridgeConfig c;
+  c.serial = read_serial(r, node, field, 57600);
+  c.ticks_per_wheel_rev = r.positive(node, field, "ticks_per_wheel_rev", 0.0);
+  c.pid_rate_hz = r.positive(node, field, "pid_rate_hz", c.pid_rate_hz);
+  c.boot_wait_s = r.non_negative(node, field, "boot_wait_s", c.boot_wait_s);
+  return c;
+}
+
+drivers::RoboClawConfig read_roboclaw(const base::YamlReader& r, const YAML::Node& node,
+                                      const std::string& field) {
+  r.only_keys(node, field,
+              {"device", "baud", "timeout_s", "address", "ticks_per_wheel_rev", "board_timeout_s",
+               "left_is_m1"});
+  drivers::RoboClawConfig c;
+  c.serial = read_serial(r, node, field, 38400);
+  if (node["address"]) {
+    const int address = r.integer(node["address"], field + ".address", 0x80);
+    if (address > 0x87) {
+      r.fail(node["address"], field + ".address", "must be 0x80..0x87");
+    }
+    c.address = static_cast<std::uint8_t>(address);
+  }
+  c.ticks_per_wheel_rev = r.positive(node, field, "ticks_per_wheel_rev", 0.0);
+  c.board_timeout_s = r.positive(node, field, "board_timeout_s", c.board_timeout_s);
+  if (c.board_timeout_s < 0.1 || c.board_timeout_s > 25.5) {
+    r.fail(node["board_timeout_s"], field + ".board_timeout_s", "must be 0.1 .. 25.5 s");
+  }
+  c.left_is_m1 = r.boolean(node, field, "left_is_m1", c.left_is_m1);
+  return c;
+}
+
 }  // namespace
 
 DriveSection parse_drive_section(const std::string& yaml_text, const std::string& source_name) {
   const YAML::Node root = base::load_yaml(yaml_text, source_name);
   const YAML::Node drive = root.IsMap() ? root["drive"] : YAML::Node();
   if (!drive) {
-    throw base::ConfigError(source_name, 1, 1, "drive", "missing: the launch file has no drive section");
+    throw base::ConfigError(source_name, 1, 1, "drive",
+                            "missing: the launch file has no drive section");
   }
   return read_drive(base::YamlReader(source_name), drive);
 }
@@ -54,50 +187,16 @@ DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
               {"type", "loop_rate_hz", "geometry", "limits", "watchdog", "sim", "odrive",
                "arduino_bridge", "roboclaw"});
   DriveSection s;
-  const std::string type =
-      r.word(drive, "drive", "type", {"sim", "odrive_can", "arduino_bridge", "roboclaw"}, "");
-  if (type.empty()) {
-    r.fail(drive, "drive.type", "missing: sim, odrive_can, arduino_bridge or roboclaw");
-  }
-  // Settings of another drive than the chosen one are a mistake, not something to ignore.
-  const std::string own = type == "odrive_can" ? "odrive" : type;
-  for (const char* other : {"sim", "odrive", "arduino_bridge", "roboclaw"}) {
-    if (drive[other] && own != other) {
-      r.fail(drive[other], std::string("drive.") + other,
-             "settings for another drive than type '" + type + "'");
-    }
-  }
+  const std::string type = read_type(r, drive);
   s.loop_rate_hz = r.positive(drive, "drive", "loop_rate_hz", s.loop_rate_hz);
-
   if (const YAML::Node g = drive["geometry"]) {
-    r.only_keys(g, "drive.geometry", {"wheel_separation_m", "wheel_radius_m"});
-    s.stage.geometry.wheel_separation_m =
-        r.positive(g, "drive.geometry", "wheel_separation_m", s.stage.geometry.wheel_separation_m);
-    s.stage.geometry.wheel_radius_m =
-        r.positive(g, "drive.geometry", "wheel_radius_m", s.stage.geometry.wheel_radius_m);
+    read_geometry(r, g, s.stage.geometry);
   }
   if (const YAML::Node l = drive["limits"]) {
-    r.only_keys(l, "drive.limits",
-                {"max_speed_mps", "max_reverse_speed_mps", "max_accel_mps2", "max_turn_rate",
-                 "max_wheel_speed_radps"});
-    auto& lim = s.stage.limits;
-    lim.max_speed_mps = r.positive(l, "drive.limits", "max_speed_mps", lim.max_speed_mps);
-    lim.max_reverse_speed_mps =
-        r.non_negative(l, "drive.limits", "max_reverse_speed_mps", lim.max_reverse_speed_mps);
-    lim.max_accel_mps2 = r.positive(l, "drive.limits", "max_accel_mps2", lim.max_accel_mps2);
-    lim.max_turn_rate = r.positive(l, "drive.limits", "max_turn_rate", lim.max_turn_rate);
-    lim.max_wheel_speed_radps =
-        r.positive(l, "drive.limits", "max_wheel_speed_radps", lim.max_wheel_speed_radps);
+    read_limits(r, l, s.stage.limits);
   }
   if (const YAML::Node w = drive["watchdog"]) {
-    r.only_keys(w, "drive.watchdog", {"timeout_s", "ramp_s"});
-    s.stage.watchdog.timeout_s =
-        r.positive(w, "drive.watchdog", "timeout_s", s.stage.watchdog.timeout_s);
-    s.stage.watchdog.ramp_s =
-        r.non_negative(w, "drive.watchdog", "ramp_s", s.stage.watchdog.ramp_s);
-    if (s.stage.watchdog.ramp_s > s.stage.watchdog.timeout_s) {
-      r.fail(w["ramp_s"], "drive.watchdog.ramp_s", "must not exceed timeout_s");
-    }
+    read_watchdog(r, w, s.stage.watchdog);
   }
   // The watchdog must see several loop periods before it trips.
   if (1.0 / s.loop_rate_hz > 0.5 * s.stage.watchdog.timeout_s) {
@@ -105,69 +204,19 @@ DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
            "one loop period must be at most half of watchdog.timeout_s");
   }
 
+  const std::string own = own_section(type);
   const YAML::Node own_node = drive[own];
   const std::string field = "drive." + own;
   if (type == "sim") {
-    drivers::SimBaseConfig c;
-    c.geometry = s.stage.geometry;
-    if (own_node) {
-      r.only_keys(own_node, field, {"wheel_time_constant_s"});
-      c.wheel_time_constant_s = r.non_negative(own_node, field, "wheel_time_constant_s", 0.0);
-    }
-    s.drive = c;
+    s.drive = read_sim(r, own_node, field, s.stage.geometry);
   } else if (type == "odrive_can") {
-    drivers::OdriveCanConfig c;
-    if (own_node) {
-      r.only_keys(own_node, field,
-                  {"can_interface", "left", "right", "motor_turns_per_wheel_turn", "timeout_s"});
-      c.interface = r.text(own_node, field, "can_interface", c.interface, true);
-      c.left = read_axis(r, own_node["left"], field + ".left", c.left);
-      c.right = read_axis(r, own_node["right"], field + ".right", c.right);
-      if (c.left.node_id == c.right.node_id) {
-        r.fail(own_node, field, "left and right need different node ids");
-      }
-      c.motor_turns_per_wheel_turn =
-          r.positive(own_node, field, "motor_turns_per_wheel_turn", c.motor_turns_per_wheel_turn);
-      c.timeout_s = r.positive(own_node, field, "timeout_s", c.timeout_s);
-    }
-    s.drive = c;
+    s.drive = read_odrive_can(r, own_node, field);
   } else {
-    if (!own_node) {
-      r.fail(drive, field, "missing: the serial drive's settings (device, ticks_per_wheel_rev)");
-    }
-    if (!own_node["ticks_per_wheel_rev"]) {
-      r.fail(own_node, field + ".ticks_per_wheel_rev", "missing: encoder ticks per wheel turn");
-    }
+    require_serial_settings(r, drive, own_node, field);
     if (type == "arduino_bridge") {
-      r.only_keys(
-          own_node, field,
-          {"device", "baud", "timeout_s", "ticks_per_wheel_rev", "pid_rate_hz", "boot_wait_s"});
-      drivers::ArduinoBridgeConfig c;
-      c.serial = read_serial(r, own_node, field, 57600);
-      c.ticks_per_wheel_rev = r.positive(own_node, field, "ticks_per_wheel_rev", 0.0);
-      c.pid_rate_hz = r.positive(own_node, field, "pid_rate_hz", c.pid_rate_hz);
-      c.boot_wait_s = r.non_negative(own_node, field, "boot_wait_s", c.boot_wait_s);
-      s.drive = c;
+      s.drive = read_arduino_bridge(r, own_node, field);
     } else {
-      r.only_keys(own_node, field,
-                  {"device", "baud", "timeout_s", "address", "ticks_per_wheel_rev",
-                   "board_timeout_s", "left_is_m1"});
-      drivers::RoboClawConfig c;
-      c.serial = read_serial(r, own_node, field, 38400);
-      if (own_node["address"]) {
-        const int address = r.integer(own_node["address"], field + ".address", 0x80);
-        if (address > 0x87) {
-          r.fail(own_node["address"], field + ".address", "must be 0x80..0x87");
-        }
-        c.address = static_cast<std::uint8_t>(address);
-      }
-      c.ticks_per_wheel_rev = r.positive(own_node, field, "ticks_per_wheel_rev", 0.0);
-      c.board_timeout_s = r.positive(own_node, field, "board_timeout_s", c.board_timeout_s);
-      if (c.board_timeout_s < 0.1 || c.board_timeout_s > 25.5) {
-        r.fail(own_node["board_timeout_s"], field + ".board_timeout_s", "must be 0.1 .. 25.5 s");
-      }
-      c.left_is_m1 = r.boolean(own_node, field, "left_is_m1", c.left_is_m1);
-      s.drive = c;
+      s.drive = read_roboclaw(r, own_node, field);
     }
   }
   return s;

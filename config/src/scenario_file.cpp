@@ -1,10 +1,11 @@
 #include "flowsteer/config/scenario_file.hpp"
 
 #include <numbers>
+#include <optional>
 
 #include "builtin_scenarios.hpp"
-#include "flowsteer/config/controller_reader.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
+#include "flowsteer/config/controller_reader.hpp"
 
 namespace flowsteer::config {
 
@@ -126,8 +127,8 @@ sim_camera::CameraSpec read_camera(const base::YamlReader& r, const YAML::Node& 
 
 // A scenario's controller: every setting of every steering model.
 servo::ControllerConfig read_scenario_controller(const base::YamlReader& r, const YAML::Node& node,
-                                                    const std::string& field,
-                                                    const servo::ControllerConfig& c) {
+                                                 const std::string& field,
+                                                 const servo::ControllerConfig& c) {
   if (node) {
     r.only_keys(node, field,
                 {"type",
@@ -157,8 +158,8 @@ servo::ControllerConfig read_scenario_controller(const base::YamlReader& r, cons
 }
 
 servo::PerceptionConfig read_scenario_perception(const base::YamlReader& r, const YAML::Node& node,
-                                                    const std::string& field,
-                                                    const servo::PerceptionConfig& p) {
+                                                 const std::string& field,
+                                                 const servo::PerceptionConfig& p) {
   if (node) {
     r.only_keys(node, field, {"flow", "segmentation"});
   }
@@ -192,59 +193,193 @@ sim_camera::PointLight read_point_light(const base::YamlReader& r, const YAML::N
   return p;
 }
 
+void require_list(const base::YamlReader& r, const YAML::Node& node, const std::string& field) {
+  if (!node.IsSequence()) {
+    r.fail(node, field, "expected a list");
+  }
+}
+
+// lighting.sun, or `none` for no sun.
+std::optional<sim_camera::SunLight> read_sun(const base::YamlReader& r, const YAML::Node& sun) {
+  if (sun.IsScalar() && sun.Scalar() == "none") {
+    return std::nullopt;
+  }
+  r.only_keys(sun, "lighting.sun", {"azimuth_deg", "elevation_deg", "intensity", "shadows"});
+  sim_camera::SunLight s;
+  s.azimuth_rad = r.number(sun, "lighting.sun", "azimuth_deg", s.azimuth_rad / kDeg) * kDeg;
+  s.elevation_rad = r.number(sun, "lighting.sun", "elevation_deg", s.elevation_rad / kDeg) * kDeg;
+  if (!(s.elevation_rad > 0.0 && s.elevation_rad < std::numbers::pi / 2)) {
+    r.fail(sun["elevation_deg"], "lighting.sun.elevation_deg", "must be in (0, 90)");
+  }
+  s.intensity = static_cast<float>(r.non_negative(sun, "lighting.sun", "intensity", s.intensity));
+  s.shadows = r.boolean(sun, "lighting.sun", "shadows", s.shadows);
+  return s;
+}
+
+sim_camera::Lighting read_lighting(const base::YamlReader& r, const YAML::Node& node,
+                                   sim_camera::Lighting lighting) {
+  r.only_keys(node, "lighting", {"ambient", "sun", "points"});
+  lighting.ambient =
+      static_cast<float>(r.non_negative(node, "lighting", "ambient", lighting.ambient));
+  if (const YAML::Node sun = node["sun"]) {
+    lighting.sun = read_sun(r, sun);
+  }
+  if (const YAML::Node points = node["points"]) {
+    require_list(r, points, "lighting.points");
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      lighting.points.push_back(
+          read_point_light(r, points[k], "lighting.points[" + std::to_string(k) + "]"));
+    }
+  }
+  return lighting;
+}
+
+// A moving obstacle: a solid (no wall) that starts at the first of its waypoints.
+sim_camera::MovingObstacle read_moving_obstacle(const base::YamlReader& r, const YAML::Node& node,
+                                                const std::string& field) {
+  r.only_keys(
+      node, field,
+      {"shape", "size", "radius_m", "height_m", "material", "waypoints", "speed_mps", "loop"});
+  YAML::Node body = YAML::Clone(node);
+  body.remove("waypoints");
+  body.remove("speed_mps");
+  body.remove("loop");
+  if (!node["waypoints"]) {
+    r.fail(node, field + ".waypoints", "missing: a moving obstacle needs waypoints");
+  }
+  sim_camera::MovingObstacle m;
+  m.waypoints = read_points(r, node["waypoints"], field + ".waypoints");
+  body["position"] = node["waypoints"][0];
+  m.body = read_solid(r, body, field, false);
+  if (m.waypoints.size() < 2) {
+    r.fail(node["waypoints"], field + ".waypoints", "needs at least two waypoints");
+  }
+  m.speed_mps = r.non_negative(node, field, "speed_mps", 1.0);
+  m.loop = r.boolean(node, field, "loop", false);
+  return m;
+}
+
+// What an agent's own settings start from: the scenario's.
+struct AgentDefaults {
+  sim_camera::CameraSpec camera;
+  servo::ControllerConfig controller;
+  servo::PerceptionConfig perception;
+};
+
+// The agent's leader, agents[index] of `agent_count`. Unless its controller names its kind, an
+// agent with a leader follows it.
+void read_leader(const base::YamlReader& r, const YAML::Node& root, const YAML::Node& node,
+                 const std::string& field, std::size_t agent_count, std::size_t self,
+                 AgentSpec& a) {
+  const YAML::Node leader = node["leader"];
+  const int index = r.integer(leader, field + ".leader", 0);
+  if (static_cast<std::size_t>(index) >= agent_count || static_cast<std::size_t>(index) == self) {
+    r.fail(leader, field + ".leader", "must be the index of another agent");
+  }
+  a.leader = index;
+  if (!node["controller"] || !node["controller"]["kind"]) {
+    a.controller.kind = servo::NavigationKind::following;
+    // CGF §8.2 follows with β = 1 where goal reaching uses 0.1; a β written anywhere wins.
+    const bool beta_given = (node["controller"] && node["controller"]["beta"]) ||
+                            (root["controller"] && root["controller"]["beta"]);
+    if (!beta_given) {
+      a.controller.beta = 1.0;
+    }
+  }
+}
+
+// An agent heads for goals or follows a leader, as its controller can.
+void check_navigation(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
+                      const AgentSpec& a) {
+  if (a.controller.model == servo::SteeringModel::motion_energy && a.leader) {
+    r.fail(node["leader"], field + ".leader",
+           "a motion_energy controller steers to goals and cannot follow a leader");
+  }
+  if (a.controller.kind == servo::NavigationKind::following && !a.leader) {
+    r.fail(node, field + ".leader", "missing: a following agent needs a leader");
+  }
+  if (!a.leader && a.goals.empty()) {
+    r.fail(node, field + ".goal", "missing: the agent needs a goal or a leader");
+  }
+}
+
+// A light the agent carries, placed relative to the agent.
+sim_camera::PointLight read_carried_light(const base::YamlReader& r, const YAML::Node& light,
+                                          const std::string& field) {
+  r.only_keys(light, field, {"intensity", "range_m", "height_m", "ahead_m"});
+  sim_camera::PointLight p;
+  p.position_m = {r.number(light, field, "ahead_m", 0.4), 0.0,
+                  r.positive(light, field, "height_m", 1.2)};
+  p.intensity = static_cast<float>(r.non_negative(light, field, "intensity", 1.5));
+  p.range_m = r.positive(light, field, "range_m", 6.0);
+  return p;
+}
+
+// agents[i]: `root` for the scenario's controller, `agents` for the leader's index.
+AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& root, const YAML::Node& agents,
+                     std::size_t i, const AgentDefaults& defaults) {
+  const std::string field = "agents[" + std::to_string(i) + "]";
+  const YAML::Node node = agents[i];
+  r.only_keys(node, field,
+              {"name", "start", "heading_deg", "speed_mps", "preferred_speed_mps", "max_speed_mps",
+               "radius_m", "height_m", "goal", "goals", "goal_radius_m", "leader", "controller",
+               "perception", "camera", "material", "carried_light"});
+  AgentSpec a;
+  a.name = r.text(node, field, "name", "agent" + std::to_string(i));
+  if (!node["start"]) {
+    r.fail(node, field + ".start", "missing: where does the agent start?");
+  }
+  a.start_m = r.pair(node, field, "start", Eigen::Vector2d::Zero());
+  a.heading_rad = r.number(node, field, "heading_deg", 0.0) * kDeg;
+  a.preferred_speed_mps = r.non_negative(node, field, "preferred_speed_mps", 1.0);
+  a.start_speed_mps = r.non_negative(node, field, "speed_mps", a.preferred_speed_mps);
+  a.max_speed_mps = r.positive(node, field, "max_speed_mps", 1.5 * a.preferred_speed_mps);
+  a.radius_m = r.positive(node, field, "radius_m", a.radius_m);
+  a.height_m = r.positive(node, field, "height_m", a.height_m);
+  a.goal_radius_m = r.positive(node, field, "goal_radius_m", a.goal_radius_m);
+  if (node["goal"] && node["goals"]) {
+    r.fail(node["goals"], field + ".goals", "give goal or goals, not both");
+  }
+  if (node["goal"]) {
+    a.goals = {r.pair(node, field, "goal", Eigen::Vector2d::Zero())};
+  } else if (node["goals"]) {
+    a.goals = read_points(r, node["goals"], field + ".goals");
+  }
+  a.controller =
+      read_scenario_controller(r, node["controller"], field + ".controller", defaults.controller);
+  if (node["leader"]) {
+    read_leader(r, root, node, field, agents.size(), i, a);
+  }
+  check_navigation(r, node, field, a);
+  a.camera = read_camera(r, node["camera"], field + ".camera", defaults.camera);
+  a.perception =
+      read_scenario_perception(r, node["perception"], field + ".perception", defaults.perception);
+  a.material = read_material(r, node["material"], field + ".material", a.material);
+  if (const YAML::Node light = node["carried_light"]) {
+    a.carried_light = read_carried_light(r, light, field + ".carried_light");
+  }
+  return a;
+}
 }  // namespace
 
 sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::string& source_name) {
   const base::YamlReader r(source_name);
   const YAML::Node root =
       base::load_yaml_map(yaml_text, source_name, "at least agents:",
-                    {"name", "description", "step_s", "duration_s", "camera", "controller",
-                     "perception", "lighting", "ground", "obstacles", "moving", "agents"});
-  auto require_list = [&](const YAML::Node& node, const std::string& field) {
-    if (!node.IsSequence()) {
-      r.fail(node, field, "expected a list");
-    }
-  };
+                          {"name", "description", "step_s", "duration_s", "camera", "controller",
+                           "perception", "lighting", "ground", "obstacles", "moving", "agents"});
   sim_camera::WorldSpec w;
   w.name = r.text(root, "", "name", source_name);
   w.description = r.text(root, "", "description", "");
   w.step_s = r.positive(root, "", "step_s", w.step_s);
   w.duration_s = r.positive(root, "", "duration_s", w.duration_s);
-  const sim_camera::CameraSpec camera = read_camera(r, root["camera"], "camera", {});
-  const servo::ControllerConfig controller =
-      read_scenario_controller(r, root["controller"], "controller", {});
-  const servo::PerceptionConfig perception =
-      read_scenario_perception(r, root["perception"], "perception", {});
+  AgentDefaults defaults;
+  defaults.camera = read_camera(r, root["camera"], "camera", {});
+  defaults.controller = read_scenario_controller(r, root["controller"], "controller", {});
+  defaults.perception = read_scenario_perception(r, root["perception"], "perception", {});
 
   if (const YAML::Node lighting = root["lighting"]) {
-    r.only_keys(lighting, "lighting", {"ambient", "sun", "points"});
-    w.lighting.ambient =
-        static_cast<float>(r.non_negative(lighting, "lighting", "ambient", w.lighting.ambient));
-    if (const YAML::Node sun = lighting["sun"]) {
-      if (sun.IsScalar() && sun.Scalar() == "none") {
-        w.lighting.sun.reset();
-      } else {
-        r.only_keys(sun, "lighting.sun", {"azimuth_deg", "elevation_deg", "intensity", "shadows"});
-        sim_camera::SunLight s;
-        s.azimuth_rad = r.number(sun, "lighting.sun", "azimuth_deg", s.azimuth_rad / kDeg) * kDeg;
-        s.elevation_rad =
-            r.number(sun, "lighting.sun", "elevation_deg", s.elevation_rad / kDeg) * kDeg;
-        if (!(s.elevation_rad > 0.0 && s.elevation_rad < std::numbers::pi / 2)) {
-          r.fail(sun["elevation_deg"], "lighting.sun.elevation_deg", "must be in (0, 90)");
-        }
-        s.intensity =
-            static_cast<float>(r.non_negative(sun, "lighting.sun", "intensity", s.intensity));
-        s.shadows = r.boolean(sun, "lighting.sun", "shadows", s.shadows);
-        w.lighting.sun = s;
-      }
-    }
-    if (const YAML::Node points = lighting["points"]) {
-      require_list(points, "lighting.points");
-      for (std::size_t k = 0; k < points.size(); ++k) {
-        w.lighting.points.push_back(
-            read_point_light(r, points[k], "lighting.points[" + std::to_string(k) + "]"));
-      }
-    }
+    w.lighting = read_lighting(r, lighting, w.lighting);
   }
   if (const YAML::Node ground = root["ground"]) {
     r.only_keys(ground, "ground", {"size_m", "material"});
@@ -252,37 +387,16 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     w.ground = read_material(r, ground["material"], "ground.material", w.ground);
   }
   if (const YAML::Node obstacles = root["obstacles"]) {
-    require_list(obstacles, "obstacles");
+    require_list(r, obstacles, "obstacles");
     for (std::size_t k = 0; k < obstacles.size(); ++k) {
       w.obstacles.push_back(
           read_solid(r, obstacles[k], "obstacles[" + std::to_string(k) + "]", true));
     }
   }
   if (const YAML::Node moving = root["moving"]) {
-    require_list(moving, "moving");
+    require_list(r, moving, "moving");
     for (std::size_t k = 0; k < moving.size(); ++k) {
-      const std::string field = "moving[" + std::to_string(k) + "]";
-      const YAML::Node node = moving[k];
-      r.only_keys(
-          node, field,
-          {"shape", "size", "radius_m", "height_m", "material", "waypoints", "speed_mps", "loop"});
-      YAML::Node body = YAML::Clone(node);
-      body.remove("waypoints");
-      body.remove("speed_mps");
-      body.remove("loop");
-      if (!node["waypoints"]) {
-        r.fail(node, field + ".waypoints", "missing: a moving obstacle needs waypoints");
-      }
-      sim_camera::MovingObstacle m;
-      m.waypoints = read_points(r, node["waypoints"], field + ".waypoints");
-      body["position"] = node["waypoints"][0];
-      m.body = read_solid(r, body, field, false);
-      if (m.waypoints.size() < 2) {
-        r.fail(node["waypoints"], field + ".waypoints", "needs at least two waypoints");
-      }
-      m.speed_mps = r.non_negative(node, field, "speed_mps", 1.0);
-      m.loop = r.boolean(node, field, "loop", false);
-      w.moving.push_back(m);
+      w.moving.push_back(read_moving_obstacle(r, moving[k], "moving[" + std::to_string(k) + "]"));
     }
   }
   const YAML::Node agents = root["agents"];
@@ -290,77 +404,7 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     r.fail(agents ? agents : root, "agents", "expected a list of one agent or more");
   }
   for (std::size_t i = 0; i < agents.size(); ++i) {
-    const std::string field = "agents[" + std::to_string(i) + "]";
-    const YAML::Node node = agents[i];
-    r.only_keys(node, field,
-                {"name", "start", "heading_deg", "speed_mps", "preferred_speed_mps",
-                 "max_speed_mps", "radius_m", "height_m", "goal", "goals", "goal_radius_m",
-                 "leader", "controller", "perception", "camera", "material", "carried_light"});
-    AgentSpec a;
-    a.name = r.text(node, field, "name", "agent" + std::to_string(i));
-    if (!node["start"]) {
-      r.fail(node, field + ".start", "missing: where does the agent start?");
-    }
-    a.start_m = r.pair(node, field, "start", Eigen::Vector2d::Zero());
-    a.heading_rad = r.number(node, field, "heading_deg", 0.0) * kDeg;
-    a.preferred_speed_mps = r.non_negative(node, field, "preferred_speed_mps", 1.0);
-    a.start_speed_mps = r.non_negative(node, field, "speed_mps", a.preferred_speed_mps);
-    a.max_speed_mps = r.positive(node, field, "max_speed_mps", 1.5 * a.preferred_speed_mps);
-    a.radius_m = r.positive(node, field, "radius_m", a.radius_m);
-    a.height_m = r.positive(node, field, "height_m", a.height_m);
-    a.goal_radius_m = r.positive(node, field, "goal_radius_m", a.goal_radius_m);
-    if (node["goal"] && node["goals"]) {
-      r.fail(node["goals"], field + ".goals", "give goal or goals, not both");
-    }
-    if (node["goal"]) {
-      a.goals = {r.pair(node, field, "goal", Eigen::Vector2d::Zero())};
-    } else if (node["goals"]) {
-      a.goals = read_points(r, node["goals"], field + ".goals");
-    }
-    a.controller =
-        read_scenario_controller(r, node["controller"], field + ".controller", controller);
-    if (const YAML::Node leader = node["leader"]) {
-      const int index = r.integer(leader, field + ".leader", 0);
-      if (static_cast<std::size_t>(index) >= agents.size() ||
-          static_cast<std::size_t>(index) == i) {
-        r.fail(leader, field + ".leader", "must be the index of another agent");
-      }
-      a.leader = index;
-      if (!node["controller"] || !node["controller"]["kind"]) {
-        a.controller.kind = servo::NavigationKind::following;
-        // CGF §8.2 follows with β = 1 where goal reaching uses 0.1; a β written anywhere wins.
-        const bool beta_given = (node["controller"] && node["controller"]["beta"]) ||
-                                (root["controller"] && root["controller"]["beta"]);
-        if (!beta_given) {
-          a.controller.beta = 1.0;
-        }
-      }
-    }
-    if (a.controller.model == servo::SteeringModel::motion_energy && a.leader) {
-      r.fail(node["leader"], field + ".leader",
-             "a motion_energy controller steers to goals and cannot follow a leader");
-    }
-    if (a.controller.kind == servo::NavigationKind::following && !a.leader) {
-      r.fail(node, field + ".leader", "missing: a following agent needs a leader");
-    }
-    if (!a.leader && a.goals.empty()) {
-      r.fail(node, field + ".goal", "missing: the agent needs a goal or a leader");
-    }
-    a.camera = read_camera(r, node["camera"], field + ".camera", camera);
-    a.perception =
-        read_scenario_perception(r, node["perception"], field + ".perception", perception);
-    a.material = read_material(r, node["material"], field + ".material", a.material);
-    if (const YAML::Node light = node["carried_light"]) {
-      r.only_keys(light, field + ".carried_light", {"intensity", "range_m", "height_m", "ahead_m"});
-      sim_camera::PointLight p;
-      p.position_m = {r.number(light, field + ".carried_light", "ahead_m", 0.4), 0.0,
-                      r.positive(light, field + ".carried_light", "height_m", 1.2)};
-      p.intensity =
-          static_cast<float>(r.non_negative(light, field + ".carried_light", "intensity", 1.5));
-      p.range_m = r.positive(light, field + ".carried_light", "range_m", 6.0);
-      a.carried_light = p;
-    }
-    w.agents.push_back(a);
+    w.agents.push_back(read_agent(r, root, agents, i, defaults));
   }
   try {
     sim_camera::World check(w);

@@ -6,10 +6,10 @@
 #include <memory>
 #include <sstream>
 
+#include "flowsteer/eval/output_files.hpp"
 #include "flowsteer/eval/simulated_agent.hpp"
 #include "flowsteer/pipeline/perception.hpp"
 #include "flowsteer/servo/analytic_scene.hpp"
-#include "flowsteer/eval/output_files.hpp"
 
 namespace flowsteer::eval {
 
@@ -75,6 +75,204 @@ struct MethodRun {
   std::vector<RegionCover> covers;
 };
 
+// The synthetic method first: it fits the exact flow without depth, the error the fit itself
+// makes, which every estimator's row includes.
+std::vector<servo::FlowMethod> methods_to_evaluate(const FlowEvalOptions& options) {
+  const std::span<const servo::FlowMethod> all = servo::numerical_flow_methods();
+  std::vector<servo::FlowMethod> methods{servo::FlowMethod::synthetic};
+  if (options.methods.empty()) {
+    methods.insert(methods.end(), all.begin(), all.end());
+  } else {
+    methods.insert(methods.end(), options.methods.begin(), options.methods.end());
+  }
+  return methods;
+}
+
+// The world with every camera at resolution² and every agent perceiving by default.
+sim_camera::WorldSpec at_resolution(const sim_camera::WorldSpec& world_spec, int resolution) {
+  sim_camera::WorldSpec spec = world_spec;
+  for (auto& a : spec.agents) {
+    a.camera.width_px = a.camera.height_px = resolution;
+    a.perception = {};
+  }
+  return spec;
+}
+
+// One run per method, each perceiving like the truth but with the method's flow, without depth.
+std::vector<MethodRun> start_runs(std::span<const servo::FlowMethod> methods,
+                                  const pipeline::PerceptionOptions& truth_options,
+                                  servo::SegmentationMethod segmentation,
+                                  const base::CameraIntrinsics& intrinsics, int resolution) {
+  std::vector<MethodRun> runs;
+  for (servo::FlowMethod method : methods) {
+    pipeline::PerceptionOptions o = truth_options;
+    o.flow = method;
+    o.use_depth = false;
+    o.segmentation = segmentation;
+    MethodRun run;
+    run.perception = std::make_unique<pipeline::Perception>(intrinsics, o);
+    run.row.method = method;
+    run.row.segmentation = segmentation;
+    run.row.resolution = resolution;
+    runs.push_back(std::move(run));
+  }
+  return runs;
+}
+
+// Each agent steps on its own controller; `commands` gets what each commands.
+void step_agents(std::vector<std::unique_ptr<SimulatedAgent>>& agents,
+                 std::vector<std::pair<double, double>>& commands) {
+  for (std::size_t i = 0; i < agents.size(); ++i) {
+    pipeline::StageTimes times;
+    const servo::ControlOutput& out = agents[i]->step(times);
+    commands[i] = {out.command.accel_mps2, out.command.turn_rate};
+  }
+}
+
+// Endpoint errors over the pixels where both flows are valid; `to_px` turns flow into pixels.
+void add_endpoint_errors(MethodRun& run, std::span<const Eigen::Vector2f> estimated,
+                         std::span<const Eigen::Vector2f> exact, double to_px) {
+  for (std::size_t p = 0; p < estimated.size(); ++p) {
+    run.total_count += 1.0;
+    if (!estimated[p].allFinite() || !exact[p].allFinite())
+      continue;
+    run.valid_count += 1.0;
+    run.epe_sum += (estimated[p] - exact[p]).cast<double>().norm() * to_px;
+  }
+}
+
+// Regions approaching within the horizon that are mostly ground or sky.
+void count_phantoms(MethodRun& run, std::span<const servo::ObjectFeatures> estimated_objects,
+                    double horizon_s) {
+  for (const servo::ObjectFeatures& o : estimated_objects) {
+    const auto label = static_cast<std::size_t>(o.label);
+    if (o.kind == servo::RegionKind::visible && o.status == servo::MotionStatus::approaching &&
+        o.ttc_s <= horizon_s && label < run.covers.size() &&
+        (run.covers[label].id == servo::kGroundId || run.covers[label].id == servo::kSkyId)) {
+      ++run.row.phantom_objects;
+    }
+  }
+}
+
+// The region the object with `source_id` is the most of that covers most of it; kNoRegion when
+// it is the most of none.
+int region_of_object(std::span<const RegionCover> covers, std::int32_t source_id) {
+  int region = servo::Segmentation::kNoRegion;
+  for (std::size_t r = 0; r < covers.size(); ++r) {
+    if (covers[r].id == source_id &&
+        (region == servo::Segmentation::kNoRegion ||
+         covers[r].object_px > covers[static_cast<std::size_t>(region)].object_px)) {
+      region = static_cast<int>(r);
+    }
+  }
+  return region;
+}
+
+// Scores the run on one object approaching in truth (`t`): small, missed, or found with the errors
+// of its region's fit.
+void score_object(MethodRun& run, const servo::ObjectFeatures& t,
+                  std::span<const servo::ObjectFeatures> estimated_objects, int min_object_px) {
+  if (t.pixel_count < min_object_px) {
+    ++run.row.small_objects;
+    return;
+  }
+  const int region = region_of_object(run.covers, t.source_id);
+  // extract() gives one object per region, in label order.
+  const servo::ObjectFeatures* o = region == servo::Segmentation::kNoRegion
+                                       ? nullptr
+                                       : &estimated_objects[static_cast<std::size_t>(region)];
+  if (o == nullptr || o->kind != servo::RegionKind::visible ||
+      o->status != servo::MotionStatus::approaching) {
+    ++run.row.missed_objects;
+    return;
+  }
+  const RegionCover& cover = run.covers[static_cast<std::size_t>(region)];
+  ++run.row.approaching_objects;
+  run.recall_sum += static_cast<double>(cover.object_px) / t.pixel_count;
+  run.purity_sum += static_cast<double>(cover.object_px) / cover.region_px;
+  run.foe_errors.push_back(std::abs(o->foe.x() - t.foe.x()));
+  run.ttc_errors.push_back(std::abs(o->ttc_s - t.ttc_s) / t.ttc_s);
+}
+
+// Scores the run on a frame it has processed, against the truth's flow and objects.
+void score_frame(MethodRun& run, double flow_ms, const pipeline::Perception& truth,
+                 const camera_io::Frame& view, double to_px, const FlowEvalOptions& options) {
+  ++run.row.frames;
+  run.ms_sum += flow_ms;
+  add_endpoint_errors(run, run.perception->flow().flow(), truth.flow().flow(), to_px);
+  cover_regions(run.perception->segmentation(), view.sim->object_ids, run.region_id_pairs,
+                run.covers);
+  const auto estimated_objects = run.perception->objects();
+  count_phantoms(run, estimated_objects, options.phantom_horizon_s);
+  for (const servo::ObjectFeatures& t : truth.objects()) {
+    if (t.kind == servo::RegionKind::visible && t.status == servo::MotionStatus::approaching) {
+      score_object(run, t, estimated_objects, options.min_object_px);
+    }
+  }
+}
+
+FlowEvalRow summarise(const MethodRun& run) {
+  FlowEvalRow row = run.row;
+  row.endpoint_error_px = run.valid_count > 0 ? run.epe_sum / run.valid_count : 0.0;
+  row.valid_fraction = run.total_count > 0 ? run.valid_count / run.total_count : 0.0;
+  if (row.approaching_objects > 0) {
+    row.object_recall_mean = run.recall_sum / row.approaching_objects;
+    row.region_purity_mean = run.purity_sum / row.approaching_objects;
+  }
+  row.foe_error_median = median(run.foe_errors);
+  row.ttc_relative_error_median = median(run.ttc_errors);
+  row.ms_per_frame = row.frames > 0 ? run.ms_sum / row.frames : 0.0;
+  return row;
+}
+
+// Walks agent 0 through the world with its camera at resolution², every method measured on the
+// same frames; appends one row per method to `rows`.
+void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolution,
+                            std::span<const servo::FlowMethod> methods,
+                            const FlowEvalOptions& options, sim_camera::Renderer& renderer,
+                            std::ostream& log, std::vector<FlowEvalRow>& rows) {
+  const sim_camera::WorldSpec spec = at_resolution(world_spec, resolution);
+  sim_camera::World world(spec);
+  std::vector<std::unique_ptr<SimulatedAgent>> agents;
+  for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+    agents.push_back(std::make_unique<SimulatedAgent>(world, renderer, i));
+  }
+  pipeline::PerceptionOptions truth_options = brain_config(spec.agents[0]).perception;
+  truth_options.dark_regions = false;
+  truth_options.use_depth = true;
+  const base::CameraIntrinsics& k = agents[0]->intrinsics();
+  pipeline::Perception truth(k, truth_options);
+  std::vector<MethodRun> runs =
+      start_runs(methods, truth_options, options.segmentation, k, resolution);
+  const double to_px = k.fx_px * spec.step_s;
+  // The estimators compare images a baseline apart: until they have one, they are not measured.
+  const int warmup_frames =
+      static_cast<int>(std::ceil(truth_options.optical_flow.baseline_s / spec.step_s));
+
+  log << "flow evaluation: " << spec.name << " at " << resolution << "x" << resolution << ", "
+      << options.frames << " frames\n";
+  std::vector<std::pair<double, double>> commands(spec.agents.size());
+  for (int frame = 0; frame < options.frames && !world.finished(); ++frame) {
+    step_agents(agents, commands);
+    const camera_io::Frame& view = agents[0]->frame();
+    const sim_camera::AgentState& state = world.agents()[0];
+    pipeline::StageTimes times;
+    truth.process(view, state.speed_mps, state.turn_rate, times);
+    for (MethodRun& run : runs) {
+      pipeline::StageTimes method_times;
+      if (run.perception->process(view, state.speed_mps, state.turn_rate, method_times) ==
+              servo::FlowStatus::ok &&
+          frame >= warmup_frames) {
+        score_frame(run, method_times.flow, truth, view, to_px, options);
+      }
+    }
+    world.step(commands);
+  }
+  for (const MethodRun& run : runs) {
+    rows.push_back(summarise(run));
+  }
+}
+
 }  // namespace
 
 std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
@@ -82,147 +280,11 @@ std::vector<FlowEvalRow> evaluate_flow(const sim_camera::WorldSpec& world_spec,
   if (world_spec.agents.empty()) {
     throw std::invalid_argument("flow evaluation: the scenario has no agent to carry the camera");
   }
-  const std::span<const servo::FlowMethod> all = servo::numerical_flow_methods();
-  // The synthetic row fits the exact flow without depth: the error the fit itself makes, which
-  // every estimator's row includes.
-  std::vector<servo::FlowMethod> methods{servo::FlowMethod::synthetic};
-  if (options.methods.empty()) {
-    methods.insert(methods.end(), all.begin(), all.end());
-  } else {
-    methods.insert(methods.end(), options.methods.begin(), options.methods.end());
-  }
+  const std::vector<servo::FlowMethod> methods = methods_to_evaluate(options);
   std::unique_ptr<sim_camera::Renderer> renderer = sim_camera::Renderer::create();
   std::vector<FlowEvalRow> rows;
   for (const int resolution : options.resolutions) {
-    sim_camera::WorldSpec spec = world_spec;
-    for (auto& a : spec.agents) {
-      a.camera.width_px = a.camera.height_px = resolution;
-      a.perception = {};
-    }
-    sim_camera::World world(spec);
-    std::vector<std::unique_ptr<SimulatedAgent>> agents;
-    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-      agents.push_back(std::make_unique<SimulatedAgent>(world, *renderer, i));
-    }
-    const sim_camera::AgentSpec& walker = spec.agents[0];
-    pipeline::PerceptionOptions truth_options = brain_config(walker).perception;
-    truth_options.dark_regions = false;
-    truth_options.use_depth = true;
-    pipeline::Perception truth(agents[0]->intrinsics(), truth_options);
-    std::vector<MethodRun> runs;
-    for (servo::FlowMethod method : methods) {
-      pipeline::PerceptionOptions o = truth_options;
-      o.flow = method;
-      o.use_depth = false;
-      o.segmentation = options.segmentation;
-      MethodRun run;
-      run.perception = std::make_unique<pipeline::Perception>(agents[0]->intrinsics(), o);
-      run.row.method = method;
-      run.row.segmentation = options.segmentation;
-      run.row.resolution = resolution;
-      runs.push_back(std::move(run));
-    }
-    const base::CameraIntrinsics& k = agents[0]->intrinsics();
-    const double to_px = k.fx_px * spec.step_s;
-    // The estimators compare images a baseline apart: until they have one, they are not measured.
-    const int warmup_frames =
-        static_cast<int>(std::ceil(truth_options.optical_flow.baseline_s / spec.step_s));
-
-    log << "flow evaluation: " << spec.name << " at " << resolution << "x" << resolution << ", "
-        << options.frames << " frames\n";
-    std::vector<std::pair<double, double>> commands(spec.agents.size());
-    for (int frame = 0; frame < options.frames && !world.finished(); ++frame) {
-      for (std::size_t i = 0; i < agents.size(); ++i) {
-        pipeline::StageTimes times;
-        const servo::ControlOutput& out = agents[i]->step(times);
-        commands[i] = {out.command.accel_mps2, out.command.turn_rate};
-      }
-      const camera_io::Frame& view = agents[0]->frame();
-      const sim_camera::AgentState& state = world.agents()[0];
-      pipeline::StageTimes times;
-      truth.process(view, state.speed_mps, state.turn_rate, times);
-      const auto truth_objects = truth.objects();
-      for (MethodRun& run : runs) {
-        pipeline::StageTimes method_times;
-        if (run.perception->process(view, state.speed_mps, state.turn_rate, method_times) !=
-                servo::FlowStatus::ok ||
-            frame < warmup_frames) {
-          continue;
-        }
-        ++run.row.frames;
-        run.ms_sum += method_times.flow;
-        const auto estimated = run.perception->flow().flow();
-        const auto exact = truth.flow().flow();
-        for (std::size_t p = 0; p < estimated.size(); ++p) {
-          run.total_count += 1.0;
-          if (!estimated[p].allFinite() || !exact[p].allFinite())
-            continue;
-          run.valid_count += 1.0;
-          run.epe_sum += (estimated[p] - exact[p]).cast<double>().norm() * to_px;
-        }
-        cover_regions(run.perception->segmentation(), view.sim->object_ids, run.region_id_pairs,
-                      run.covers);
-        const auto estimated_objects = run.perception->objects();
-        for (const servo::ObjectFeatures& o : estimated_objects) {
-          const auto label = static_cast<std::size_t>(o.label);
-          if (o.kind == servo::RegionKind::visible &&
-              o.status == servo::MotionStatus::approaching &&
-              o.ttc_s <= options.phantom_horizon_s && label < run.covers.size() &&
-              (run.covers[label].id == servo::kGroundId || run.covers[label].id == servo::kSkyId)) {
-            ++run.row.phantom_objects;
-          }
-        }
-        for (const servo::ObjectFeatures& t : truth_objects) {
-          if (t.kind != servo::RegionKind::visible ||
-              t.status != servo::MotionStatus::approaching) {
-            continue;
-          }
-          if (t.pixel_count < options.min_object_px) {
-            ++run.row.small_objects;
-            continue;
-          }
-          int region = servo::Segmentation::kNoRegion;
-          for (std::size_t r = 0; r < run.covers.size(); ++r) {
-            if (run.covers[r].id == t.source_id &&
-                (region == servo::Segmentation::kNoRegion ||
-                 run.covers[r].object_px >
-                     run.covers[static_cast<std::size_t>(region)].object_px)) {
-              region = static_cast<int>(r);
-            }
-          }
-          // extract() gives one object per region, in label order.
-          const servo::ObjectFeatures* o =
-              region == servo::Segmentation::kNoRegion
-                  ? nullptr
-                  : &estimated_objects[static_cast<std::size_t>(region)];
-          if (o == nullptr || o->kind != servo::RegionKind::visible ||
-              o->status != servo::MotionStatus::approaching) {
-            ++run.row.missed_objects;
-            continue;
-          }
-          const RegionCover& cover = run.covers[static_cast<std::size_t>(region)];
-          ++run.row.approaching_objects;
-          run.recall_sum += static_cast<double>(cover.object_px) / t.pixel_count;
-          run.purity_sum += static_cast<double>(cover.object_px) / cover.region_px;
-          run.foe_errors.push_back(std::abs(o->foe.x() - t.foe.x()));
-          run.ttc_errors.push_back(std::abs(o->ttc_s - t.ttc_s) / t.ttc_s);
-        }
-      }
-      world.step(commands);
-    }
-    for (MethodRun& run : runs) {
-      FlowEvalRow& row = run.row;
-      row.endpoint_error_px = run.valid_count > 0 ? run.epe_sum / run.valid_count : 0.0;
-      row.valid_fraction = run.total_count > 0 ? run.valid_count / run.total_count : 0.0;
-      if (row.approaching_objects > 0) {
-        row.object_recall_mean = run.recall_sum / row.approaching_objects;
-        row.region_purity_mean = run.purity_sum / row.approaching_objects;
-      }
-      row.foe_error_median = median(run.foe_errors);
-      row.ttc_relative_error_median = median(run.ttc_errors);
-      row.ms_per_frame = row.frames > 0 ? run.ms_sum / row.frames : 0.0;
-      rows.push_back(row);
-    }
+    evaluate_at_resolution(world_spec, resolution, methods, options, *renderer, log, rows);
   }
   return rows;
 }

@@ -119,34 +119,43 @@ RadialFitWorkspace& RadialFitWorkspace::operator=(RadialFitWorkspace&&) noexcept
 
 namespace {
 
-// The robust fit shared by both forms of the model (see `design`): a least-squares start, then
-// iteratively reweighted rounds. Returns p; the fit's quality and the covariance of p go into
-// `fit`. Empty when the samples cannot identify p.
 template <int N>
-std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const FlowSample> samples,
-                                                             const Eigen::Vector2d& foe,
-                                                             const RadialFitOptions& options,
-                                                             RadialFitWorkspace::Buffers& buffers,
-                                                             RadialFit& fit) {
-  using Vector = Eigen::Matrix<double, N, 1>;
-  using Matrix = Eigen::Matrix<double, N, N>;
-  if (samples.size() < 3) {
-    return std::nullopt;
-  }
-  const auto n = static_cast<double>(samples.size());
+using Parameters = Eigen::Matrix<double, N, 1>;
+template <int N>
+using ParameterMatrix = Eigen::Matrix<double, N, N>;
 
-  // Least-squares start.
-  Matrix normal = Matrix::Zero();
-  Vector rhs = Vector::Zero();
-  double flow_scale = 0.0;
-  for (const FlowSample& s : samples) {
-    const Eigen::Matrix<double, 2, N> a = design<N>(s, foe);
+// The samples a fit explains and the FOE its design is taken about (see `design`).
+template <int N>
+struct RadialProblem {
+  std::span<const FlowSample> samples;
+  Eigen::Vector2d foe;
+
+  std::size_t size() const { return samples.size(); }
+  Eigen::Vector2d predicted(const Parameters<N>& p, std::size_t j) const {
+    return design<N>(samples[j], foe) * p;
+  }
+  double residual_norm(const Parameters<N>& p, std::size_t j) const {
+    return (samples[j].flow - predicted(p, j)).norm();
+  }
+};
+
+// The linear least-squares p, and the samples' mean flow magnitude in `flow_scale`. Empty when
+// p is not finite or all samples sit at one point, where the model is not identifiable.
+template <int N>
+std::optional<Parameters<N>> least_squares_start(const RadialProblem<N>& problem,
+                                                 double& flow_scale) {
+  const auto n = static_cast<double>(problem.size());
+  ParameterMatrix<N> normal = ParameterMatrix<N>::Zero();
+  Parameters<N> rhs = Parameters<N>::Zero();
+  flow_scale = 0.0;
+  for (const FlowSample& s : problem.samples) {
+    const Eigen::Matrix<double, 2, N> a = design<N>(s, problem.foe);
     normal.noalias() += a.transpose() * a;
     rhs.noalias() += a.transpose() * s.flow;
     flow_scale += s.flow.norm();
   }
   flow_scale /= n;
-  Vector p;
+  Parameters<N> p;
   if constexpr (N == 1) {
     p = rhs / normal(0, 0);
   } else {
@@ -158,102 +167,147 @@ std::optional<Eigen::Matrix<double, N, 1>> robust_radial_fit(std::span<const Flo
     spread -= (normal(0, 1) * normal(0, 1) + normal(0, 2) * normal(0, 2)) / n;
   }
   if (!p.allFinite() || spread <= 1e-12 * n) {
-    return std::nullopt;  // all samples at one point: the model is not identifiable
+    return std::nullopt;
   }
-  const auto predicted = [&](std::size_t j) -> Eigen::Vector2d {
-    return design<N>(samples[j], foe) * p;
-  };
-  const auto residual_norm = [&](std::size_t j) { return (samples[j].flow - predicted(j)).norm(); };
+  return p;
+}
 
-  // Flow noise grows with the flow (numerical flow errs in proportion to the displacement), so
-  // after the first round a residual is measured relative to the flow the model predicts
-  // there, floored near the FOE where that vanishes.
-  std::vector<double>& scale = buffers.scale;
-  std::vector<double>& norms = buffers.norms;
-  std::vector<double>& weights = buffers.weights;  // as the rounds leave them
-  std::vector<double>& scratch = buffers.sorted;
-  scale.assign(samples.size(), 1.0);
-  norms.resize(samples.size());
-  weights.assign(samples.size(), 1.0);
-  auto scaled_norms = [&] {
-    for (std::size_t j = 0; j < samples.size(); ++j) {
-      norms[j] = scale[j] * residual_norm(j);
+// Each sample's residual norm times its scale, into buffers.norms.
+template <int N>
+void scale_residual_norms(const RadialProblem<N>& problem, const Parameters<N>& p,
+                          RadialFitWorkspace::Buffers& buffers) {
+  for (std::size_t j = 0; j < problem.size(); ++j) {
+    buffers.norms[j] = buffers.scale[j] * problem.residual_norm(p, j);
+  }
+}
+
+// Flow noise grows with the flow (numerical flow errs in proportion to the displacement), so
+// after the first round a residual is measured relative to the flow the model predicts there,
+// floored near the FOE where that vanishes.
+template <int N>
+void scale_by_predicted_flow(const RadialProblem<N>& problem, const Parameters<N>& p,
+                             std::vector<double>& scale) {
+  const auto n = static_cast<double>(problem.size());
+  double mean = 0.0;
+  for (std::size_t j = 0; j < problem.size(); ++j) {
+    mean += problem.predicted(p, j).norm();
+  }
+  const double floor = 0.25 * mean / n + 1e-12;
+  for (std::size_t j = 0; j < problem.size(); ++j) {
+    scale[j] = 1.0 / (problem.predicted(p, j).norm() + floor);
+  }
+}
+
+template <int N>
+RadialSolver<N>& solver_for(RadialFitWorkspace::Buffers& buffers) {
+  if constexpr (N == 1) {
+    return buffers.solver_about;
+  } else {
+    return buffers.solver;
+  }
+}
+
+// Iteratively reweighted least squares from p, with σ the robust spread of the norms in
+// `buffers`: Cauchy rounds find the bulk of the inliers from any start; Tukey rounds then give
+// outliers no weight at all, which Cauchy's long tail still does. Each round is solved by Ceres'
+// TinySolver. Leaves the last round's weights, scales and norms in `buffers`; returns their σ.
+template <int N>
+double reweighted_rounds(const RadialProblem<N>& problem, const RadialFitOptions& options,
+                         RadialFitWorkspace::Buffers& buffers, double sigma, Parameters<N>& p,
+                         RadialFit& fit) {
+  RadialSolver<N>& solver = solver_for<N>(buffers);
+  solver.options.max_num_iterations = options.max_iterations;
+  const WeightedRadialResiduals<N> residuals{problem.samples, buffers.weights, problem.foe};
+  const int rounds = options.max_rounds + 2;
+  for (int round = 0; round < rounds; ++round) {
+    const Loss loss = round < options.max_rounds ? Loss::cauchy : Loss::tukey;
+    for (std::size_t j = 0; j < problem.size(); ++j) {
+      buffers.weights[j] = buffers.scale[j] * robust_weight(loss, buffers.norms[j], sigma);
     }
-  };
-  scaled_norms();
-  double sigma = robust_sigma(norms, scratch);
-  // Flow comes in float32: residuals below this are rounding, not noise.
-  const double exact = 1e-6 * flow_scale + 1e-12;
-
-  if (sigma > exact) {
-    // Iteratively reweighted least squares: Cauchy rounds find the bulk of the inliers from any
-    // start; Tukey rounds then give outliers no weight at all, which Cauchy's long tail still
-    // does. Each round is solved by Ceres' TinySolver.
-    RadialSolver<N>& solver = [&]() -> RadialSolver<N>& {
-      if constexpr (N == 1) {
-        return buffers.solver_about;
-      } else {
-        return buffers.solver;
-      }
-    }();
-    solver.options.max_num_iterations = options.max_iterations;
-    const WeightedRadialResiduals<N> residuals{samples, weights, foe};
-    const int rounds = options.max_rounds + 2;
-    for (int round = 0; round < rounds; ++round) {
-      const Loss loss = round < options.max_rounds ? Loss::cauchy : Loss::tukey;
-      for (std::size_t j = 0; j < samples.size(); ++j) {
-        weights[j] = scale[j] * robust_weight(loss, norms[j], sigma);
-      }
-      const Vector previous = p;
-      fit.quality.iterations += solver.Solve(residuals, &p).iterations;
-      if (round == 0) {
-        double mean = 0.0;
-        for (std::size_t j = 0; j < samples.size(); ++j) {
-          mean += predicted(j).norm();
-        }
-        const double floor = 0.25 * mean / n + 1e-12;
-        for (std::size_t j = 0; j < samples.size(); ++j) {
-          scale[j] = 1.0 / (predicted(j).norm() + floor);
-        }
-      }
-      scaled_norms();
-      sigma = robust_sigma(norms, scratch);
-      const bool settled = (p - previous).norm() <= 1e-6 * p.norm();
-      if (settled && round >= options.max_rounds) {
-        break;
-      }
-      if (settled && round > 0) {
-        round = options.max_rounds - 1;  // on to the Tukey rounds
-      }
+    const Parameters<N> previous = p;
+    fit.quality.iterations += solver.Solve(residuals, &p).iterations;
+    if (round == 0) {
+      scale_by_predicted_flow(problem, p, buffers.scale);
+    }
+    scale_residual_norms(problem, p, buffers);
+    sigma = robust_sigma(buffers.norms, buffers.sorted);
+    const bool settled = (p - previous).norm() <= 1e-6 * p.norm();
+    if (settled && round >= options.max_rounds) {
+      break;
+    }
+    if (settled && round > 0) {
+      round = options.max_rounds - 1;  // on to the Tukey rounds
     }
   }
+  return sigma;
+}
 
+// The fit's quality over the inliers of the last round, and the covariance of p by the sandwich
+// H⁻¹ M H⁻¹ over its weights: H the weighted information, M the spread of each sample's weighted
+// score. Unlike the residual variance times H⁻¹ it stays honest where the noise is not alike
+// over the region, or the model does not quite hold (a slanted surface without depth). Float
+// rounding (`exact`) sets its floor. Returns the covariance.
+template <int N>
+ParameterMatrix<N> assess_fit(const RadialProblem<N>& problem, const Parameters<N>& p,
+                              const RadialFitOptions& options,
+                              const RadialFitWorkspace::Buffers& buffers, double sigma,
+                              double exact, FitQuality& quality) {
   int inliers = 0;
   double sum_squares = 0.0;
-  // The covariance of p by the sandwich H⁻¹ M H⁻¹ over the last round's weights: H the
-  // weighted information, M the spread of each sample's weighted score. Unlike the residual
-  // variance times H⁻¹ it stays honest where the noise is not alike over the region, or the model
-  // does not quite hold (a slanted surface without depth). Float rounding sets its floor.
-  Matrix information = Matrix::Zero();
-  Matrix score_spread = Matrix::Zero();
-  for (std::size_t j = 0; j < samples.size(); ++j) {
-    const Eigen::Vector2d r = samples[j].flow - predicted(j);
+  ParameterMatrix<N> information = ParameterMatrix<N>::Zero();
+  ParameterMatrix<N> score_spread = ParameterMatrix<N>::Zero();
+  for (std::size_t j = 0; j < problem.size(); ++j) {
+    const Eigen::Vector2d r = problem.samples[j].flow - problem.predicted(p, j);
     const double e = r.norm();
-    if (norms[j] <= options.inlier_threshold * std::max(sigma, exact * scale[j])) {
+    if (buffers.norms[j] <= options.inlier_threshold * std::max(sigma, exact * buffers.scale[j])) {
       ++inliers;
       sum_squares += e * e;
     }
-    const Eigen::Matrix<double, 2, N> a = design<N>(samples[j], foe);
-    const double w2 = weights[j] * weights[j];
+    const Eigen::Matrix<double, 2, N> a = design<N>(problem.samples[j], problem.foe);
+    const double w2 = buffers.weights[j] * buffers.weights[j];
     information.noalias() += w2 * a.transpose() * a;
     const Eigen::Matrix2d spread2 = r * r.transpose() + exact * exact * Eigen::Matrix2d::Identity();
     score_spread.noalias() += (w2 * w2) * a.transpose() * spread2 * a;
   }
-  fit.quality.samples = static_cast<int>(samples.size());
-  fit.quality.inlier_fraction = inliers / n;
-  fit.quality.residual_rms = inliers > 0 ? std::sqrt(sum_squares / inliers) : 0.0;
-  const Matrix bread = information.inverse();
-  const Matrix covariance = bread * score_spread * bread;
+  quality.samples = static_cast<int>(problem.size());
+  quality.inlier_fraction = inliers / static_cast<double>(problem.size());
+  quality.residual_rms = inliers > 0 ? std::sqrt(sum_squares / inliers) : 0.0;
+  const ParameterMatrix<N> bread = information.inverse();
+  return bread * score_spread * bread;
+}
+
+// The robust fit shared by both forms of the model (see `design`): a least-squares start, then
+// iteratively reweighted rounds. Returns p; the fit's quality and the covariance of p go into
+// `fit`. Empty when the samples cannot identify p.
+template <int N>
+std::optional<Parameters<N>> robust_radial_fit(std::span<const FlowSample> samples,
+                                               const Eigen::Vector2d& foe,
+                                               const RadialFitOptions& options,
+                                               RadialFitWorkspace::Buffers& buffers,
+                                               RadialFit& fit) {
+  if (samples.size() < 3) {
+    return std::nullopt;
+  }
+  const RadialProblem<N> problem{samples, foe};
+  double flow_scale = 0.0;
+  const std::optional<Parameters<N>> start = least_squares_start(problem, flow_scale);
+  if (!start) {
+    return std::nullopt;
+  }
+  Parameters<N> p = *start;
+  // The first round measures residuals unscaled (see scale_by_predicted_flow).
+  buffers.scale.assign(samples.size(), 1.0);
+  buffers.norms.resize(samples.size());
+  buffers.weights.assign(samples.size(), 1.0);
+  scale_residual_norms(problem, p, buffers);
+  double sigma = robust_sigma(buffers.norms, buffers.sorted);
+  // Flow comes in float32: residuals below this are rounding, not noise.
+  const double exact = 1e-6 * flow_scale + 1e-12;
+  if (sigma > exact) {
+    sigma = reweighted_rounds(problem, options, buffers, sigma, p, fit);
+  }
+  const ParameterMatrix<N> covariance =
+      assess_fit(problem, p, options, buffers, sigma, exact, fit.quality);
   if constexpr (N == 3) {
     fit.parameters = p;
     fit.parameter_covariance = covariance;
@@ -415,6 +469,68 @@ struct FeatureExtractor::Accumulator {
   bool scales_by_depth(bool use_depth) const {
     return use_depth && depth_count == pixels && pixels > 0;
   }
+  // What scales a vector at depth Z to the region's mean depth, times Z; empty when the samples
+  // are not scaled by depth.
+  std::optional<double> inverse_mean_depth(bool use_depth) const {
+    if (!scales_by_depth(use_depth)) {
+      return std::nullopt;
+    }
+    return pixels / sum_depth;
+  }
+
+  // Adds one of the region's pixels: its position, its depth (NaN without one) and its flow.
+  // Returns whether the flow vector is valid.
+  bool add(double x, double y, float depth, const Eigen::Vector2f& flow) {
+    ++pixels;
+    sum_x += x;
+    sum_y += y;
+    min_x = std::min(min_x, x);
+    max_x = std::max(max_x, x);
+    const bool has_depth = std::isfinite(depth) && depth > 0.0F;
+    if (has_depth) {
+      ++depth_count;
+      sum_depth += depth;
+    }
+    if (!flow.allFinite()) {
+      ++invalid;
+      return false;
+    }
+    sum_u += flow.x();
+    sum_xu += x * flow.x();
+    if (has_depth) {  // the depth moments go with the flow moments: over valid vectors
+      const double inverse_depth = 1.0 / depth;
+      ++valid_depth_count;
+      sum_inv_depth += inverse_depth;
+      sum_x_inv_depth += x * inverse_depth;
+    }
+    return true;
+  }
+
+  // The region's size, extent, mean depth and flow moments into f: all but its fit.
+  void describe(const FlowField& field, ObjectFeatures& f) const {
+    f.pixel_count = pixels;
+    f.invalid_flow_count = invalid;
+    if (pixels == 0) {
+      return;
+    }
+    f.centre = Eigen::Vector2d(sum_x, sum_y) / pixels;
+    f.width = max_x - min_x + 1.0 / field.intrinsics().fx_px;
+    f.min_x = min_x;
+    f.max_x = max_x;
+    f.cut_left = min_x <= field.x(0);
+    f.cut_right = max_x >= field.x(field.width() - 1);
+    if (depth_count > 0) {
+      f.depth_m = sum_depth / depth_count;
+    }
+    if (valid() > 0) {
+      f.moments.mean_u = sum_u / valid();
+      f.moments.mean_xu = sum_xu / valid();
+      if (valid_depth_count == valid()) {
+        f.moments.mean_inv_depth = sum_inv_depth / valid();
+        f.moments.mean_x_inv_depth = sum_x_inv_depth / valid();
+      }
+    }
+  }
 };
 
 FeatureExtractor::FeatureExtractor(const FeatureOptions& options)
@@ -449,11 +565,10 @@ FeatureExtractor::FeatureExtractor(FeatureExtractor&&) noexcept = default;
 FeatureExtractor& FeatureExtractor::operator=(FeatureExtractor&&) noexcept = default;
 
 namespace {
-constexpr double kMinTtc_s = 1e-3;
-}  // namespace
 
-std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field,
-                                                          const Segmentation& segmentation) {
+constexpr double kMinTtc_s = 1e-3;
+
+void check_sizes_match(const FlowField& field, const Segmentation& segmentation) {
   if (segmentation.width != field.width() || segmentation.height != field.height() ||
       segmentation.labels.size() != field.size()) {
     throw std::invalid_argument(
@@ -461,25 +576,18 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
         std::to_string(segmentation.height) + " but the flow field is " +
         std::to_string(field.width()) + "x" + std::to_string(field.height()));
   }
-  const auto regions = static_cast<std::size_t>(segmentation.region_count());
-  accumulators_.assign(regions, Accumulator{});
-  if (region_pixels_.size() < regions) {
-    region_pixels_.resize(regions);
-  }
-  for (std::size_t r = 0; r < regions; ++r) {
-    region_pixels_[r].clear();
-  }
-  const auto flow = field.flow();
-  const auto depth = field.depth();
-  const auto& labels = segmentation.labels;
+}
 
-  // Most pixels belong to no region: blocks of them are skipped with one AND over their labels
-  // (kNoRegion is all bits set), which the compiler vectorises.
+// Calls visit(i, col, row, label) for every pixel in a region, in raster order. Most pixels
+// belong to no region: blocks of them are skipped with one AND over their labels (kNoRegion is
+// all bits set), which the compiler vectorises.
+template <typename Visit>
+void for_each_region_pixel(const FlowField& field, const Segmentation& segmentation,
+                           Visit&& visit) {
   static_assert(Segmentation::kNoRegion == -1);
   constexpr int kBlock = 16;
   for (int row = 0; row < field.height(); ++row) {
-    const double y = field.y(row);
-    const std::int32_t* row_labels = labels.data() + field.index(0, row);
+    const std::int32_t* row_labels = segmentation.labels.data() + field.index(0, row);
     for (int col = 0; col < field.width(); ++col) {
       if (col % kBlock == 0) {
         const int end = std::min(col + kBlock, field.width());
@@ -492,71 +600,137 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
           continue;
         }
       }
-      const std::size_t i = field.index(col, row);
       const std::int32_t label = row_labels[col];
-      if (label < 0) {
-        continue;
+      if (label >= 0) {
+        visit(field.index(col, row), col, row, label);
       }
-      Accumulator& a = accumulators_[static_cast<std::size_t>(label)];
-      const double x = field.x(col);
-      ++a.pixels;
-      a.sum_x += x;
-      a.sum_y += y;
-      a.min_x = std::min(a.min_x, x);
-      a.max_x = std::max(a.max_x, x);
-      const bool has_depth = !depth.empty() && std::isfinite(depth[i]) && depth[i] > 0.0F;
-      if (has_depth) {
-        ++a.depth_count;
-        a.sum_depth += depth[i];
-      }
-      if (!flow[i].allFinite()) {
-        ++a.invalid;
-        continue;
-      }
-      a.sum_u += flow[i].x();
-      a.sum_xu += x * flow[i].x();
-      if (has_depth) {  // the depth moments go with the flow moments: over valid vectors
-        const double inverse_depth = 1.0 / depth[i];
-        ++a.valid_depth_count;
-        a.sum_inv_depth += inverse_depth;
-        a.sum_x_inv_depth += x * inverse_depth;
-      }
-      region_pixels_[static_cast<std::size_t>(label)].push_back(static_cast<std::uint32_t>(i));
     }
   }
+}
+
+// Of `valid` vectors, a fit takes `take`, one every `stride`: at most max_samples, evenly spread.
+struct SampleStride {
+  int take = 0;
+  int stride = 1;
+};
+
+SampleStride sample_stride(int valid, int max_samples) {
+  const int stride = (valid + max_samples - 1) / max_samples;
+  return {(valid + stride - 1) / stride, stride};
+}
+
+// Fills `out` with every stride-th of a region's valid pixels as fit samples. With a depth for
+// every pixel, each vector is scaled to the region's mean depth: across a slanted or curved
+// surface τ_j = −Z_j / v_z varies, and u_j Z_j / Z̄ = (x_j − f) / τ̄ holds exactly where the
+// shared-τ model of CGF §5 holds only for a surface facing the camera.
+void take_samples(const FlowField& field, std::span<const std::uint32_t> pixels, int stride,
+                  std::optional<double> inverse_mean_depth, std::span<FlowSample> out) {
+  const auto flow = field.flow();
+  const auto depth = field.depth();
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const std::uint32_t i = pixels[k * static_cast<std::size_t>(stride)];
+    const auto col = static_cast<int>(i % static_cast<std::uint32_t>(field.width()));
+    const auto row = static_cast<int>(i / static_cast<std::uint32_t>(field.width()));
+    const double scale = inverse_mean_depth ? depth[i] * *inverse_mean_depth : 1.0;
+    out[k] = {{field.x(col), field.y(row)}, scale * flow[i].cast<double>()};
+  }
+}
+
+// Whether a static plane explains the samples' flow about as well as the radial model does
+// (FeatureOptions::static_surface_rss_ratio). Not for samples scaled by depth: those have the
+// static FOE's radial flow exactly on any surface, which the hypothesis test sees.
+bool looks_like_static_surface(std::span<const FlowSample> samples, bool scaled_by_depth,
+                               const FeatureOptions& options) {
+  if (!(options.static_surface_rss_ratio > 0.0) || scaled_by_depth) {
+    return false;
+  }
+  const SurfaceResiduals residuals = static_surface_residuals(samples, *options.static_foe);
+  return residuals.static_plane <= options.static_surface_rss_ratio * residuals.radial;
+}
+
+// A region's radial fit. With a static FOE given, the fit is redone about it when the free fit
+// agrees with it (its covariance widened for the valid vectors' correlated errors) or the
+// flow looks like a static surface.
+RadialFit fit_region(std::span<const FlowSample> samples, int valid, bool scaled_by_depth,
+                     const FeatureOptions& options, RadialFitWorkspace& workspace) {
+  RadialFit fit = fit_radial_flow(samples, options.fit, workspace);
+  if (!options.static_foe) {
+    return fit;
+  }
+  const double area_px = options.flow_noise_correlation_px * options.flow_noise_correlation_px;
+  const double independent =
+      std::min<double>(static_cast<double>(samples.size()), static_cast<double>(valid) / area_px);
+  const double covariance_scale = static_cast<double>(samples.size()) / std::max(independent, 1.0);
+  if (foe_hypothesis_statistic(fit, *options.static_foe, covariance_scale) <=
+          options.static_foe_chi2 ||
+      looks_like_static_surface(samples, scaled_by_depth, options)) {
+    fit = fit_radial_flow_about(samples, *options.static_foe, options.fit, workspace);
+    fit.quality.static_foe = true;
+  }
+  return fit;
+}
+
+// The fit's motion into f, for flow measured over `interval_s`.
+void set_motion_features(ObjectFeatures& f, const RadialFit& fit,
+                         std::span<const FlowSample> samples, double interval_s) {
+  f.status = fit.status;
+  f.foe = fit.foe;
+  // Displacement flow over an interval Δ fits τ + Δ (flow_field.hpp); the FOE is unchanged.
+  f.ttc_s = fit.ttc_s - interval_s;
+  if (fit.status == MotionStatus::approaching) {
+    // A τ within the interval means contact is imminent; it stays positive, as approaching.
+    f.ttc_s = std::max(f.ttc_s, kMinTtc_s);
+  }
+  f.fit = fit.quality;
+  if (fit.status == MotionStatus::approaching || fit.status == MotionStatus::receding) {
+    f.ttc_eq5_s = ttc_from_foe(samples, fit.foe, fit.ttc_s) - interval_s;
+    if (fit.status == MotionStatus::approaching)
+      f.ttc_eq5_s = std::max(f.ttc_eq5_s, kMinTtc_s);
+  }
+}
+
+}  // namespace
+
+std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field,
+                                                          const Segmentation& segmentation) {
+  check_sizes_match(field, segmentation);
+  const auto regions = static_cast<std::size_t>(segmentation.region_count());
+  accumulators_.assign(regions, Accumulator{});
+  if (region_pixels_.size() < regions) {
+    region_pixels_.resize(regions);
+  }
+  for (std::size_t r = 0; r < regions; ++r) {
+    region_pixels_[r].clear();
+  }
+  const auto flow = field.flow();
+  const auto depth = field.depth();
+  for_each_region_pixel(
+      field, segmentation, [&](std::size_t i, int col, int row, std::int32_t label) {
+        const float z = depth.empty() ? std::numeric_limits<float>::quiet_NaN() : depth[i];
+        const auto r = static_cast<std::size_t>(label);
+        if (accumulators_[r].add(field.x(col), field.y(row), z, flow[i])) {
+          region_pixels_[r].push_back(static_cast<std::uint32_t>(i));
+        }
+      });
 
   // Every region with enough valid vectors gets up to max_fit_samples of them, taken at an even
   // stride from its pixels in raster order.
   sample_offsets_.assign(regions + 1, 0);
   for (std::size_t r = 0; r < regions; ++r) {
-    const auto& pixels = region_pixels_[r];
-    const int valid = static_cast<int>(pixels.size());
-    int take = 0;
-    int stride = 1;
+    const int valid = static_cast<int>(region_pixels_[r].size());
+    SampleStride s;
     if (segmentation.kinds[r] == RegionKind::visible && valid >= options_.min_pixels) {
-      stride = (valid + options_.max_fit_samples - 1) / options_.max_fit_samples;
-      take = (valid + stride - 1) / stride;
+      s = sample_stride(valid, options_.max_fit_samples);
     }
-    sample_offsets_[r + 1] = sample_offsets_[r] + take;
+    sample_offsets_[r + 1] = sample_offsets_[r] + s.take;
     samples_.resize(static_cast<std::size_t>(sample_offsets_[r + 1]));
-    // With a depth for every pixel, each vector is scaled to the region's mean depth: across a
-    // slanted or curved surface τ_j = −Z_j / v_z varies, and u_j Z_j / Z̄ = (x_j − f) / τ̄ holds
-    // exactly where the shared-τ model of CGF §5 holds only for a surface facing the camera.
-    const Accumulator& a = accumulators_[r];
-    const bool scale_by_depth = a.scales_by_depth(options_.use_depth);
-    const double inverse_mean_depth = scale_by_depth ? a.pixels / a.sum_depth : 0.0;
-    for (int k = 0; k < take; ++k) {
-      const std::uint32_t i = pixels[static_cast<std::size_t>(k * stride)];
-      const auto col = static_cast<int>(i % static_cast<std::uint32_t>(field.width()));
-      const auto row = static_cast<int>(i / static_cast<std::uint32_t>(field.width()));
-      const double scale = scale_by_depth ? depth[i] * inverse_mean_depth : 1.0;
-      samples_[static_cast<std::size_t>(sample_offsets_[r] + k)] = {{field.x(col), field.y(row)},
-                                                                    scale * flow[i].cast<double>()};
-    }
+    take_samples(field, region_pixels_[r], s.stride,
+                 accumulators_[r].inverse_mean_depth(options_.use_depth),
+                 std::span(samples_).subspan(static_cast<std::size_t>(sample_offsets_[r]),
+                                             static_cast<std::size_t>(s.take)));
   }
 
   features_.resize(regions);
-  const double pixel_width = 1.0 / field.intrinsics().fx_px;
   for (std::size_t r = 0; r < regions; ++r) {
     const Accumulator& a = accumulators_[r];
     ObjectFeatures& f = features_[r];
@@ -564,73 +738,17 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     f.label = static_cast<int>(r);
     f.source_id = segmentation.source_ids[r];
     f.kind = segmentation.kinds[r];
-    f.pixel_count = a.pixels;
-    f.invalid_flow_count = a.invalid;
-    if (a.pixels == 0) {
-      continue;
-    }
-    f.centre = Eigen::Vector2d(a.sum_x, a.sum_y) / a.pixels;
-    f.width = a.max_x - a.min_x + pixel_width;
-    f.min_x = a.min_x;
-    f.max_x = a.max_x;
-    f.cut_left = a.min_x <= field.x(0);
-    f.cut_right = a.max_x >= field.x(field.width() - 1);
-    if (a.depth_count > 0) {
-      f.depth_m = a.sum_depth / a.depth_count;
-    }
-    if (a.valid() > 0) {
-      f.moments.mean_u = a.sum_u / a.valid();
-      f.moments.mean_xu = a.sum_xu / a.valid();
-      if (a.valid_depth_count == a.valid()) {
-        f.moments.mean_inv_depth = a.sum_inv_depth / a.valid();
-        f.moments.mean_x_inv_depth = a.sum_x_inv_depth / a.valid();
-      }
-    }
+    a.describe(field, f);
     const std::span<const FlowSample> region_samples(
         samples_.data() + sample_offsets_[r],
         static_cast<std::size_t>(sample_offsets_[r + 1] - sample_offsets_[r]));
     if (region_samples.empty()) {
-      continue;
+      continue;  // not fitted: too few valid vectors, or not a visible region
     }
-    RadialFit fit = fit_radial_flow(region_samples, options_.fit, *fit_workspace_);
-    if (options_.static_foe) {
-      const double area_px =
-          options_.flow_noise_correlation_px * options_.flow_noise_correlation_px;
-      const double independent = std::min<double>(static_cast<double>(region_samples.size()),
-                                                  static_cast<double>(a.valid()) / area_px);
-      const double covariance_scale =
-          static_cast<double>(region_samples.size()) / std::max(independent, 1.0);
-      // Samples scaled by depth have the static FOE's radial flow exactly on any surface.
-      const auto looks_like_static_surface = [&] {
-        if (!(options_.static_surface_rss_ratio > 0.0) || a.scales_by_depth(options_.use_depth)) {
-          return false;
-        }
-        const SurfaceResiduals residuals =
-            static_surface_residuals(region_samples, *options_.static_foe);
-        return residuals.static_plane <= options_.static_surface_rss_ratio * residuals.radial;
-      };
-      if (foe_hypothesis_statistic(fit, *options_.static_foe, covariance_scale) <=
-              options_.static_foe_chi2 ||
-          looks_like_static_surface()) {
-        fit = fit_radial_flow_about(region_samples, *options_.static_foe, options_.fit,
-                                    *fit_workspace_);
-        fit.quality.static_foe = true;
-      }
-    }
-    f.status = fit.status;
-    f.foe = fit.foe;
-    // Displacement flow over an interval Δ fits τ + Δ (flow_field.hpp); the FOE is unchanged.
-    f.ttc_s = fit.ttc_s - field.interval_s();
-    if (fit.status == MotionStatus::approaching) {
-      // A τ within the interval means contact is imminent; it stays positive, as approaching.
-      f.ttc_s = std::max(f.ttc_s, kMinTtc_s);
-    }
-    f.fit = fit.quality;
-    if (fit.status == MotionStatus::approaching || fit.status == MotionStatus::receding) {
-      f.ttc_eq5_s = ttc_from_foe(region_samples, fit.foe, fit.ttc_s) - field.interval_s();
-      if (fit.status == MotionStatus::approaching)
-        f.ttc_eq5_s = std::max(f.ttc_eq5_s, kMinTtc_s);
-    }
+    const RadialFit fit =
+        fit_region(region_samples, a.valid(), a.scales_by_depth(options_.use_depth), options_,
+                   *fit_workspace_);
+    set_motion_features(f, fit, region_samples, field.interval_s());
   }
   return features_;
 }

@@ -219,11 +219,152 @@ class RunCounter {
   std::int32_t run_ = 0;
 };
 
+// Whether pixel i's flow is one to segment: not excluded, and finite.
+bool has_flow(std::span<const Eigen::Vector2f> flow, std::span<const std::uint8_t> excluded,
+              std::size_t i) {
+  return (excluded.empty() || excluded[i] == 0) && flow[i].allFinite();
+}
+
+// The fast method segments the features at the nearest pixels of a grid of at most
+// fast_max_side_px per side; k and the smallest region scale with pixel area so that it finds
+// the same regions, coarser.
+cv::Size graph_size(SegmentationMethod method, const FlowSegmentationOptions& options, int width,
+                    int height) {
+  if (method != SegmentationMethod::flow_graph_fast ||
+      std::max(width, height) <= options.fast_max_side_px) {
+    return {width, height};
+  }
+  const double scale = static_cast<double>(options.fast_max_side_px) / std::max(width, height);
+  return {std::max(1, static_cast<int>(std::lround(width * scale))),
+          std::max(1, static_cast<int>(std::lround(height * scale)))};
+}
+
+// Graph features at the nearest pixel of each graph pixel: flow in pixels per reference
+// interval, and a validity channel.
+void fill_graph_features(const FlowField& derotated, std::span<const std::uint8_t> excluded,
+                         double reference_interval_s, cv::Size size, cv::Mat& features) {
+  const auto to_px_x = static_cast<float>(derotated.intrinsics().fx_px * reference_interval_s);
+  const auto to_px_y = static_cast<float>(derotated.intrinsics().fy_px * reference_interval_s);
+  const auto flow = derotated.flow();
+  features.create(size, CV_32FC3);
+  for (int row = 0; row < size.height; ++row) {
+    auto* f = features.ptr<cv::Vec3f>(row);
+    const int source_row = row * derotated.height() / size.height;
+    for (int col = 0; col < size.width; ++col) {
+      const std::size_t i = derotated.index(col * derotated.width() / size.width, source_row);
+      f[col] = has_flow(flow, excluded, i)
+                   ? cv::Vec3f(flow[i].x() * to_px_x, flow[i].y() * to_px_y, 0.0F)
+                   : cv::Vec3f(0.0F, 0.0F, kInvalidMark);
+    }
+  }
+}
+
+// The merge test never joins pixels with and without flow (kInvalidMark, which excluded pixels
+// get too), but the merge of small segments does: an island of flow under min_region_px joins
+// the pixels without flow around it. Such islands (a striped agent's stripes fail the texture
+// test between them) are scattered over the image and would add up to one region whose fit
+// mixes every motion in view. A segment is kept only when most of its graph pixels have flow:
+// `balance` gets, per segment, its graph pixels with flow less those without.
+void count_flow_balance(const cv::Mat& labels, const cv::Mat& features, std::size_t segments,
+                        std::vector<std::int32_t>& balance) {
+  balance.assign(segments, 0);
+  for (int row = 0; row < labels.rows; ++row) {
+    const auto* label = labels.ptr<std::int32_t>(row);
+    const auto* f = features.ptr<cv::Vec3f>(row);
+    for (int col = 0; col < labels.cols; ++col) {
+      balance[static_cast<std::size_t>(label[col])] += f[col][2] == 0.0F ? 1 : -1;
+    }
+  }
+}
+
+// Labels at full resolution (nearest graph pixel), kept only for pixels with flow, into `labels`.
+// Counts go one slot up into `counts`, slot 0 counting the pixels without a label, so that no
+// pixel takes a branch. `graph_cols` is scratch.
+void label_full_resolution(const FlowField& derotated, std::span<const std::uint8_t> excluded,
+                           const cv::Mat& graph_labels, std::vector<int>& graph_cols,
+                           std::vector<std::int32_t>& labels, std::vector<std::int32_t>& counts) {
+  const int width = derotated.width();
+  const int height = derotated.height();
+  const auto flow = derotated.flow();
+  graph_cols.resize(static_cast<std::size_t>(width));
+  const double col_scale = static_cast<double>(graph_labels.cols) / width;
+  const double row_scale = static_cast<double>(graph_labels.rows) / height;
+  for (int col = 0; col < width; ++col) {
+    graph_cols[static_cast<std::size_t>(col)] =
+        std::min(graph_labels.cols - 1, static_cast<int>(col * col_scale));
+  }
+  RunCounter count(counts);
+  for (int row = 0; row < height; ++row) {
+    const auto* g = graph_labels.ptr<std::int32_t>(
+        std::min(graph_labels.rows - 1, static_cast<int>(row * row_scale)));
+    for (int col = 0; col < width; ++col) {
+      const std::size_t i = derotated.index(col, row);
+      const std::int32_t segment = has_flow(flow, excluded, i)
+                                       ? g[graph_cols[static_cast<std::size_t>(col)]]
+                                       : Segmentation::kNoRegion;
+      labels[i] = segment;
+      count.add(static_cast<std::size_t>(segment + 1));
+    }
+  }
+  count.flush();
+}
+
+// Numbers the segments kept (enough pixels with flow, most of its graph pixels with flow) as
+// regions 0..n-1: region_of_label is indexed one up, like `counts`; region_sizes gets each
+// region's pixels.
+void compact_regions(std::span<const std::int32_t> counts, std::span<const std::int32_t> balance,
+                     std::int32_t min_px, std::vector<std::int32_t>& region_of_label,
+                     std::vector<std::int32_t>& region_sizes) {
+  const std::size_t segments = balance.size();
+  region_of_label.assign(segments + 1, Segmentation::kNoRegion);
+  region_sizes.clear();
+  for (std::size_t s = 1; s <= segments; ++s) {
+    if (counts[s] > 0 && counts[s] >= min_px && balance[s - 1] > 0) {
+      region_of_label[s] = static_cast<std::int32_t>(region_sizes.size());
+      region_sizes.push_back(counts[s]);
+    }
+  }
+}
+
+// Turns each pixel's segment in `labels` into its region, and counts in the same pass the pixels
+// each region shares with each of the previous frame's `previous` regions (when that frame had as
+// many pixels), one row and column up in `overlaps`.
+void relabel_and_count_overlaps(std::span<const std::int32_t> region_of_label, std::size_t regions,
+                                std::span<const std::int32_t> previous_labels, std::size_t previous,
+                                std::vector<std::int32_t>& labels,
+                                std::vector<std::int32_t>& overlaps) {
+  const bool comparable = previous_labels.size() == labels.size();
+  overlaps.assign((regions + 1) * (previous + 1), 0);
+  RunCounter overlap(overlaps);
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const std::int32_t region = region_of_label[static_cast<std::size_t>(labels[i] + 1)];
+    labels[i] = region;
+    if (comparable) {
+      overlap.add(static_cast<std::size_t>(region + 1) * (previous + 1) +
+                  static_cast<std::size_t>(previous_labels[i] + 1));
+    }
+  }
+  overlap.flush();
+}
+
 }  // namespace
 
 struct FlowSegmenter::Graph {
   cv::Ptr<cv::ximgproc::segmentation::GraphSegmentation> opencv;  // flow_graph
   GridSegmentation own;                                           // flow_graph_fast
+
+  // Writes each pixel's segment to `labels` (CV_32S) and returns how many.
+  std::size_t segment(const cv::Mat& features, float k, int min_size, cv::Mat& labels) {
+    if (opencv) {
+      opencv->setK(k);
+      opencv->setMinSize(min_size);
+      opencv->processImage(features, labels);
+      double max_label = 0.0;
+      cv::minMaxLoc(labels, nullptr, &max_label);
+      return static_cast<std::size_t>(max_label) + 1;
+    }
+    return static_cast<std::size_t>(own.segment(features, k, min_size, labels));
+  }
 };
 
 FlowSegmenter::FlowSegmenter(SegmentationMethod method, const FlowSegmentationOptions& options)
@@ -248,131 +389,33 @@ FlowSegmenter& FlowSegmenter::operator=(FlowSegmenter&&) noexcept = default;
 
 void FlowSegmenter::segment(const FlowField& derotated, std::span<const std::uint8_t> excluded,
                             Segmentation& out) {
-  const int width = derotated.width();
-  const int height = derotated.height();
   const std::size_t pixels = derotated.size();
   if (!excluded.empty() && excluded.size() != pixels) {
     throw std::invalid_argument("FlowSegmenter: exclusion mask has " +
                                 std::to_string(excluded.size()) + " pixels, expected " +
                                 std::to_string(pixels));
   }
-
-  // Graph features: flow in pixels per reference interval, and a validity channel.
-  const auto to_px_x =
-      static_cast<float>(derotated.intrinsics().fx_px * options_.reference_interval_s);
-  const auto to_px_y =
-      static_cast<float>(derotated.intrinsics().fy_px * options_.reference_interval_s);
-  const auto flow = derotated.flow();
-  const auto valid = [&](std::size_t i) {
-    return (excluded.empty() || excluded[i] == 0) && flow[i].allFinite();
-  };
-  const auto feature = [&](std::size_t i) {
-    return valid(i) ? cv::Vec3f(flow[i].x() * to_px_x, flow[i].y() * to_px_y, 0.0F)
-                    : cv::Vec3f(0.0F, 0.0F, kInvalidMark);
-  };
-
-  // The fast method segments the features at the nearest pixels of a grid of at most
-  // fast_max_side_px per side; k and the smallest region scale with pixel area so that it finds
-  // the same regions, coarser.
-  cv::Size graph_size(width, height);
-  if (method_ == SegmentationMethod::flow_graph_fast &&
-      std::max(width, height) > options_.fast_max_side_px) {
-    const double scale = static_cast<double>(options_.fast_max_side_px) / std::max(width, height);
-    graph_size = {std::max(1, static_cast<int>(std::lround(width * scale))),
-                  std::max(1, static_cast<int>(std::lround(height * scale)))};
-  }
-  features_.create(graph_size, CV_32FC3);
-  for (int row = 0; row < graph_size.height; ++row) {
-    auto* f = features_.ptr<cv::Vec3f>(row);
-    const int source_row = row * height / graph_size.height;
-    for (int col = 0; col < graph_size.width; ++col) {
-      f[col] = feature(derotated.index(col * width / graph_size.width, source_row));
-    }
-  }
+  fill_graph_features(derotated, excluded, options_.reference_interval_s,
+                      graph_size(method_, options_, derotated.width(), derotated.height()),
+                      features_);
   const double area_scale = static_cast<double>(features_.total()) / pixels;
   const int min_region_px =
       std::max(1, static_cast<int>(options_.min_region_fraction * features_.total()));
   const auto k = static_cast<float>(options_.k * area_scale);
-  std::size_t segments = 0;
-  if (graph_->opencv) {
-    graph_->opencv->setK(k);
-    graph_->opencv->setMinSize(min_region_px);
-    graph_->opencv->processImage(features_, graph_labels_);
-    double max_label = 0.0;
-    cv::minMaxLoc(graph_labels_, nullptr, &max_label);
-    segments = static_cast<std::size_t>(max_label) + 1;
-  } else {
-    segments =
-        static_cast<std::size_t>(graph_->own.segment(features_, k, min_region_px, graph_labels_));
-  }
-  // The merge test never joins pixels with and without flow (kInvalidMark, which excluded pixels
-  // get too), but the merge of small segments does: an island of flow under min_region_px joins
-  // the pixels without flow around it. Such islands (a striped agent's stripes fail the texture
-  // test between them) are scattered over the image and would add up to one region whose fit
-  // mixes every motion in view. A segment is kept only when most of its graph pixels have flow.
-  flow_balance_.assign(segments, 0);
-  for (int row = 0; row < graph_labels_.rows; ++row) {
-    const auto* label = graph_labels_.ptr<std::int32_t>(row);
-    const auto* f = features_.ptr<cv::Vec3f>(row);
-    for (int col = 0; col < graph_labels_.cols; ++col) {
-      flow_balance_[static_cast<std::size_t>(label[col])] += f[col][2] == 0.0F ? 1 : -1;
-    }
-  }
+  const std::size_t segments = graph_->segment(features_, k, min_region_px, graph_labels_);
+  count_flow_balance(graph_labels_, features_, segments, flow_balance_);
 
-  // Labels at full resolution (nearest graph pixel), kept only for valid pixels. Counts sit one
-  // slot up, slot 0 counting the pixels without a label, so that no pixel takes a branch.
-  out.width = width;
-  out.height = height;
+  out.width = derotated.width();
+  out.height = derotated.height();
   out.labels.resize(pixels);
   valid_counts_.assign(segments + 1, 0);
-  graph_cols_.resize(static_cast<std::size_t>(width));
-  const double col_scale = static_cast<double>(graph_labels_.cols) / width;
-  const double row_scale = static_cast<double>(graph_labels_.rows) / height;
-  for (int col = 0; col < width; ++col) {
-    graph_cols_[static_cast<std::size_t>(col)] =
-        std::min(graph_labels_.cols - 1, static_cast<int>(col * col_scale));
-  }
-  RunCounter valid_count(valid_counts_);
-  for (int row = 0; row < height; ++row) {
-    const auto* g = graph_labels_.ptr<std::int32_t>(
-        std::min(graph_labels_.rows - 1, static_cast<int>(row * row_scale)));
-    for (int col = 0; col < width; ++col) {
-      const std::size_t i = derotated.index(col, row);
-      const std::int32_t segment =
-          valid(i) ? g[graph_cols_[static_cast<std::size_t>(col)]] : Segmentation::kNoRegion;
-      out.labels[i] = segment;
-      valid_count.add(static_cast<std::size_t>(segment + 1));
-    }
-  }
-  valid_count.flush();
-
-  // Compact the segments with enough valid pixels into regions 0..n-1 (region_of_label_ is
-  // indexed one up too).
-  const auto min_full_px = static_cast<std::int32_t>(options_.min_region_fraction * pixels);
-  region_of_label_.assign(segments + 1, Segmentation::kNoRegion);
-  region_sizes_.clear();
-  for (std::size_t s = 1; s <= segments; ++s) {
-    if (valid_counts_[s] > 0 && valid_counts_[s] >= min_full_px && flow_balance_[s - 1] > 0) {
-      region_of_label_[s] = static_cast<std::int32_t>(region_sizes_.size());
-      region_sizes_.push_back(valid_counts_[s]);
-    }
-  }
-  const std::size_t regions = region_sizes_.size();
-  // Overlaps with the previous frame's regions, counted in the same pass, one row and column up.
-  const std::size_t previous = previous_ids_.size();
-  const bool comparable = previous_labels_.size() == pixels;
-  overlaps_.assign((regions + 1) * (previous + 1), 0);
-  RunCounter overlap(overlaps_);
-  for (std::size_t i = 0; i < pixels; ++i) {
-    const std::int32_t region = region_of_label_[static_cast<std::size_t>(out.labels[i] + 1)];
-    out.labels[i] = region;
-    if (comparable) {
-      overlap.add(static_cast<std::size_t>(region + 1) * (previous + 1) +
-                  static_cast<std::size_t>(previous_labels_[i] + 1));
-    }
-  }
-  overlap.flush();
-  out.kinds.assign(regions, RegionKind::visible);
+  label_full_resolution(derotated, excluded, graph_labels_, graph_cols_, out.labels, valid_counts_);
+  compact_regions(valid_counts_, flow_balance_,
+                  static_cast<std::int32_t>(options_.min_region_fraction * pixels),
+                  region_of_label_, region_sizes_);
+  relabel_and_count_overlaps(region_of_label_, region_sizes_.size(), previous_labels_,
+                             previous_ids_.size(), out.labels, overlaps_);
+  out.kinds.assign(region_sizes_.size(), RegionKind::visible);
   assign_track_ids(out);
 }
 
