@@ -14,6 +14,9 @@ namespace {
 const cv::Scalar kFoeColor(255, 120, 0);
 const cv::Scalar kCentreColor(0, 140, 255);
 const cv::Scalar kGoalColor(200, 80, 255);
+constexpr int kCaptionFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr double kCaptionScale = 0.55;
+constexpr int kCaptionMargin = 8;  // px, left of the top view's caption and at least as much right
 
 cv::Scalar agent_color(std::size_t i) {
   static const cv::Scalar palette[] = {{200, 60, 30},  {40, 160, 40},  {30, 60, 220},
@@ -134,12 +137,19 @@ cv::Mat draw_topview(const sim_camera::World& world,
   const Eigen::Vector2d lo = bounds.min() - margin;
   const Eigen::Vector2d extent = bounds.max() + margin - lo;
   const double scale = 900.0 / std::max(extent.x(), extent.y());
-  const cv::Size size(static_cast<int>(extent.x() * scale),
+  char caption[160];
+  std::snprintf(caption, sizeof caption, "%s  t = %.1f s  collisions: %zu  (1 m = %.0f px)",
+                spec.name.c_str(), world.time_s(), collisions.size(), scale);
+  const int caption_width = cv::getTextSize(caption, kCaptionFont, kCaptionScale, 1, nullptr).width;
+  // A narrow world (a corridor) is centred in an image wide enough for the caption.
+  const int world_width = static_cast<int>(extent.x() * scale);
+  const cv::Size size(std::max(world_width, caption_width + 2 * kCaptionMargin),
                       static_cast<int>(extent.y() * scale) + 30);
+  const int left = (size.width - world_width) / 2;
   cv::Mat image(size, CV_8UC3, cv::Scalar(250, 250, 250));
   // World y points up in the picture.
   auto px = [&](const Eigen::Vector2d& p) {
-    return cv::Point(static_cast<int>((p.x() - lo.x()) * scale),
+    return cv::Point(left + static_cast<int>((p.x() - lo.x()) * scale),
                      static_cast<int>(size.height - 30 - (p.y() - lo.y()) * scale));
   };
   auto draw_solid = [&](const sim_camera::Solid& s, const cv::Scalar& color, int thickness) {
@@ -188,10 +198,7 @@ cv::Mat draw_topview(const sim_camera::World& world,
   for (const auto& c : collisions) {
     cv::drawMarker(image, px(c.position_m), cv::Scalar(0, 0, 255), cv::MARKER_TILTED_CROSS, 18, 3);
   }
-  char caption[160];
-  std::snprintf(caption, sizeof caption, "%s  t = %.1f s  collisions: %zu  (1 m = %.0f px)",
-                spec.name.c_str(), world.time_s(), collisions.size(), scale);
-  cv::putText(image, caption, {8, size.height - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.55,
+  cv::putText(image, caption, {kCaptionMargin, size.height - 10}, kCaptionFont, kCaptionScale,
               cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
   return image;
 }

@@ -1,6 +1,7 @@
 #include "flowsteer/eval/simulation.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -11,9 +12,9 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "flowsteer/eval/simulated_agent.hpp"
 #include "flowsteer/eval/output_files.hpp"
 #include "flowsteer/eval/overlay.hpp"
+#include "flowsteer/eval/simulated_agent.hpp"
 
 namespace flowsteer::eval {
 
@@ -57,6 +58,91 @@ class Progress {
   int next_percent_ = 0;
 };
 
+// The cost terms of every agent step, for costs.csv: one column per term name, in the order the
+// names first appear. Rows and cells are stored flat and reserved up front. An agent's terms come
+// in the same order every step, so each (agent, term index) keeps its column and the names are
+// searched only when that column's name differs.
+class CostLog {
+ public:
+  CostLog(std::size_t agents, std::size_t steps) : columns_(agents) {
+    rows_.reserve(agents * steps);
+  }
+
+  void add(double t, std::size_t agent, const servo::ControlOutput& output) {
+    if (cells_.capacity() == 0) {
+      cells_.reserve(rows_.capacity() * output.terms.size());
+    }
+    rows_.push_back({t, agent, output.cost, cells_.size()});
+    for (std::size_t k = 0; k < output.terms.size(); ++k) {
+      const servo::TermEvaluation& term = output.terms[k];
+      cells_.push_back({column(agent, k, term.name), term.gradient.cost});
+    }
+  }
+
+  // t, agent, the terms (empty where an agent's controller has no such term), total.
+  CsvTable table() const {
+    std::vector<std::string> header = {"t", "agent"};
+    header.insert(header.end(), names_.begin(), names_.end());
+    header.push_back("total");
+    CsvTable csv(std::move(header));
+    for (std::size_t r = 0; r < rows_.size(); ++r) {
+      const Row& row = rows_[r];
+      const std::size_t end = r + 1 < rows_.size() ? rows_[r + 1].first_cell : cells_.size();
+      std::vector<double> values(names_.size() + 3, std::nan(""));
+      values.front() = row.t;
+      values[1] = static_cast<double>(row.agent);
+      values.back() = row.total;
+      for (std::size_t c = row.first_cell; c < end; ++c) {
+        values[2 + cells_[c].column] = cells_[c].cost;
+      }
+      csv.add(std::move(values));
+    }
+    return csv;
+  }
+
+ private:
+  std::size_t column(std::size_t agent, std::size_t term, const std::string& name) {
+    std::vector<std::size_t>& columns = columns_[agent];
+    if (term < columns.size() && names_[columns[term]] == name) {
+      return columns[term];
+    }
+    const auto found =
+        static_cast<std::size_t>(std::find(names_.begin(), names_.end(), name) - names_.begin());
+    if (found == names_.size()) {
+      names_.push_back(name);
+    }
+    columns.resize(std::max(columns.size(), term + 1));
+    columns[term] = found;
+    return found;
+  }
+
+  struct Row {
+    double t;
+    std::size_t agent;
+    double total;
+    std::size_t first_cell;  // its cells run to the next row's first
+  };
+  struct Cell {
+    std::size_t column;
+    double cost;
+  };
+  std::vector<std::string> names_;
+  std::vector<std::vector<std::size_t>> columns_;  // per agent, by term index
+  std::vector<Row> rows_;
+  std::vector<Cell> cells_;
+};
+
+// t, agent, x, y, heading, v, a_c, omega: a row of trajectories.csv.
+using TrajectoryRow = std::array<double, 8>;
+
+void write_trajectories(const std::filesystem::path& path, const std::vector<TrajectoryRow>& rows) {
+  CsvTable csv({"t", "agent", "x", "y", "heading", "v", "a_c", "omega"});
+  for (const TrajectoryRow& row : rows) {
+    csv.add({row.begin(), row.end()});
+  }
+  csv.write(path);
+}
+
 }  // namespace
 
 SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptions& options,
@@ -86,26 +172,24 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
     loops.push_back(std::move(loop));
   }
 
-  CsvTable trajectories({"t", "agent", "x", "y", "heading", "v", "a_c", "omega"});
-  // The cost terms by column, in the order they first appear; a row's terms[k] is the cost of
-  // term_names[k] (NaN where the agent's controller has no such term).
-  std::vector<std::string> term_names;
-  struct CostRow {
-    double t;
-    std::size_t agent;
-    std::vector<double> terms;
-    double total;
-  };
-  std::vector<CostRow> cost_rows;
-
   const int max_steps = static_cast<int>(std::ceil(spec.duration_s / spec.step_s - 1e-9));
   const int total_steps = options.steps ? std::min(*options.steps, max_steps) : max_steps;
+  // Room for every step up front: the loop then allocates nothing of its own per step.
+  const auto steps = static_cast<std::size_t>(std::max(total_steps, 0));
+  std::vector<std::vector<Eigen::Vector2d>> paths(spec.agents.size());
+  for (std::size_t i = 0; i < loops.size(); ++i) {
+    loops[i].result.turn_rates.reserve(steps);
+    paths[i].reserve(steps);
+  }
+  std::vector<TrajectoryRow> trajectories;
+  trajectories.reserve(steps * loops.size());
+  CostLog costs(loops.size(), steps);
+
   Progress progress(log, options.progress_bar, total_steps);
   pipeline::StageTimes sum;
   long agent_steps = 0;
   std::vector<std::pair<double, double>> commands(spec.agents.size());
   std::vector<sim_camera::Collision> collisions;
-  std::vector<std::vector<Eigen::Vector2d>> paths(spec.agents.size());
   int step = 0;
   for (; step < total_steps && !world.finished(); ++step) {
     for (std::size_t i = 0; i < loops.size(); ++i) {
@@ -120,21 +204,9 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
       const servo::ControlOutput& output = loop.pipeline->step(times);
       commands[i] = {output.command.accel_mps2, output.command.turn_rate};
       loop.result.turn_rates.push_back(output.command.turn_rate);
-      loop.result.positions_m.push_back(state.position_m);
       sum += times;
       ++agent_steps;
-
-      CostRow row{world.time_s(), i, {}, output.cost};
-      for (const servo::TermEvaluation& t : output.terms) {
-        const auto column = static_cast<std::size_t>(
-            std::find(term_names.begin(), term_names.end(), t.name) - term_names.begin());
-        if (column == term_names.size()) {
-          term_names.push_back(t.name);
-        }
-        row.terms.resize(std::max(row.terms.size(), column + 1), std::nan(""));
-        row.terms[column] = t.gradient.cost;
-      }
-      cost_rows.push_back(std::move(row));
+      costs.add(world.time_s(), i, output);
 
       if (options.video && out) {
         if (!loop.video) {
@@ -147,8 +219,9 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
     }
     for (std::size_t i = 0; i < loops.size(); ++i) {
       const sim_camera::AgentState& s = world.agents()[i];
-      trajectories.add({world.time_s(), static_cast<double>(i), s.position_m.x(), s.position_m.y(),
-                        s.yaw_rad, s.speed_mps, commands[i].first, commands[i].second});
+      trajectories.push_back({world.time_s(), static_cast<double>(i), s.position_m.x(),
+                              s.position_m.y(), s.yaw_rad, s.speed_mps, commands[i].first,
+                              commands[i].second});
       paths[i].push_back(s.position_m);
     }
     world.step(commands);
@@ -175,7 +248,11 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
   result.steps = step;
   result.duration_s = world.time_s();
   for (std::size_t i = 0; i < loops.size(); ++i) {
-    AgentResult r = loops[i].result;
+    AgentResult r = std::move(loops[i].result);
+    // An agent steers until it reaches its goal: it chose its turn rates at its path's first
+    // points.
+    r.positions_m.assign(paths[i].begin(),
+                         paths[i].begin() + static_cast<std::ptrdiff_t>(r.turn_rates.size()));
     const sim_camera::AgentState& s = world.agents()[i];
     r.reached_goal = s.reached_goal;
     r.time_to_goal_s = s.time_to_goal_s;
@@ -183,7 +260,7 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
       r.final_distance_to_leader_m =
           (world.agents()[static_cast<std::size_t>(*leader)].position_m - s.position_m).norm();
     }
-    result.agents.push_back(r);
+    result.agents.push_back(std::move(r));
   }
   result.collisions = collisions;
   if (agent_steps > 0) {
@@ -193,21 +270,8 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
   }
   result.topview = draw_topview(world, paths, result.collisions);
   if (out) {
-    trajectories.write(out->staging_path("trajectories.csv"));
-    CsvTable costs([&] {
-      std::vector<std::string> header = {"t", "agent"};
-      header.insert(header.end(), term_names.begin(), term_names.end());
-      header.push_back("total");
-      return header;
-    }());
-    for (const CostRow& row : cost_rows) {
-      std::vector<double> values = {row.t, static_cast<double>(row.agent)};
-      values.insert(values.end(), row.terms.begin(), row.terms.end());
-      values.resize(2 + term_names.size(), std::nan(""));
-      values.push_back(row.total);
-      costs.add(values);
-    }
-    costs.write(out->staging_path("costs.csv"));
+    write_trajectories(out->staging_path("trajectories.csv"), trajectories);
+    costs.table().write(out->staging_path("costs.csv"));
     for (auto& loop : loops) {
       if (loop.video) {
         loop.video->release();

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -259,6 +260,79 @@ std::vector<std::uint8_t> noise_texture() {
   return texels;
 }
 
+// The programs' uniform locations, looked up once after linking: each glGetUniformLocation is a
+// search by name, and a frame would otherwise make ~20 of them plus 4 per draw.
+struct SceneUniforms {
+  GLint model;
+  GLint normal_matrix;
+  GLint world_to_camera;
+  GLint projection;
+  GLint light_view_projection;
+  GLint albedo;
+  GLint pattern;
+  GLint pattern_scale;
+  GLint pattern_contrast;
+  GLint id;
+  GLint relative_velocity;
+  GLint camera_omega;
+  GLint ambient;
+  GLint sun_direction;
+  GLint sun_intensity;
+  GLint sun_shadows;
+  GLint point_count;
+  GLint point_position;  // element 0: glUniform*v fills the array from there
+  GLint point_intensity;
+  GLint point_range;
+};
+
+SceneUniforms scene_uniforms(GLuint program) {
+  auto at = [program](const char* name) { return glGetUniformLocation(program, name); };
+  return {.model = at("u_model"),
+          .normal_matrix = at("u_normal_matrix"),
+          .world_to_camera = at("u_world_to_camera"),
+          .projection = at("u_projection"),
+          .light_view_projection = at("u_light_view_projection"),
+          .albedo = at("u_albedo"),
+          .pattern = at("u_pattern"),
+          .pattern_scale = at("u_pattern_scale"),
+          .pattern_contrast = at("u_pattern_contrast"),
+          .id = at("u_id"),
+          .relative_velocity = at("u_relative_velocity"),
+          .camera_omega = at("u_camera_omega"),
+          .ambient = at("u_ambient"),
+          .sun_direction = at("u_sun_direction"),
+          .sun_intensity = at("u_sun_intensity"),
+          .sun_shadows = at("u_sun_shadows"),
+          .point_count = at("u_point_count"),
+          .point_position = at("u_point_position"),
+          .point_intensity = at("u_point_intensity"),
+          .point_range = at("u_point_range")};
+}
+
+struct ShadowUniforms {
+  GLint model;
+  GLint light_view_projection;
+};
+
+// The point lights as the scene program's uniforms hold them: fixed lights, then carried ones.
+// Elements past `count` stay zero, so equal values mean an equal upload.
+struct PointUniforms {
+  int count = 0;
+  std::array<float, 3 * kMaxPointLights> position{};
+  std::array<float, kMaxPointLights> intensity{};
+  std::array<float, kMaxPointLights> range{};
+
+  void add(const Eigen::Vector3d& position_m, float light_intensity, double range_m) {
+    const auto k = static_cast<std::size_t>(count++);
+    intensity.at(k) = light_intensity;  // World keeps the lights within kMaxPointLights
+    range[k] = static_cast<float>(range_m);
+    position[3 * k] = static_cast<float>(position_m.x());
+    position[3 * k + 1] = static_cast<float>(position_m.y());
+    position[3 * k + 2] = static_cast<float>(position_m.z());
+  }
+  bool operator==(const PointUniforms&) const = default;
+};
+
 // What one draw needs: the shape, its pose and size, how it looks, who it is and how it moves.
 struct DrawItem {
   const Mesh* mesh;
@@ -276,6 +350,9 @@ struct Renderer::Impl {
   std::string description;
   GLuint scene_program = 0;
   GLuint shadow_program = 0;
+  SceneUniforms scene{};
+  ShadowUniforms shadow{};
+  std::optional<PointUniforms> uploaded_points;  // none before the first frame
   Mesh box;
   Mesh cylinder;
   Mesh ground;
@@ -379,6 +456,14 @@ struct Renderer::Impl {
   void create_resources() {
     scene_program = link(shaders::kSceneVertex, shaders::kSceneFragment, "scene");
     shadow_program = link(shaders::kShadowVertex, shaders::kShadowFragment, "shadow");
+    scene = scene_uniforms(scene_program);
+    shadow = {
+        .model = glGetUniformLocation(shadow_program, "u_model"),
+        .light_view_projection = glGetUniformLocation(shadow_program, "u_light_view_projection")};
+    // The samplers' texture units never change.
+    glUseProgram(scene_program);
+    glUniform1i(glGetUniformLocation(scene_program, "u_shadow_map"), 0);
+    glUniform1i(glGetUniformLocation(scene_program, "u_noise"), 1);
     box = box_mesh();
     cylinder = cylinder_mesh();
     ground = ground_mesh();
@@ -543,23 +628,48 @@ struct Renderer::Impl {
     glDepthFunc(GL_LESS);
     glClear(GL_DEPTH_BUFFER_BIT);
     glUseProgram(shadow_program);
-    glUniformMatrix4fv(glGetUniformLocation(shadow_program, "u_light_view_projection"), 1, GL_FALSE,
-                       light_view_projection.data());
-    const GLint model_location = glGetUniformLocation(shadow_program, "u_model");
+    glUniformMatrix4fv(shadow.light_view_projection, 1, GL_FALSE, light_view_projection.data());
     collect_items(world, std::nullopt);
     for (const DrawItem& item : items) {
-      glUniformMatrix4fv(model_location, 1, GL_FALSE, item.model.data());
+      glUniformMatrix4fv(shadow.model, 1, GL_FALSE, item.model.data());
       item.mesh->draw();
     }
     check_gl("rendering the shadow map");
   }
 
   void set_material(const Material& m) {
-    glUniform3f(glGetUniformLocation(scene_program, "u_albedo"), m.albedo.x(), m.albedo.y(),
-                m.albedo.z());
-    glUniform1i(glGetUniformLocation(scene_program, "u_pattern"), static_cast<int>(m.pattern));
-    glUniform1f(glGetUniformLocation(scene_program, "u_pattern_scale"), m.pattern_scale_m);
-    glUniform1f(glGetUniformLocation(scene_program, "u_pattern_contrast"), m.pattern_contrast);
+    glUniform3f(scene.albedo, m.albedo.x(), m.albedo.y(), m.albedo.z());
+    glUniform1i(scene.pattern, static_cast<int>(m.pattern));
+    glUniform1f(scene.pattern_scale, m.pattern_scale_m);
+    glUniform1f(scene.pattern_contrast, m.pattern_contrast);
+  }
+
+  // The point lights go to the scene program only when they differ from what it holds: fixed
+  // lights change with the world, carried ones when their agents move.
+  void upload_points(const World& world) {
+    const WorldSpec& spec = world.spec();
+    PointUniforms points;
+    for (const PointLight& p : spec.lighting.points) {
+      points.add(p.position_m, p.intensity, p.range_m);
+    }
+    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+      if (const auto& carried = spec.agents[i].carried_light) {
+        const AgentState& a = world.agents()[i];
+        const Eigen::Vector2d offset =
+            Eigen::Rotation2Dd(a.yaw_rad) * carried->position_m.head<2>();
+        points.add(
+            {a.position_m.x() + offset.x(), a.position_m.y() + offset.y(), carried->position_m.z()},
+            carried->intensity, carried->range_m);
+      }
+    }
+    if (uploaded_points == points) {
+      return;
+    }
+    glUniform1i(scene.point_count, points.count);
+    glUniform3fv(scene.point_position, points.count, points.position.data());
+    glUniform1fv(scene.point_intensity, points.count, points.intensity.data());
+    glUniform1fv(scene.point_range, points.count, points.range.data());
+    uploaded_points = points;
   }
 
   void render(const World& world, const View& view, RenderedView& out) {
@@ -618,72 +728,38 @@ struct Renderer::Impl {
     glClearBufferfv(GL_DEPTH, 0, &far_depth);
 
     glUseProgram(scene_program);
-    auto location = [&](const char* name) { return glGetUniformLocation(scene_program, name); };
-    glUniformMatrix4fv(location("u_world_to_camera"), 1, GL_FALSE, world_to_camera.data());
-    glUniformMatrix4fv(location("u_projection"), 1, GL_FALSE, projection.data());
-    glUniformMatrix4fv(location("u_light_view_projection"), 1, GL_FALSE,
-                       light_view_projection.data());
-    glUniform3f(location("u_camera_omega"), static_cast<float>(omega.x()),
-                static_cast<float>(omega.y()), static_cast<float>(omega.z()));
-    glUniform1f(location("u_ambient"), lighting.ambient);
+    glUniformMatrix4fv(scene.world_to_camera, 1, GL_FALSE, world_to_camera.data());
+    glUniformMatrix4fv(scene.projection, 1, GL_FALSE, projection.data());
+    glUniformMatrix4fv(scene.light_view_projection, 1, GL_FALSE, light_view_projection.data());
+    glUniform3f(scene.camera_omega, static_cast<float>(omega.x()), static_cast<float>(omega.y()),
+                static_cast<float>(omega.z()));
+    glUniform1f(scene.ambient, lighting.ambient);
     if (lighting.sun) {
       const SunLight& sun = *lighting.sun;
-      glUniform3f(location("u_sun_direction"),
+      glUniform3f(scene.sun_direction,
                   static_cast<float>(std::cos(sun.elevation_rad) * std::cos(sun.azimuth_rad)),
                   static_cast<float>(std::cos(sun.elevation_rad) * std::sin(sun.azimuth_rad)),
                   static_cast<float>(std::sin(sun.elevation_rad)));
-      glUniform1f(location("u_sun_intensity"), sun.intensity);
-      glUniform1i(location("u_sun_shadows"), sun.shadows ? 1 : 0);
+      glUniform1f(scene.sun_intensity, sun.intensity);
+      glUniform1i(scene.sun_shadows, sun.shadows ? 1 : 0);
     } else {
-      glUniform1f(location("u_sun_intensity"), 0.0F);
-      glUniform1i(location("u_sun_shadows"), 0);
+      glUniform1f(scene.sun_intensity, 0.0F);
+      glUniform1i(scene.sun_shadows, 0);
     }
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, shadow_texture);
-    glUniform1i(location("u_shadow_map"), 0);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, noise_texture_id);
-    glUniform1i(location("u_noise"), 1);
-    // Fixed lights, then the lights agents carry.
-    std::vector<PointLight> points = lighting.points;
-    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-      if (const auto& carried = spec.agents[i].carried_light) {
-        const AgentState& a = world.agents()[i];
-        const Eigen::Vector2d offset =
-            Eigen::Rotation2Dd(a.yaw_rad) * carried->position_m.head<2>();
-        PointLight p = *carried;
-        p.position_m = Eigen::Vector3d(a.position_m.x() + offset.x(), a.position_m.y() + offset.y(),
-                                       carried->position_m.z());
-        points.push_back(p);
-      }
-    }
-    const int point_count = static_cast<int>(points.size());  // World checks the limit
-    glUniform1i(location("u_point_count"), point_count);
-    for (int p = 0; p < point_count; ++p) {
-      const PointLight& light = points[static_cast<std::size_t>(p)];
-      char name[32];
-      std::snprintf(name, sizeof name, "u_point_position[%d]", p);
-      glUniform3f(location(name), static_cast<float>(light.position_m.x()),
-                  static_cast<float>(light.position_m.y()),
-                  static_cast<float>(light.position_m.z()));
-      std::snprintf(name, sizeof name, "u_point_intensity[%d]", p);
-      glUniform1f(location(name), light.intensity);
-      std::snprintf(name, sizeof name, "u_point_range[%d]", p);
-      glUniform1f(location(name), static_cast<float>(light.range_m));
-    }
+    upload_points(world);
 
-    const GLint model_location = location("u_model");
-    const GLint normal_location = location("u_normal_matrix");
-    const GLint id_location = location("u_id");
-    const GLint velocity_location = location("u_relative_velocity");
     auto draw = [&](const Mesh& mesh, const Eigen::Matrix4f& model, const Material& material,
                     std::int32_t id, const Eigen::Vector3d& velocity) {
       const Eigen::Matrix3f normal = model.block<3, 3>(0, 0).inverse().transpose();
       const Eigen::Vector3f relative = (rotation * (velocity - agent_velocity)).cast<float>();
-      glUniformMatrix4fv(model_location, 1, GL_FALSE, model.data());
-      glUniformMatrix3fv(normal_location, 1, GL_FALSE, normal.data());
-      glUniform1i(id_location, id);
-      glUniform3f(velocity_location, relative.x(), relative.y(), relative.z());
+      glUniformMatrix4fv(scene.model, 1, GL_FALSE, model.data());
+      glUniformMatrix3fv(scene.normal_matrix, 1, GL_FALSE, normal.data());
+      glUniform1i(scene.id, id);
+      glUniform3f(scene.relative_velocity, relative.x(), relative.y(), relative.z());
       set_material(material);
       mesh.draw();
     };
@@ -700,8 +776,7 @@ struct Renderer::Impl {
     read_back(k, omega, out);
   }
 
-  void read_back(const base::CameraIntrinsics& k, const Eigen::Vector3d& omega,
-                 RenderedView& out) {
+  void read_back(const base::CameraIntrinsics& k, const Eigen::Vector3d& omega, RenderedView& out) {
     out.image.create(k.height_px, k.width_px, CV_8UC3);
     out.object_ids.create(k.height_px, k.width_px, CV_32SC1);
     out.flow.create(k.height_px, k.width_px, CV_32FC2);
@@ -745,7 +820,7 @@ View View::of_agent(const World& world, std::size_t agent) {
 
 base::CameraIntrinsics View::intrinsics() const {
   return base::CameraIntrinsics::from_horizontal_fov(camera.width_px, camera.height_px,
-                                                      camera.hfov_rad);
+                                                     camera.hfov_rad);
 }
 
 std::unique_ptr<Renderer> Renderer::create() {

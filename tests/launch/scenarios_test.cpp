@@ -7,9 +7,11 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/overlay.hpp"
 #include "flowsteer/eval/simulation.hpp"
 
 namespace flowsteer::eval {
@@ -292,6 +294,39 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
   }
   EXPECT_EQ(entries, 10);
   std::filesystem::remove_all(dir);
+}
+
+// A 2 m wide corridor, 20 m long: far narrower than the caption under its top view.
+TEST(SimOutputs, TopviewOfANarrowWorldIsWideEnoughForItsCaption) {
+  sim_camera::WorldSpec spec;
+  spec.name = "narrow";
+  for (const double x : {-1.0, 1.0}) {
+    sim_camera::Solid wall;
+    wall.centre_m = {x, 0.0};
+    wall.size_m = {0.1, 20.0};
+    spec.obstacles.push_back(wall);
+  }
+  sim_camera::AgentSpec walker;
+  walker.start_m = {0.0, -9.0};
+  walker.goals = {{0.0, 9.0}};
+  spec.agents.push_back(walker);
+  const sim_camera::World world(spec);
+  const cv::Mat top = draw_topview(world, {{walker.start_m}}, {});
+  // 900 px for the 23 m of the corridor and its margins: 39 px a metre, the corridor ~200 px.
+  const cv::Size caption = cv::getTextSize("narrow  t = 0.0 s  collisions: 0  (1 m = 39 px)",
+                                           cv::FONT_HERSHEY_SIMPLEX, 0.55, 1, nullptr);
+  EXPECT_GE(top.cols, caption.width + 8);
+  // The caption's last dark pixel is inside the image, not at its edge.
+  cv::Mat strip;
+  cv::cvtColor(top.rowRange(top.rows - 30, top.rows), strip, cv::COLOR_BGR2GRAY);
+  int rightmost = -1;
+  for (int col = 0; col < strip.cols; ++col) {
+    if (cv::countNonZero(strip.col(col) < 128) > 0) {
+      rightmost = col;
+    }
+  }
+  EXPECT_GT(rightmost, 0);
+  EXPECT_LT(rightmost, top.cols - 4);
 }
 
 }  // namespace
