@@ -9,9 +9,11 @@ namespace flowsteer::base {
 
 namespace {
 
-void require(bool ok, const std::string& what) {
+// The message is built only on failure: validate() runs on every rendered frame.
+template <typename Message>
+void require(bool ok, const Message& message) {
   if (!ok) {
-    throw std::invalid_argument(what);
+    throw std::invalid_argument(message());
   }
 }
 
@@ -19,9 +21,10 @@ void require(bool ok, const std::string& what) {
 
 CameraIntrinsics CameraIntrinsics::from_horizontal_fov(int width_px, int height_px,
                                                        double hfov_rad) {
-  require(std::isfinite(hfov_rad) && hfov_rad > 0.0 && hfov_rad < std::numbers::pi,
-          "horizontal field of view must be in (0, 180) degrees, got " +
-              std::to_string(hfov_rad * 180.0 / std::numbers::pi));
+  require(std::isfinite(hfov_rad) && hfov_rad > 0.0 && hfov_rad < std::numbers::pi, [&] {
+    return "horizontal field of view must be in (0, 180) degrees, got " +
+           std::to_string(hfov_rad * 180.0 / std::numbers::pi);
+  });
   CameraIntrinsics k;
   k.width_px = width_px;
   k.height_px = height_px;
@@ -34,24 +37,30 @@ CameraIntrinsics CameraIntrinsics::from_horizontal_fov(int width_px, int height_
 }
 
 void CameraIntrinsics::validate() const {
-  require(width_px > 0,
-          "camera intrinsics: width_px must be positive, got " + std::to_string(width_px));
-  require(height_px > 0,
-          "camera intrinsics: height_px must be positive, got " + std::to_string(height_px));
-  require(std::isfinite(fx_px) && fx_px > 0.0,
-          "camera intrinsics: fx_px must be positive, got " + std::to_string(fx_px));
-  require(std::isfinite(fy_px) && fy_px > 0.0,
-          "camera intrinsics: fy_px must be positive, got " + std::to_string(fy_px));
-  require(std::isfinite(cx_px), "camera intrinsics: cx_px is not finite");
-  require(std::isfinite(cy_px), "camera intrinsics: cy_px is not finite");
+  require(width_px > 0, [&] {
+    return "camera intrinsics: width_px must be positive, got " + std::to_string(width_px);
+  });
+  require(height_px > 0, [&] {
+    return "camera intrinsics: height_px must be positive, got " + std::to_string(height_px);
+  });
+  require(std::isfinite(fx_px) && fx_px > 0.0, [&] {
+    return "camera intrinsics: fx_px must be positive, got " + std::to_string(fx_px);
+  });
+  require(std::isfinite(fy_px) && fy_px > 0.0, [&] {
+    return "camera intrinsics: fy_px must be positive, got " + std::to_string(fy_px);
+  });
+  require(std::isfinite(cx_px), [&] { return "camera intrinsics: cx_px is not finite"; });
+  require(std::isfinite(cy_px), [&] { return "camera intrinsics: cy_px is not finite"; });
 }
 
 void CameraMount::validate() const {
-  require(std::isfinite(height_m) && height_m > 0.0,
-          "camera mount: height_m must be positive, got " + std::to_string(height_m));
-  require(
-      std::isfinite(pitch_rad) && std::abs(pitch_rad) < 0.5 * std::numbers::pi,
-      "camera mount: pitch_rad must be within (-90, 90) degrees, got " + std::to_string(pitch_rad));
+  require(std::isfinite(height_m) && height_m > 0.0, [&] {
+    return "camera mount: height_m must be positive, got " + std::to_string(height_m);
+  });
+  require(std::isfinite(pitch_rad) && std::abs(pitch_rad) < 0.5 * std::numbers::pi, [&] {
+    return "camera mount: pitch_rad must be within (-90, 90) degrees, got " +
+           std::to_string(pitch_rad);
+  });
 }
 
 Eigen::Matrix3d CameraMount::camera_to_body() const {

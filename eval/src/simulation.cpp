@@ -22,7 +22,7 @@ namespace {
 
 // Everything one agent keeps from step to step.
 struct AgentLoop {
-  std::unique_ptr<SimulatedAgent> pipeline;
+  std::unique_ptr<SimulatedAgent> agent;
   AgentResult result;
   Eigen::Vector2d last_position;
   std::unique_ptr<cv::VideoWriter> video;
@@ -143,12 +143,175 @@ void write_trajectories(const std::filesystem::path& path, const std::vector<Tra
   csv.write(path);
 }
 
-}  // namespace
+// One run of a world: the world, its renderer, one loop per agent and what the run records for
+// its result and its files. Everything that grows per step is reserved up front, so a step
+// allocates nothing of its own.
+class SimulationRun {
+ public:
+  SimulationRun(const sim_camera::WorldSpec& spec, const SimOptions& options)
+      : spec_(spec),
+        options_(options),
+        world_(spec_),
+        renderer_(sim_camera::Renderer::create()),
+        total_steps_(total_steps(spec_, options)),
+        paths_(spec_.agents.size()),
+        commands_(spec_.agents.size()),
+        costs_(spec_.agents.size(), static_cast<std::size_t>(total_steps_)) {
+    // After the world and the renderer: a run that cannot start leaves the folder as it was.
+    if (options.write_outputs) {
+      out_.emplace(options.out_dir);
+    }
+    const auto steps = static_cast<std::size_t>(total_steps_);
+    for (std::size_t i = 0; i < spec_.agents.size(); ++i) {
+      AgentLoop loop{std::make_unique<SimulatedAgent>(world_, *renderer_, i),
+                     {},
+                     spec_.agents[i].start_m,
+                     nullptr};
+      loop.result.name = spec_.agents[i].name;
+      loop.result.min_clearance_m = world_.clearance(i);
+      loop.result.turn_rates.reserve(steps);
+      paths_[i].reserve(steps);
+      loops_.push_back(std::move(loop));
+    }
+    trajectories_.reserve(steps * loops_.size());
+  }
 
-SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptions& options,
-                         std::ostream& log) {
-  sim_camera::WorldSpec spec = world_spec;
-  for (auto& a : spec.agents) {
+  int total_steps() const { return total_steps_; }
+  const sim_camera::World& world() const { return world_; }
+
+  // One control step: every agent that still steers renders, thinks and commands; the world moves.
+  void step() {
+    for (std::size_t i = 0; i < loops_.size(); ++i) {
+      commands_[i] = {0.0, 0.0};
+      if (!world_.agents()[i].reached_goal || spec_.agents[i].leader) {
+        steer(i);
+      }
+    }
+    for (std::size_t i = 0; i < loops_.size(); ++i) {
+      const sim_camera::AgentState& s = world_.agents()[i];
+      trajectories_.push_back({world_.time_s(), static_cast<double>(i), s.position_m.x(),
+                               s.position_m.y(), s.yaw_rad, s.speed_mps, commands_[i].first,
+                               commands_[i].second});
+      paths_[i].push_back(s.position_m);
+    }
+    world_.step(commands_);
+    account_motion();
+  }
+
+  SimResult result(int steps) {
+    SimResult result;
+    result.scenario = spec_.name;
+    result.steps = steps;
+    result.duration_s = world_.time_s();
+    for (std::size_t i = 0; i < loops_.size(); ++i) {
+      result.agents.push_back(agent_result(i));
+    }
+    result.collisions = collisions_;
+    if (agent_steps_ > 0) {
+      const double n = static_cast<double>(agent_steps_);
+      result.per_agent_step_ms = {sum_.render / n,   sum_.flow / n,    sum_.segment / n,
+                                  sum_.features / n, sum_.control / n, sum_.total / n};
+    }
+    result.topview = draw_topview(world_, paths_, result.collisions);
+    return result;
+  }
+
+  // trajectories.csv, costs.csv, the videos, topview.png and summary.json, committed together;
+  // nothing without an output folder.
+  void write(const SimResult& result) {
+    if (!out_) {
+      return;
+    }
+    write_trajectories(out_->staging_path("trajectories.csv"), trajectories_);
+    costs_.table().write(out_->staging_path("costs.csv"));
+    for (AgentLoop& loop : loops_) {
+      if (loop.video) {
+        loop.video->release();
+      }
+    }
+    write_image(out_->staging_path("topview.png"), result.topview);
+    write_summary_json(out_->staging_path("summary.json"), result);
+    out_->commit();
+  }
+
+ private:
+  static int total_steps(const sim_camera::WorldSpec& spec, const SimOptions& options) {
+    const int max_steps = static_cast<int>(std::ceil(spec.duration_s / spec.step_s - 1e-9));
+    return std::max(0, options.steps ? std::min(*options.steps, max_steps) : max_steps);
+  }
+
+  void steer(std::size_t i) {
+    AgentLoop& loop = loops_[i];
+    pipeline::StageTimes times;
+    const servo::ControlOutput& output = loop.agent->step(times);
+    commands_[i] = {output.command.accel_mps2, output.command.turn_rate};
+    loop.result.turn_rates.push_back(output.command.turn_rate);
+    sum_ += times;
+    ++agent_steps_;
+    costs_.add(world_.time_s(), i, output);
+    if (options_.video && out_) {
+      if (!loop.video) {
+        loop.video =
+            open_video(out_->staging_path("agent_" + std::to_string(i) + ".mp4"),
+                       overlay_size(loop.agent->frame().image.size()), 1.0 / spec_.step_s);
+      }
+      loop.video->write(draw_overlay(*loop.agent));
+    }
+  }
+
+  // Path lengths, clearances and the collisions the last step started.
+  void account_motion() {
+    for (std::size_t i = 0; i < loops_.size(); ++i) {
+      AgentLoop& loop = loops_[i];
+      const Eigen::Vector2d p = world_.agents()[i].position_m;
+      loop.result.path_length_m += (p - loop.last_position).norm();
+      loop.last_position = p;
+      loop.result.min_clearance_m = std::min(loop.result.min_clearance_m, world_.clearance(i));
+    }
+    for (const sim_camera::Collision& c : world_.new_collisions()) {
+      ++loops_[c.agent].result.collisions;
+      if (c.other_agent) {
+        ++loops_[*c.other_agent].result.collisions;
+      }
+      collisions_.push_back(c);
+    }
+  }
+
+  AgentResult agent_result(std::size_t i) {
+    AgentResult r = std::move(loops_[i].result);
+    // An agent steers until it reaches its goal: it chose its turn rates at its path's first
+    // points.
+    r.positions_m.assign(paths_[i].begin(),
+                         paths_[i].begin() + static_cast<std::ptrdiff_t>(r.turn_rates.size()));
+    const sim_camera::AgentState& s = world_.agents()[i];
+    r.reached_goal = s.reached_goal;
+    r.time_to_goal_s = s.time_to_goal_s;
+    if (const auto& leader = spec_.agents[i].leader) {
+      r.final_distance_to_leader_m =
+          (world_.agents()[static_cast<std::size_t>(*leader)].position_m - s.position_m).norm();
+    }
+    return r;
+  }
+
+  sim_camera::WorldSpec spec_;
+  const SimOptions& options_;
+  sim_camera::World world_;
+  std::unique_ptr<sim_camera::Renderer> renderer_;
+  std::optional<OutputDir> out_;  // none: no files
+  int total_steps_;
+  std::vector<AgentLoop> loops_;
+  std::vector<std::vector<Eigen::Vector2d>> paths_;
+  std::vector<std::pair<double, double>> commands_;
+  std::vector<TrajectoryRow> trajectories_;
+  CostLog costs_;
+  std::vector<sim_camera::Collision> collisions_;
+  pipeline::StageTimes sum_;
+  long agent_steps_ = 0;
+};
+
+// The scenario with the options' overrides of every agent's camera and perception.
+sim_camera::WorldSpec with_overrides(sim_camera::WorldSpec spec, const SimOptions& options) {
+  for (sim_camera::AgentSpec& a : spec.agents) {
     if (options.resolution)
       a.camera.width_px = a.camera.height_px = *options.resolution;
     if (options.flow)
@@ -156,131 +319,23 @@ SimResult run_simulation(const sim_camera::WorldSpec& world_spec, const SimOptio
     if (options.segmentation)
       a.perception.segmentation = *options.segmentation;
   }
-  sim_camera::World world(spec);
-  std::unique_ptr<sim_camera::Renderer> renderer = sim_camera::Renderer::create();
-  std::optional<OutputDir> out;
-  if (options.write_outputs) {
-    out.emplace(options.out_dir);
-  }
+  return spec;
+}
 
-  std::vector<AgentLoop> loops;
-  for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-    AgentLoop loop{
-        std::make_unique<SimulatedAgent>(world, *renderer, i), {}, spec.agents[i].start_m, nullptr};
-    loop.result.name = spec.agents[i].name;
-    loop.result.min_clearance_m = world.clearance(i);
-    loops.push_back(std::move(loop));
-  }
+}  // namespace
 
-  const int max_steps = static_cast<int>(std::ceil(spec.duration_s / spec.step_s - 1e-9));
-  const int total_steps = options.steps ? std::min(*options.steps, max_steps) : max_steps;
-  // Room for every step up front: the loop then allocates nothing of its own per step.
-  const auto steps = static_cast<std::size_t>(std::max(total_steps, 0));
-  std::vector<std::vector<Eigen::Vector2d>> paths(spec.agents.size());
-  for (std::size_t i = 0; i < loops.size(); ++i) {
-    loops[i].result.turn_rates.reserve(steps);
-    paths[i].reserve(steps);
-  }
-  std::vector<TrajectoryRow> trajectories;
-  trajectories.reserve(steps * loops.size());
-  CostLog costs(loops.size(), steps);
-
-  Progress progress(log, options.progress_bar, total_steps);
-  pipeline::StageTimes sum;
-  long agent_steps = 0;
-  std::vector<std::pair<double, double>> commands(spec.agents.size());
-  std::vector<sim_camera::Collision> collisions;
+SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& options,
+                         std::ostream& log) {
+  SimulationRun run(with_overrides(world, options), options);
+  Progress progress(log, options.progress_bar, run.total_steps());
   int step = 0;
-  for (; step < total_steps && !world.finished(); ++step) {
-    for (std::size_t i = 0; i < loops.size(); ++i) {
-      AgentLoop& loop = loops[i];
-      const sim_camera::AgentSpec& agent = spec.agents[i];
-      const sim_camera::AgentState& state = world.agents()[i];
-      commands[i] = {0.0, 0.0};
-      if (state.reached_goal && !agent.leader) {
-        continue;
-      }
-      pipeline::StageTimes times;
-      const servo::ControlOutput& output = loop.pipeline->step(times);
-      commands[i] = {output.command.accel_mps2, output.command.turn_rate};
-      loop.result.turn_rates.push_back(output.command.turn_rate);
-      sum += times;
-      ++agent_steps;
-      costs.add(world.time_s(), i, output);
-
-      if (options.video && out) {
-        if (!loop.video) {
-          loop.video =
-              open_video(out->staging_path("agent_" + std::to_string(i) + ".mp4"),
-                         overlay_size(loop.pipeline->frame().image.size()), 1.0 / spec.step_s);
-        }
-        loop.video->write(draw_overlay(*loop.pipeline));
-      }
-    }
-    for (std::size_t i = 0; i < loops.size(); ++i) {
-      const sim_camera::AgentState& s = world.agents()[i];
-      trajectories.push_back({world.time_s(), static_cast<double>(i), s.position_m.x(),
-                              s.position_m.y(), s.yaw_rad, s.speed_mps, commands[i].first,
-                              commands[i].second});
-      paths[i].push_back(s.position_m);
-    }
-    world.step(commands);
-    for (std::size_t i = 0; i < loops.size(); ++i) {
-      AgentLoop& loop = loops[i];
-      const Eigen::Vector2d p = world.agents()[i].position_m;
-      loop.result.path_length_m += (p - loop.last_position).norm();
-      loop.last_position = p;
-      loop.result.min_clearance_m = std::min(loop.result.min_clearance_m, world.clearance(i));
-    }
-    for (const sim_camera::Collision& c : world.new_collisions()) {
-      ++loops[c.agent].result.collisions;
-      if (c.other_agent) {
-        ++loops[*c.other_agent].result.collisions;
-      }
-      collisions.push_back(c);
-    }
-    progress.update(step + 1, world.time_s());
+  for (; step < run.total_steps() && !run.world().finished(); ++step) {
+    run.step();
+    progress.update(step + 1, run.world().time_s());
   }
   progress.finish();
-
-  SimResult result;
-  result.scenario = spec.name;
-  result.steps = step;
-  result.duration_s = world.time_s();
-  for (std::size_t i = 0; i < loops.size(); ++i) {
-    AgentResult r = std::move(loops[i].result);
-    // An agent steers until it reaches its goal: it chose its turn rates at its path's first
-    // points.
-    r.positions_m.assign(paths[i].begin(),
-                         paths[i].begin() + static_cast<std::ptrdiff_t>(r.turn_rates.size()));
-    const sim_camera::AgentState& s = world.agents()[i];
-    r.reached_goal = s.reached_goal;
-    r.time_to_goal_s = s.time_to_goal_s;
-    if (const auto& leader = spec.agents[i].leader) {
-      r.final_distance_to_leader_m =
-          (world.agents()[static_cast<std::size_t>(*leader)].position_m - s.position_m).norm();
-    }
-    result.agents.push_back(std::move(r));
-  }
-  result.collisions = collisions;
-  if (agent_steps > 0) {
-    const double n = static_cast<double>(agent_steps);
-    result.per_agent_step_ms = {sum.render / n,   sum.flow / n,    sum.segment / n,
-                                sum.features / n, sum.control / n, sum.total / n};
-  }
-  result.topview = draw_topview(world, paths, result.collisions);
-  if (out) {
-    write_trajectories(out->staging_path("trajectories.csv"), trajectories);
-    costs.table().write(out->staging_path("costs.csv"));
-    for (auto& loop : loops) {
-      if (loop.video) {
-        loop.video->release();
-      }
-    }
-    write_image(out->staging_path("topview.png"), result.topview);
-    write_summary_json(out->staging_path("summary.json"), result);
-    out->commit();
-  }
+  SimResult result = run.result(step);
+  run.write(result);
   return result;
 }
 
