@@ -251,9 +251,8 @@ class SimulationRun {
     costs_.add(world_.time_s(), i, output);
     if (options_.video && out_) {
       if (!loop.video) {
-        loop.video =
-            open_video(out_->staging_path("agent_" + std::to_string(i) + ".mp4"),
-                       overlay_size(loop.agent->frame().image.size()), 1.0 / spec_.step_s);
+        loop.video = open_video(out_->staging_path("agent_" + std::to_string(i) + ".mp4"),
+                                overlay_size(loop.agent->frame().image.size()), 1.0 / spec_.step_s);
       }
       loop.video->write(draw_overlay(*loop.agent));
     }
