@@ -426,6 +426,15 @@ std::vector<BuiltinScenario> builtin_scenarios() {
   return out;
 }
 
+bool is_builtin_scenario(const std::string& name) {
+  for (const auto& [builtin_name, text] : builtin::kScenarios) {
+    if (name == builtin_name) {
+      return true;
+    }
+  }
+  return false;
+}
+
 sim_camera::WorldSpec builtin_scenario(const std::string& name) {
   std::string known;
   for (const auto& [builtin_name, text] : builtin::kScenarios) {

@@ -34,12 +34,7 @@ struct EvalRobustnessCommand {
 // A built-in scenario's name, else a scenario file; a name that is neither gets the built-in
 // scenarios' error, which lists them.
 sim_camera::WorldSpec scenario_named(const std::string& name_or_file) {
-  for (const config::BuiltinScenario& s : config::builtin_scenarios()) {
-    if (s.name == name_or_file) {
-      return config::builtin_scenario(name_or_file);
-    }
-  }
-  if (std::filesystem::exists(name_or_file)) {
+  if (!config::is_builtin_scenario(name_or_file) && std::filesystem::exists(name_or_file)) {
     return config::load_scenario(name_or_file);
   }
   return config::builtin_scenario(name_or_file);

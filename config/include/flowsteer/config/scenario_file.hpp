@@ -20,6 +20,7 @@ struct BuiltinScenario {
   std::string description;
 };
 std::vector<BuiltinScenario> builtin_scenarios();
+bool is_builtin_scenario(const std::string& name);
 // Throws base::ConfigError listing the known names when `name` is not one of them.
 sim_camera::WorldSpec builtin_scenario(const std::string& name);
 
