@@ -1,6 +1,7 @@
 #include "flowsteer/eval/output_files.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <random>
@@ -116,6 +117,15 @@ void write_image(const std::filesystem::path& path, const cv::Mat& image) {
   }
 }
 
+std::string format_csv_number(double value) {
+  if (!std::isfinite(value)) {
+    return "";
+  }
+  char text[32];
+  std::snprintf(text, sizeof text, "%.7g", value);
+  return text;
+}
+
 void CsvTable::add(std::vector<std::string> labels, std::vector<double> values) {
   if (labels.size() + values.size() != header_.size()) {
     throw std::logic_error("CsvTable: a row of " + std::to_string(labels.size() + values.size()) +
@@ -130,18 +140,13 @@ void CsvTable::write(const std::filesystem::path& path) const {
   for (std::size_t k = 0; k < header_.size(); ++k) {
     out << (k > 0 ? "," : "") << header_[k];
   }
-  out << "\n" << std::setprecision(7);
+  out << "\n";
   for (const Row& row : rows_) {
     for (std::size_t k = 0; k < row.labels.size(); ++k) {
       out << (k > 0 ? "," : "") << row.labels[k];
     }
     for (std::size_t k = 0; k < row.values.size(); ++k) {
-      if (k > 0 || !row.labels.empty()) {
-        out << ",";
-      }
-      if (std::isfinite(row.values[k])) {
-        out << row.values[k];
-      }
+      out << (k > 0 || !row.labels.empty() ? "," : "") << format_csv_number(row.values[k]);
     }
     out << "\n";
   }

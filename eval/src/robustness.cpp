@@ -8,6 +8,8 @@
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/eval/output_files.hpp"
+#include "process_pool.hpp"
+#include "suite_files.hpp"
 
 namespace flowsteer::eval {
 
@@ -97,22 +99,39 @@ std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& worl
   for (const auto& flow : flows) {
     for (const auto& segmentation : segmentations) {
       for (const int resolution : resolutions) {
-        SimOptions sim;
-        sim.resolution = resolution;
-        sim.steps = options.steps;
-        sim.flow = flow;
-        sim.segmentation = segmentation;
-        sim.write_outputs = false;
-        // One line per run, not the run's own progress lines.
-        std::ostream quiet(nullptr);
-        const RunSummary summary = summarize(run_simulation(world, sim, quiet));
-        log << "flowsteer eval robustness: " << world.name << ", flow " << method_name(flow)
-            << ", segmentation " << method_name(segmentation) << ", " << resolution
-            << " px: " << summary.collisions << " collisions, " << summary.goals_reached << "/"
-            << summary.agents_with_goal() << " goals\n";
-        runs.push_back({flow, segmentation, resolution, summary});
+        runs.push_back({flow, segmentation, resolution, {}});
       }
     }
+  }
+  std::string first_error;
+  run_in_processes(
+      runs.size(), options.jobs,
+      [&](std::size_t k) {
+        SimOptions sim;
+        sim.resolution = runs[k].resolution;
+        sim.steps = options.steps;
+        sim.flow = runs[k].flow;
+        sim.segmentation = runs[k].segmentation;
+        sim.write_outputs = false;
+        std::ostream quiet(nullptr);  // one line per run, not the run's own progress lines
+        return summary_fields(summarize(run_simulation(world, sim, quiet)));
+      },
+      [&](std::size_t k, const TaskOutcome& outcome) {
+        RobustnessRun& run = runs[k];
+        log << "flowsteer eval robustness: " << world.name << ", flow " << method_name(run.flow)
+            << ", segmentation " << method_name(run.segmentation) << ", " << run.resolution
+            << " px: ";
+        if (!outcome.ok()) {
+          log << "failed: " << outcome.error << "\n";
+          first_error = first_error.empty() ? outcome.error : first_error;
+          return;
+        }
+        run.summary = parse_summary_fields(outcome.record, world.name);
+        log << run.summary.collisions << " collisions, " << run.summary.goals_reached << "/"
+            << run.summary.agents_with_goal() << " goals\n";
+      });
+  if (!first_error.empty()) {
+    throw std::runtime_error("a robustness run failed: " + first_error);
   }
   if (out) {
     write_tables(runs, *out);

@@ -170,7 +170,7 @@ class SimulationRun {
       loop.result.name = spec_.agents[i].name;
       loop.result.min_clearance_m = world_.clearance(i);
       loop.result.turn_rates.reserve(steps);
-      paths_[i].reserve(steps);
+      paths_[i].reserve(steps + 1);
       loops_.push_back(std::move(loop));
     }
     trajectories_.reserve(steps * loops_.size());
@@ -204,6 +204,7 @@ class SimulationRun {
     result.steps = steps;
     result.duration_s = world_.time_s();
     for (std::size_t i = 0; i < loops_.size(); ++i) {
+      paths_[i].push_back(world_.agents()[i].position_m);  // where the last step left it
       result.agents.push_back(agent_result(i));
     }
     result.collisions = collisions_;
@@ -285,10 +286,22 @@ class SimulationRun {
     const sim_camera::AgentState& s = world_.agents()[i];
     r.reached_goal = s.reached_goal;
     r.time_to_goal_s = s.time_to_goal_s;
-    if (const auto& leader = spec_.agents[i].leader) {
+    const sim_camera::AgentSpec& spec = spec_.agents[i];
+    if (spec.leader) {
       r.final_distance_to_leader_m =
-          (world_.agents()[static_cast<std::size_t>(*leader)].position_m - s.position_m).norm();
+          (world_.agents()[static_cast<std::size_t>(*spec.leader)].position_m - s.position_m)
+              .norm();
+      r.straight_line_m = std::numeric_limits<double>::quiet_NaN();
     }
+    Eigen::Vector2d from = spec.start_m;
+    for (const Eigen::Vector2d& goal : spec.goals) {
+      r.straight_line_m += (goal - from).norm();
+      from = goal;
+    }
+    const Effort effort = steersuite_effort(
+        std::span(paths_[i]).first(r.turn_rates.size() + 1), spec_.step_s);
+    r.active_time_s = effort.active_time_s;
+    r.kinetic_energy_sum = effort.kinetic_energy_sum;
     return r;
   }
 
@@ -338,6 +351,21 @@ SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& o
   return result;
 }
 
+Effort steersuite_effort(std::span<const Eigen::Vector2d> positions_m, double step_s) {
+  Effort effort;
+  for (std::size_t k = 1; k < positions_m.size(); ++k) {
+    const Eigen::Vector2d velocity_mps = (positions_m[k] - positions_m[k - 1]) / step_s;
+    effort.active_time_s += step_s;
+    effort.kinetic_energy_sum += 0.5 * velocity_mps.squaredNorm();
+  }
+  return effort;
+}
+
+double composite01(int collisions, const Effort& effort) {
+  // SteerSuite's weights: α = 50 per collision, β = 1 per second, γ = 1 per unit of effort.
+  return 50.0 * collisions + effort.active_time_s + effort.kinetic_energy_sum;
+}
+
 RunSummary summarize(const SimResult& result) {
   RunSummary summary;
   summary.collisions = static_cast<int>(result.collisions.size());
@@ -345,11 +373,20 @@ RunSummary summarize(const SimResult& result) {
   summary.min_clearance_m = std::numeric_limits<double>::infinity();
   double time_sum = 0.0;
   double path_sum = 0.0;
+  double ratio_sum = 0.0;
+  int ratios = 0;
+  double score_sum = 0.0;
   for (const AgentResult& a : result.agents) {
     if (a.reached_goal) {
       ++summary.goals_reached;
       time_sum += a.time_to_goal_s;
+      // An agent whose goal is its start (one standing still) has no ratio.
+      if (a.straight_line_m > 0.0) {
+        ratio_sum += a.path_length_m / a.straight_line_m;
+        ++ratios;
+      }
     }
+    score_sum += composite01(a.collisions, {a.active_time_s, a.kinetic_energy_sum});
     if (a.final_distance_to_leader_m >= 0.0) {
       ++summary.followers;
     }
@@ -359,6 +396,9 @@ RunSummary summarize(const SimResult& result) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   summary.mean_time_to_goal_s = summary.goals_reached > 0 ? time_sum / summary.goals_reached : nan;
   summary.mean_path_length_m = summary.agents > 0 ? path_sum / summary.agents : nan;
+  summary.mean_path_length_ratio =
+      ratios > 0 ? ratio_sum / ratios : nan;
+  summary.composite01 = summary.agents > 0 ? score_sum / summary.agents : nan;
   return summary;
 }
 

@@ -25,8 +25,10 @@ Subcommand add_demo(CLI::App& app);
 Subcommand add_sim(CLI::App& app);
 Subcommand add_compare(CLI::App& app);
 Subcommand add_scenarios(CLI::App& app);
-// `eval flow` and `eval robustness`.
+// `eval flow`, `eval robustness`, `eval suite` and `eval merge`.
 std::vector<Subcommand> add_eval(CLI::App& app);
+Subcommand add_eval_suite(CLI::App& eval);
+Subcommand add_eval_merge(CLI::App& eval);
 // `calibrate intrinsics`, `capture` and `mount`.
 std::vector<Subcommand> add_calibrate(CLI::App& app);
 Subcommand add_run(CLI::App& app);

@@ -2,6 +2,7 @@
 #include <iostream>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "commands.hpp"
@@ -28,6 +29,7 @@ struct EvalRobustnessCommand {
   std::vector<std::string> flows;
   std::vector<std::string> segmentations;
   std::optional<int> steps;
+  int jobs = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
   std::string out_dir = "flowsteer_robustness";
 };
 
@@ -68,6 +70,7 @@ int run_eval_robustness(const EvalRobustnessCommand& command) {
     options.segmentations.push_back(segmentation_method_option("--segmentation", name));
   }
   options.steps = command.steps;
+  options.jobs = command.jobs;
   options.out_dir = command.out_dir;
   eval::print_robustness_table(eval::evaluate_robustness(world, options, std::cerr), std::cout);
   return 0;
@@ -116,6 +119,9 @@ Subcommand add_eval_robustness(CLI::App& eval) {
                              servo::segmentation_method_names());
   robustness->add_option("--steps", command->steps, "stop each run after N control steps")
       ->check(CLI::PositiveNumber);
+  robustness->add_option("--jobs,-j", command->jobs, "runs at once, each in its own process")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
   robustness->add_option("--out", command->out_dir, "folder for robustness.csv and robustness.txt")
       ->capture_default_str();
   return {robustness, [command] { return run_eval_robustness(*command); }};
@@ -126,7 +132,8 @@ Subcommand add_eval_robustness(CLI::App& eval) {
 std::vector<Subcommand> add_eval(CLI::App& app) {
   CLI::App* eval = app.add_subcommand("eval", "Measure parts of the pipeline against the truth");
   eval->require_subcommand(1);
-  return {add_eval_flow(*eval), add_eval_robustness(*eval)};
+  return {add_eval_flow(*eval), add_eval_robustness(*eval), add_eval_suite(*eval),
+          add_eval_merge(*eval)};
 }
 
 }  // namespace flowsteer::cli

@@ -31,6 +31,9 @@ class OutputDir {
   std::filesystem::path staging_;
 };
 
+// A number as CSV cells hold it: 7 significant digits, NaN and infinities as an empty cell.
+std::string format_csv_number(double value);
+
 // A table of numbers written as CSV (NaN as an empty cell); a row may start with text cells
 // (names without commas or quotes).
 class CsvTable {

@@ -23,6 +23,7 @@ struct RobustnessOptions {
   std::vector<servo::FlowMethod> flows;
   std::vector<servo::SegmentationMethod> segmentations;
   std::optional<int> steps;  // stop each run after this many control steps
+  int jobs = 1;              // runs at once, each in a worker process of its own
   std::filesystem::path out_dir = "flowsteer_robustness";
   bool write_outputs = true;
 };
@@ -40,7 +41,8 @@ std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
                                         const RobustnessOptions& options);
 
 // Every flow × segmentation × resolution, in that order, each run as `flowsteer sim` with those
-// overrides and without its files. Then, with write_outputs, robustness.csv and robustness.txt
+// overrides and without its files, in options.jobs worker processes. Throws std::runtime_error
+// naming the first run that failed, once all have ended. Then, with write_outputs, robustness.csv and robustness.txt
 // (the printed table) in out_dir, each written whole or not at all; out_dir is created before the
 // first run, so a folder that cannot be written fails at once. Progress goes to `log`.
 std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& world,

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <optional>
 #include <ostream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,11 @@ struct AgentResult {
   double min_clearance_m = 0.0;
   int collisions = 0;
   double final_distance_to_leader_m = -1.0;  // followers only
+  // From its start through its goals in order; NaN for followers.
+  double straight_line_m = 0.0;
+  // SteerSuite's effort over the steps the agent steered (see steersuite_effort).
+  double active_time_s = 0.0;
+  double kinetic_energy_sum = 0.0;
   // The commanded turn rate ω (rad/s, positive right) at every step the agent was steering.
   std::vector<double> turn_rates;
   // Where the agent was (world frame, m) when it chose each of those turn rates.
@@ -49,6 +55,23 @@ struct SimResult {
   cv::Mat topview;                         // the run from above, as topview.png (draw_topview)
 };
 
+// What SteerSuite's metrics collector sums over the steps an agent is active (steering towards
+// its goals): the time T, and Σ_k ½‖v_k‖² with v_k its velocity over step k. The sum is per
+// step, not an integral, as SteerSuite has it: it depends on the step (SteerSuite runs at 20 Hz,
+// flowsteer's default step is 0.05 s). positions_m: where the agent was at the start of each
+// active step and after the last one.
+struct Effort {
+  double active_time_s = 0.0;
+  double kinetic_energy_sum = 0.0;  // m²/s², per unit mass
+};
+Effort steersuite_effort(std::span<const Eigen::Vector2d> positions_m, double step_s);
+
+// SteerSuite's composite benchmark score 01 for one agent (SteerSuite, CompositeTechnique01;
+// Singh, Kapadia, Faloutsos, Reinman, "SteerBench", CAVW 2009): 50 · collisions + T + Σ ½‖v‖².
+// Collisions are the agent's contacts with other bodies, each counted once when it begins. Lower
+// is better; a run's score is the mean over its agents.
+double composite01(int collisions, const Effort& effort);
+
 // What one run came to, over its agents.
 struct RunSummary {
   int collisions = 0;
@@ -58,6 +81,10 @@ struct RunSummary {
   double mean_time_to_goal_s = 0.0;  // over the agents that reached their goal (NaN if none)
   double mean_path_length_m = 0.0;
   double min_clearance_m = 0.0;  // over all agents and steps
+  // Path length over straight line (start through the goals), over the agents that reached
+  // a goal away from their start (NaN if none).
+  double mean_path_length_ratio = 0.0;
+  double composite01 = 0.0;  // the mean of the agents' composite01 (NaN without agents)
   int agents_with_goal() const { return agents - followers; }
   // No collision, and every agent that has a goal reached it.
   bool clean() const { return collisions == 0 && goals_reached == agents_with_goal(); }

@@ -1,0 +1,176 @@
+#include "process_pool.hpp"
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <iostream>
+#include <map>
+#include <system_error>
+
+#include <opencv2/core/utility.hpp>
+
+namespace flowsteer::eval {
+
+namespace {
+
+// The first byte of a record says whether the task returned or threw.
+constexpr char kReturned = 'R';
+constexpr char kThrew = 'E';
+
+void write_all(int fd, const std::string& bytes) {
+  std::size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0 && errno == EINTR) {
+      continue;
+    }
+    if (n <= 0) {
+      return;  // the parent is gone: nobody is left to tell
+    }
+    written += static_cast<std::size_t>(n);
+  }
+}
+
+std::string read_all(int fd) {
+  std::string bytes;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) {
+      continue;
+    }
+    if (n <= 0) {
+      return bytes;
+    }
+    bytes.append(buffer, static_cast<std::size_t>(n));
+  }
+}
+
+// The worker: runs the task, writes its record and ends without running this process's exit
+// handlers (they belong to the parent: its buffers, its GL state).
+[[noreturn]] void run_worker(int fd, std::size_t index, int jobs,
+                             const std::function<std::string(std::size_t)>& task) {
+  if (jobs > 1) {
+    cv::setNumThreads(1);
+  }
+  std::string record;
+  int status = 0;
+  try {
+    record = kReturned + task(index);
+  } catch (const std::exception& e) {
+    record = kThrew + std::string(e.what());
+    status = 1;
+  } catch (...) {
+    record = std::string(1, kThrew) + "an unknown exception";
+    status = 1;
+  }
+  // A pipe holds 64 KiB: a record this short never blocks the worker before the parent reads.
+  write_all(fd, record.substr(0, kMaxTaskRecord + 1));
+  ::close(fd);
+  ::_exit(status);
+}
+
+TaskOutcome outcome_of(const std::string& record, int status) {
+  if (!record.empty() && record.front() == kReturned) {
+    return {record.substr(1), ""};
+  }
+  if (!record.empty() && record.front() == kThrew) {
+    return {"", record.substr(1)};
+  }
+  if (WIFSIGNALED(status)) {
+    return {"", "the run's process was killed by signal " + std::to_string(WTERMSIG(status)) +
+                    " (" + strsignal(WTERMSIG(status)) + ")"};
+  }
+  return {"", "the run's process exited with status " + std::to_string(WEXITSTATUS(status)) +
+                  " without a result"};
+}
+
+// The workers running now, by process id; stops and reaps the rest when left by an exception.
+class Workers {
+ public:
+  struct Running {
+    std::size_t index;
+    int fd;
+  };
+  ~Workers() {
+    for (const auto& [pid, running] : running_) {
+      ::kill(pid, SIGTERM);
+      ::close(running.fd);
+    }
+    for (const auto& entry : running_) {
+      int status = 0;
+      ::waitpid(entry.first, &status, 0);
+    }
+  }
+  std::size_t size() const { return running_.size(); }
+
+  void start(std::size_t index, int jobs, const std::function<std::string(std::size_t)>& task) {
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0) {
+      throw std::system_error(errno, std::generic_category(), "cannot create a worker's pipe");
+    }
+    std::cout.flush();
+    std::cerr.flush();
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+      const int error = errno;
+      ::close(fds[0]);
+      ::close(fds[1]);
+      throw std::system_error(error, std::generic_category(), "cannot start a worker process");
+    }
+    if (pid == 0) {
+      ::close(fds[0]);
+      run_worker(fds[1], index, jobs, task);
+    }
+    ::close(fds[1]);
+    running_[pid] = {index, fds[0]};
+  }
+
+  // Waits for a worker to end; its index and outcome.
+  std::pair<std::size_t, TaskOutcome> wait() {
+    for (;;) {
+      int status = 0;
+      const pid_t pid = ::waitpid(-1, &status, 0);
+      if (pid < 0 && errno == EINTR) {
+        continue;
+      }
+      if (pid < 0) {
+        throw std::system_error(errno, std::generic_category(), "waiting for a worker process");
+      }
+      const auto found = running_.find(pid);
+      if (found == running_.end()) {
+        continue;  // not one of ours
+      }
+      const Running running = found->second;
+      running_.erase(found);
+      const std::string record = read_all(running.fd);
+      ::close(running.fd);
+      return {running.index, outcome_of(record, status)};
+    }
+  }
+
+ private:
+  std::map<pid_t, Running> running_;
+};
+
+}  // namespace
+
+void run_in_processes(std::size_t count, int jobs,
+                      const std::function<std::string(std::size_t)>& task,
+                      const std::function<void(std::size_t, const TaskOutcome&)>& done) {
+  Workers workers;
+  std::size_t next = 0;
+  while (next < count || workers.size() > 0) {
+    while (next < count && workers.size() < static_cast<std::size_t>(std::max(jobs, 1))) {
+      workers.start(next++, jobs, task);
+    }
+    const auto [index, outcome] = workers.wait();
+    done(index, outcome);
+  }
+}
+
+}  // namespace flowsteer::eval

@@ -1,0 +1,398 @@
+#include "flowsteer/eval/suite.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <set>
+#include <sstream>
+
+#include "flowsteer/base/clock.hpp"
+#include "flowsteer/base/config_error.hpp"
+#include "process_pool.hpp"
+#include "suite_files.hpp"
+
+namespace flowsteer::eval {
+
+namespace {
+
+constexpr int kMinResolution = 16;
+constexpr int kMaxResolution = 4096;
+
+template <typename Method>
+std::string name_or_own(const std::optional<Method>& method) {
+  return method ? std::string(servo::to_string(*method)) : std::string("own");
+}
+
+template <typename T>
+void refuse_repeats(const std::vector<T>& values, const std::string& option) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (std::find(values.begin(), values.begin() + static_cast<long>(i), values[i]) !=
+        values.begin() + static_cast<long>(i)) {
+      std::ostringstream value;
+      if constexpr (std::is_same_v<T, int>) {
+        value << values[i];
+      } else {
+        value << servo::to_string(values[i]);
+      }
+      throw base::ConfigError(option + " " + value.str(), "given twice");
+    }
+  }
+}
+
+// Each value of a list, or one "the case's own" for an empty list.
+template <typename T>
+std::vector<std::optional<T>> or_own(const std::vector<T>& values) {
+  std::vector<std::optional<T>> choices(values.begin(), values.end());
+  if (choices.empty()) {
+    choices.emplace_back();
+  }
+  return choices;
+}
+
+// FNV-1a, 64 bits: a fingerprint of what makes a suite (not a security hash).
+class Fingerprint {
+ public:
+  Fingerprint& add(const std::string& text) {
+    for (const unsigned char c : text) {
+      hash_ = (hash_ ^ c) * 1099511628211ULL;
+    }
+    hash_ = (hash_ ^ 0xFFU) * 1099511628211ULL;  // ends the field: "ab","c" differs from "a","bc"
+    return *this;
+  }
+  std::string hex() const {
+    char text[17];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash_));
+    return text;
+  }
+
+ private:
+  std::uint64_t hash_ = 14695981039346656037ULL;
+};
+
+std::string suite_id(const std::vector<SuiteCase>& cases,
+                     const std::vector<SuiteConfiguration>& configurations,
+                     const SuiteOptions& options) {
+  Fingerprint fingerprint;
+  for (const SuiteCase& c : cases) {
+    fingerprint.add(c.name).add(c.text);
+  }
+  for (const SuiteConfiguration& c : configurations) {
+    fingerprint.add(to_string(c));
+  }
+  fingerprint.add(std::to_string(options.seed))
+      .add(options.steps ? std::to_string(*options.steps) : "all");
+  return fingerprint.hex();
+}
+
+void refuse_repeated_names(const std::vector<SuiteCase>& cases) {
+  std::set<std::string> names;
+  for (const SuiteCase& c : cases) {
+    if (!names.insert(c.name).second) {
+      throw base::ConfigError(c.source, "a second case named '" + c.name +
+                                            "' (cases are told apart by their file names)");
+    }
+  }
+}
+
+// The case under the configuration, run as `flowsteer sim` runs it, its files into `folder`.
+RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& configuration,
+                    const SuiteOptions& options, const std::filesystem::path& folder) {
+  sim_camera::WorldSpec world = suite_case.world;
+  if (configuration.controller) {
+    for (sim_camera::AgentSpec& agent : world.agents) {
+      agent.controller.model = *configuration.controller;
+    }
+  }
+  SimOptions sim;
+  sim.out_dir = folder;
+  sim.resolution = configuration.resolution;
+  sim.steps = options.steps;
+  sim.flow = configuration.flow;
+  sim.segmentation = configuration.segmentation;
+  std::ostream quiet(nullptr);
+  return summarize(run_simulation(world, sim, quiet));
+}
+
+// "[#####     ] 12/48 runs, 3 not clean (1 failed), 4 min left", redrawn, or a line per run.
+class SuiteProgress {
+ public:
+  SuiteProgress(std::ostream& log, bool bar, std::size_t total)
+      : log_(log), bar_(bar), total_(total) {}
+
+  void update(const SuiteRun& run) {
+    ++done_;
+    not_clean_ += run.clean() ? 0 : 1;
+    failed_ += run.failed() ? 1 : 0;
+    const double left_s =
+        (clock_.elapsed_ms() / 1e3) / static_cast<double>(done_) * static_cast<double>(total_ - done_);
+    std::ostringstream counts;
+    counts << done_ << "/" << total_ << " runs, " << not_clean_ << " not clean (" << failed_
+           << " failed), " << static_cast<int>(std::ceil(left_s / 60.0)) << " min left";
+    if (bar_) {
+      const std::size_t filled = 30 * done_ / std::max<std::size_t>(total_, 1);
+      log_ << "\r[" << std::string(filled, '#') << std::string(30 - filled, ' ') << "] "
+           << counts.str() << "   " << (done_ == total_ ? "\n" : "") << std::flush;
+    } else {
+      log_ << "flowsteer eval suite: " << run.folder_name() << ": "
+           << (run.failed() ? "failed: " + run.error : run.clean() ? "clean" : "not clean")
+           << " [" << counts.str() << "]\n";
+    }
+  }
+
+ private:
+  std::ostream& log_;
+  bool bar_;
+  std::size_t total_;
+  std::size_t done_ = 0;
+  std::size_t not_clean_ = 0;
+  std::size_t failed_ = 0;
+  base::Stopwatch clock_;
+};
+
+// Copies each run's top view to topviews/ and keeps or drops its folder as options ask; a
+// failed run's folder gets its error.
+void file_runs(const std::vector<SuiteRun>& runs, KeepRuns keep, OutputDir& out) {
+  const std::filesystem::path runs_dir = out.staging_path("runs");
+  std::filesystem::create_directories(out.staging_path("topviews"));
+  for (const SuiteRun& run : runs) {
+    const std::filesystem::path folder = runs_dir / run.folder_name();
+    const std::filesystem::path topview = folder / "topview.png";
+    if (std::filesystem::exists(topview)) {
+      std::filesystem::copy_file(topview,
+                                 out.staging_path("topviews") / (run.folder_name() + ".png"));
+    }
+    const bool kept = keep == KeepRuns::all || (keep == KeepRuns::failed && !run.clean());
+    if (!kept) {
+      std::filesystem::remove_all(folder);
+    } else if (run.failed()) {
+      std::filesystem::create_directories(folder);
+      write_text(folder / "error.txt", run.error + "\n");
+    }
+  }
+  if (std::filesystem::exists(runs_dir) && std::filesystem::is_empty(runs_dir)) {
+    std::filesystem::remove(runs_dir);
+  }
+}
+
+}  // namespace
+
+std::string to_string(const SuiteConfiguration& c) {
+  return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" +
+         name_or_own(c.controller) + "/" +
+         (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
+}
+
+std::string SuiteRun::folder_name() const {
+  std::string name = case_name + "." + to_string(configuration);
+  std::replace(name.begin(), name.end(), '/', '.');
+  return name;
+}
+
+Shard parse_shard(const std::string& text) {
+  const auto slash = text.find('/');
+  int index = 0;
+  int count = 0;
+  char end = 0;
+  if (slash == std::string::npos ||
+      std::sscanf(text.c_str(), "%d/%d%c", &index, &count, &end) != 2 || count < 1 ||
+      index < 0 || index >= count) {
+    throw base::ConfigError("--shard " + text,
+                            "expected i/n: the i-th of n slices, 0 <= i < n (e.g. 0/4)");
+  }
+  return {index, count};
+}
+
+std::optional<KeepRuns> parse_keep_runs(const std::string& name) {
+  if (name == "failed") {
+    return KeepRuns::failed;
+  }
+  if (name == "all") {
+    return KeepRuns::all;
+  }
+  if (name == "none") {
+    return KeepRuns::none;
+  }
+  return std::nullopt;
+}
+
+std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options) {
+  refuse_repeats(options.flows, "--flow");
+  refuse_repeats(options.segmentations, "--segmentation");
+  refuse_repeats(options.controllers, "--controller");
+  refuse_repeats(options.resolutions, "--resolution");
+  for (const int n : options.resolutions) {
+    if (n < kMinResolution || n > kMaxResolution) {
+      throw base::ConfigError("--resolution " + std::to_string(n),
+                              "must be from " + std::to_string(kMinResolution) + " to " +
+                                  std::to_string(kMaxResolution) + " pixels");
+    }
+  }
+  std::vector<SuiteConfiguration> configurations;
+  for (const auto& flow : or_own(options.flows)) {
+    for (const auto& segmentation : or_own(options.segmentations)) {
+      for (const auto& controller : or_own(options.controllers)) {
+        for (const auto& resolution : or_own(options.resolutions)) {
+          configurations.push_back({flow, segmentation, controller, resolution});
+        }
+      }
+    }
+  }
+  return configurations;
+}
+
+SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& options,
+                      std::ostream& log) {
+  refuse_repeated_names(cases);
+  const std::vector<SuiteConfiguration> configurations = suite_configurations(options);
+  SuiteResult result;
+  result.suite_id = suite_id(cases, configurations, options);
+  result.seed = options.seed;
+  result.shard = options.shard;
+  result.suite_runs = cases.size() * configurations.size();
+  result.jobs = options.jobs;
+  for (std::size_t i = static_cast<std::size_t>(options.shard.index); i < result.suite_runs;
+       i += static_cast<std::size_t>(options.shard.count)) {
+    result.runs.push_back({i, cases[i / configurations.size()].name,
+                           configurations[i % configurations.size()], {}, ""});
+  }
+  OutputDir out(options.out_dir);  // before the first run: a folder that cannot be written fails now
+  const std::filesystem::path runs_dir = out.staging_path("runs");
+  const base::Stopwatch clock;
+  SuiteProgress progress(log, options.progress_bar, result.runs.size());
+  run_in_processes(
+      result.runs.size(), options.jobs,
+      [&](std::size_t k) {
+        const SuiteRun& run = result.runs[k];
+        return summary_fields(run_case(cases[run.index / configurations.size()],
+                                       run.configuration, options,
+                                       runs_dir / run.folder_name()));
+      },
+      [&](std::size_t k, const TaskOutcome& outcome) {
+        SuiteRun& run = result.runs[k];
+        run.error = outcome.error;
+        if (outcome.ok()) {
+          run.summary = parse_summary_fields(outcome.record, run.folder_name());
+        }
+        progress.update(run);
+      });
+  result.wall_s = clock.elapsed_ms() / 1e3;
+  file_runs(result.runs, options.keep_runs, out);
+  write_suite_files(result, out);
+  out.commit();
+  return result;
+}
+
+SuiteResult merge_suite_shards(const std::vector<std::filesystem::path>& shard_dirs,
+                               const std::filesystem::path& out_dir) {
+  if (shard_dirs.empty()) {
+    throw base::ConfigError("eval merge", "give the output folders of a suite's shards");
+  }
+  std::vector<SuiteResult> shards;
+  for (const std::filesystem::path& dir : shard_dirs) {
+    shards.push_back(read_suite_files(dir));
+  }
+  SuiteResult merged;
+  merged.suite_id = shards.front().suite_id;
+  merged.seed = shards.front().seed;
+  merged.suite_runs = shards.front().suite_runs;
+  merged.jobs = 0;
+  const int count = shards.front().shard.count;
+  std::vector<const std::filesystem::path*> by_index(static_cast<std::size_t>(count), nullptr);
+  for (std::size_t k = 0; k < shards.size(); ++k) {
+    const SuiteResult& s = shards[k];
+    const std::string where = shard_dirs[k].string();
+    if (s.suite_id.empty() || s.suite_id != merged.suite_id || s.shard.count != count) {
+      throw base::ConfigError(where, "shard " + std::to_string(s.shard.index) + "/" +
+                                         std::to_string(s.shard.count) + " of suite " +
+                                         s.suite_id + ", not of suite " + merged.suite_id +
+                                         " in " + std::to_string(count) + " shards like " +
+                                         shard_dirs.front().string());
+    }
+    auto& slot = by_index.at(static_cast<std::size_t>(s.shard.index));
+    if (slot != nullptr) {
+      throw base::ConfigError(where, "shard " + std::to_string(s.shard.index) +
+                                         " is also in " + slot->string());
+    }
+    slot = &shard_dirs[k];
+    merged.wall_s += s.wall_s;
+    merged.jobs = std::max(merged.jobs, s.jobs);
+    merged.runs.insert(merged.runs.end(), s.runs.begin(), s.runs.end());
+  }
+  for (int i = 0; i < count; ++i) {
+    if (by_index[static_cast<std::size_t>(i)] == nullptr) {
+      throw base::ConfigError("eval merge", "shard " + std::to_string(i) + "/" +
+                                                std::to_string(count) + " of suite " +
+                                                merged.suite_id + " is missing");
+    }
+  }
+  std::sort(merged.runs.begin(), merged.runs.end(),
+            [](const SuiteRun& a, const SuiteRun& b) { return a.index < b.index; });
+  OutputDir out(out_dir);
+  for (const std::filesystem::path& dir : shard_dirs) {
+    for (const char* folder : {"topviews", "runs"}) {
+      if (std::filesystem::is_directory(dir / folder)) {
+        std::filesystem::copy(dir / folder, out.staging_path(folder),
+                              std::filesystem::copy_options::recursive |
+                                  std::filesystem::copy_options::overwrite_existing);
+      }
+    }
+  }
+  write_suite_files(merged, out);
+  out.commit();
+  return merged;
+}
+
+void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
+  std::ostringstream table;
+  table << std::left << std::setw(26) << "case" << std::setw(40) << "configuration"
+        << std::setw(10) << "status" << std::right << std::setw(11) << "collisions"
+        << std::setw(8) << "goals" << std::setw(15) << "min_clearance" << std::setw(13)
+        << "time_to_goal" << std::setw(11) << "path_ratio" << std::setw(12) << "composite01"
+        << "\n"
+        << std::fixed << std::setprecision(2);
+  std::vector<std::string> configurations;  // in the order they first appear
+  for (const SuiteRun& run : runs) {
+    const std::string configuration = to_string(run.configuration);
+    if (std::find(configurations.begin(), configurations.end(), configuration) ==
+        configurations.end()) {
+      configurations.push_back(configuration);
+    }
+    table << std::left << std::setw(26) << run.case_name << std::setw(40) << configuration
+          << std::setw(10) << (run.failed() ? "failed" : run.clean() ? "clean" : "not clean")
+          << std::right;
+    if (run.failed()) {
+      table << "  " << run.error << "\n";
+      continue;
+    }
+    const RunSummary& s = run.summary;
+    table << std::setw(11) << s.collisions << std::setw(8)
+          << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents_with_goal()))
+          << std::setw(13) << s.min_clearance_m << " m" << std::setw(11) << s.mean_time_to_goal_s
+          << " s" << std::setw(11) << s.mean_path_length_ratio << std::setw(12) << s.composite01
+          << "\n";
+  }
+  for (const std::string& configuration : configurations) {
+    int cases = 0;
+    int clean = 0;
+    int failed = 0;
+    double score = 0.0;
+    for (const SuiteRun& run : runs) {
+      if (to_string(run.configuration) == configuration) {
+        ++cases;
+        clean += run.clean() ? 1 : 0;
+        failed += run.failed() ? 1 : 0;
+        score += run.failed() || std::isnan(run.summary.composite01) ? 0.0 : run.summary.composite01;
+      }
+    }
+    table << "configuration " << configuration << ": clean " << clean << " of " << cases
+          << " cases, total composite01 " << score;
+    if (failed > 0) {
+      table << " (" << failed << " failed runs not scored)";
+    }
+    table << "\n";
+  }
+  out << table.str();
+}
+
+}  // namespace flowsteer::eval

@@ -1,0 +1,285 @@
+#include "suite_files.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "flowsteer/base/config_error.hpp"
+#include "flowsteer/base/yaml_reader.hpp"
+
+namespace flowsteer::eval {
+
+namespace {
+
+const char* const kHeader =
+    "run,case,flow,segmentation,controller,resolution,status,agents,goals_reached,"
+    "agents_with_goal,collisions,min_clearance_m,mean_time_to_goal_s,mean_path_length_m,"
+    "mean_path_length_ratio,"
+    "composite01,error";
+constexpr std::size_t kLabelColumns = 7;  // run ... status
+constexpr std::size_t kScoreColumns = 9;  // agents ... composite01
+
+std::vector<std::string> split(const std::string& line, char separator) {
+  std::vector<std::string> cells;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, separator)) {
+    cells.push_back(cell);
+  }
+  if (!line.empty() && line.back() == separator) {
+    cells.emplace_back();
+  }
+  return cells;
+}
+
+// An error message as one CSV cell that needs no quoting.
+std::string as_cell(std::string text) {
+  std::replace(text.begin(), text.end(), ',', ';');
+  std::replace(text.begin(), text.end(), '"', '\'');
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  std::replace(text.begin(), text.end(), '\r', ' ');
+  return text;
+}
+
+const char* status(const SuiteRun& run) {
+  return run.failed() ? "failed" : run.clean() ? "clean" : "not_clean";
+}
+
+template <typename Method>
+std::string name_or_own(const std::optional<Method>& method) {
+  return method ? std::string(servo::to_string(*method)) : std::string("own");
+}
+
+std::string csv_row(const SuiteRun& run) {
+  const SuiteConfiguration& c = run.configuration;
+  std::ostringstream row;
+  row << run.index << ',' << run.case_name << ',' << name_or_own(c.flow) << ','
+      << name_or_own(c.segmentation) << ',' << name_or_own(c.controller) << ','
+      << (c.resolution ? std::to_string(*c.resolution) : "own") << ',' << status(run) << ','
+      << (run.failed() ? std::string(kScoreColumns - 1, ',') : summary_fields(run.summary)) << ','
+      << as_cell(run.error);
+  return row.str();
+}
+
+// A cell of suite.csv back into its value; `what` names it for the error.
+template <typename Parse>
+auto parse_cell(const std::string& cell, Parse parse, const std::string& what) {
+  const auto value = parse(cell);
+  if (!value) {
+    throw std::runtime_error(what + ": cannot read '" + cell + "'");
+  }
+  return *value;
+}
+
+std::optional<double> parse_double(const std::string& cell) {
+  if (cell.empty()) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  char* end = nullptr;
+  const double value = std::strtod(cell.c_str(), &end);
+  return end == cell.c_str() + cell.size() ? std::optional(value) : std::nullopt;
+}
+
+std::optional<int> parse_int(const std::string& cell) {
+  const std::optional<double> value = parse_double(cell);
+  return value && *value == std::floor(*value) && std::abs(*value) < 1e9
+             ? std::optional(static_cast<int>(*value))
+             : std::nullopt;
+}
+
+template <typename Method, typename Parse>
+std::optional<Method> own_or(const std::string& cell, Parse parse, const std::string& what) {
+  if (cell == "own") {
+    return std::nullopt;
+  }
+  return parse_cell(cell, parse, what);
+}
+
+SuiteRun parse_csv_row(const std::string& line, const std::string& where) {
+  const std::vector<std::string> cells = split(line, ',');
+  if (cells.size() != kLabelColumns + kScoreColumns + 1) {
+    throw std::runtime_error(where + ": expected " +
+                             std::to_string(kLabelColumns + kScoreColumns + 1) + " cells, got " +
+                             std::to_string(cells.size()));
+  }
+  SuiteRun run;
+  run.index = static_cast<std::size_t>(parse_cell(cells[0], parse_int, where + ": run"));
+  run.case_name = cells[1];
+  run.configuration.flow = own_or<servo::FlowMethod>(
+      cells[2], [](const std::string& s) { return servo::parse_flow_method(s); }, where);
+  run.configuration.segmentation = own_or<servo::SegmentationMethod>(
+      cells[3], [](const std::string& s) { return servo::parse_segmentation_method(s); }, where);
+  run.configuration.controller = own_or<servo::SteeringModel>(
+      cells[4], [](const std::string& s) { return servo::parse_steering_model(s); }, where);
+  run.configuration.resolution = own_or<int>(cells[5], parse_int, where + ": resolution");
+  run.error = cells.back();
+  if (cells[6] == "failed") {
+    run.error = run.error.empty() ? "failed" : run.error;
+    return run;
+  }
+  std::string scores;
+  for (std::size_t k = kLabelColumns; k < kLabelColumns + kScoreColumns; ++k) {
+    if (k > kLabelColumns) {
+      scores += ',';
+    }
+    scores += cells[k];
+  }
+  run.summary = parse_summary_fields(scores, where);
+  return run;
+}
+
+std::string suite_json(const SuiteResult& result) {
+  std::ostringstream out;
+  out << std::setprecision(6) << "{\n  \"suite_id\": \"" << result.suite_id
+      << "\",\n  \"seed\": " << result.seed << ",\n  \"shard\": " << result.shard.index
+      << ",\n  \"shards\": " << result.shard.count << ",\n  \"suite_runs\": " << result.suite_runs
+      << ",\n  \"runs\": " << result.runs.size() << ",\n  \"jobs\": " << result.jobs
+      << ",\n  \"wall_s\": " << result.wall_s << "\n}\n";
+  return out.str();
+}
+
+// Every run's top view, scaled into a grid; runs that are not clean framed in red, the case and
+// the configuration under each.
+cv::Mat contact_sheet(const std::vector<SuiteRun>& runs, const std::filesystem::path& topviews) {
+  constexpr int kCell = 300;
+  constexpr int kCaption = 44;
+  constexpr int kGap = 10;
+  constexpr int kFrame = 6;
+  const int n = std::max<int>(1, static_cast<int>(runs.size()));
+  const int columns = std::min(8, static_cast<int>(std::ceil(std::sqrt(n))));
+  const int rows = (n + columns - 1) / columns;
+  cv::Mat sheet(rows * (kCell + kCaption + kGap) + kGap, columns * (kCell + kGap) + kGap, CV_8UC3,
+                cv::Scalar(255, 255, 255));
+  const cv::Scalar red(0, 0, 220);
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const SuiteRun& run = runs[k];
+    const cv::Rect cell(kGap + static_cast<int>(k) % columns * (kCell + kGap),
+                        kGap + static_cast<int>(k) / columns * (kCell + kCaption + kGap), kCell,
+                        kCell);
+    const cv::Mat view = cv::imread((topviews / (run.folder_name() + ".png")).string());
+    if (view.empty()) {
+      sheet(cell).setTo(cv::Scalar(225, 225, 225));
+      cv::putText(sheet, "no top view", {cell.x + 12, cell.y + kCell / 2},
+                  cv::FONT_HERSHEY_SIMPLEX, 0.6, red, 1, cv::LINE_AA);
+    } else {
+      const double scale = std::min(static_cast<double>(kCell) / view.cols,
+                                    static_cast<double>(kCell) / view.rows);
+      cv::Mat fitted;
+      cv::resize(view, fitted, {}, scale, scale, cv::INTER_AREA);
+      fitted.copyTo(sheet(cv::Rect(cell.x + (kCell - fitted.cols) / 2,
+                                   cell.y + (kCell - fitted.rows) / 2, fitted.cols, fitted.rows)));
+    }
+    if (!run.clean()) {
+      cv::rectangle(sheet, cell, red, kFrame);
+    }
+    cv::putText(sheet, run.case_name + (run.failed() ? " (failed)" : ""),
+                {cell.x, cell.y + kCell + 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                run.clean() ? cv::Scalar(30, 30, 30) : red, 1, cv::LINE_AA);
+    cv::putText(sheet, to_string(run.configuration), {cell.x, cell.y + kCell + 36},
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(90, 90, 90), 1, cv::LINE_AA);
+  }
+  return sheet;
+}
+
+}  // namespace
+
+std::string summary_fields(const RunSummary& s) {
+  const double values[kScoreColumns] = {static_cast<double>(s.agents),
+                                        static_cast<double>(s.goals_reached),
+                                        static_cast<double>(s.agents_with_goal()),
+                                        static_cast<double>(s.collisions),
+                                        s.min_clearance_m,
+                                        s.mean_time_to_goal_s,
+                                        s.mean_path_length_m,
+                                        s.mean_path_length_ratio,
+                                        s.composite01};
+  std::string fields;
+  for (std::size_t k = 0; k < kScoreColumns; ++k) {
+    if (k > 0) {
+      fields += ',';
+    }
+    fields += format_csv_number(values[k]);
+  }
+  return fields;
+}
+
+RunSummary parse_summary_fields(const std::string& text, const std::string& source) {
+  const std::vector<std::string> cells = split(text, ',');
+  if (cells.size() != kScoreColumns) {
+    throw std::runtime_error(source + ": expected " + std::to_string(kScoreColumns) +
+                             " scores, got '" + text + "'");
+  }
+  auto integer = [&](std::size_t k) { return parse_cell(cells[k], parse_int, source); };
+  auto real = [&](std::size_t k) { return parse_cell(cells[k], parse_double, source); };
+  RunSummary s;
+  s.agents = integer(0);
+  s.goals_reached = integer(1);
+  s.followers = s.agents - integer(2);
+  s.collisions = integer(3);
+  s.min_clearance_m = real(4);
+  s.mean_time_to_goal_s = real(5);
+  s.mean_path_length_m = real(6);
+  s.mean_path_length_ratio = real(7);
+  s.composite01 = real(8);
+  return s;
+}
+
+void write_suite_files(const SuiteResult& result, OutputDir& out) {
+  std::string csv = std::string(kHeader) + "\n";
+  for (const SuiteRun& run : result.runs) {
+    csv += csv_row(run) + "\n";
+  }
+  write_text(out.staging_path("suite.csv"), csv);
+  std::ostringstream table;
+  print_suite_table(result.runs, table);
+  write_text(out.staging_path("suite.txt"), table.str());
+  write_text(out.staging_path("suite.json"), suite_json(result));
+  write_image(out.staging_path("contact_sheet.png"),
+              contact_sheet(result.runs, out.staging_path("topviews")));
+}
+
+SuiteResult read_suite_files(const std::filesystem::path& dir) {
+  const std::string json_path = (dir / "suite.json").string();
+  if (!std::filesystem::exists(json_path)) {
+    throw base::ConfigError(dir.string(), "not a suite's output folder: it has no suite.json");
+  }
+  YAML::Node json;
+  try {
+    json = YAML::LoadFile(json_path);
+  } catch (const YAML::Exception& e) {
+    throw base::ConfigError(json_path, e.mark.line + 1, e.mark.column + 1, "", e.msg);
+  }
+  const base::YamlReader reader(json_path);
+  SuiteResult result;
+  result.suite_id = reader.text(json, "", "suite_id", "");
+  result.seed = static_cast<std::uint32_t>(reader.non_negative(json, "", "seed", 1));
+  result.shard = {static_cast<int>(reader.non_negative(json, "", "shard", 0)),
+                  static_cast<int>(reader.positive(json, "", "shards", 1))};
+  result.suite_runs = static_cast<std::size_t>(reader.non_negative(json, "", "suite_runs", 0));
+  result.jobs = static_cast<int>(reader.positive(json, "", "jobs", 1));
+  result.wall_s = reader.non_negative(json, "", "wall_s", 0);
+
+  const std::string csv_path = (dir / "suite.csv").string();
+  std::ifstream csv(csv_path);
+  std::string line;
+  if (!std::getline(csv, line) || line != kHeader) {
+    throw base::ConfigError(csv_path, 1, 1, "", "not a suite.csv: expected the header " +
+                                                    std::string(kHeader));
+  }
+  for (int line_number = 2; std::getline(csv, line); ++line_number) {
+    try {
+      result.runs.push_back(parse_csv_row(line, csv_path + ":" + std::to_string(line_number)));
+    } catch (const std::runtime_error& e) {
+      throw base::ConfigError(csv_path, e.what());
+    }
+  }
+  return result;
+}
+
+}  // namespace flowsteer::eval

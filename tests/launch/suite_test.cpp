@@ -1,0 +1,226 @@
+// `flowsteer eval suite` and `eval merge` (issue 20): SteerSuite's composite score on hand-made
+// trajectories, a suite run in worker processes, shards merged into the unsharded result, and the
+// errors of bad shards and failing runs.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "flowsteer/base/config_error.hpp"
+#include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/suite.hpp"
+
+namespace flowsteer::eval {
+namespace {
+
+std::string file_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string error_of(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SuiteScore, EffortIsTheActiveTimeAndTheSumOfHalfTheSquaredSpeeds) {
+  // Four steps of 0.5 s: at 1 m/s, 1 m/s, 2 m/s and standing.
+  const std::vector<Eigen::Vector2d> path = {
+      {0.0, 0.0}, {0.5, 0.0}, {0.5, 0.5}, {1.5, 0.5}, {1.5, 0.5}};
+  const Effort effort = steersuite_effort(path, 0.5);
+  EXPECT_DOUBLE_EQ(effort.active_time_s, 2.0);
+  EXPECT_DOUBLE_EQ(effort.kinetic_energy_sum, 0.5 + 0.5 + 2.0 + 0.0);
+  // SteerSuite's weights: 50 per collision, 1 per second, 1 per unit of effort.
+  EXPECT_DOUBLE_EQ(composite01(3, effort), 150.0 + 2.0 + 3.0);
+  EXPECT_DOUBLE_EQ(composite01(0, steersuite_effort(std::vector<Eigen::Vector2d>{{1, 1}}, 0.05)),
+                   0.0);
+}
+
+TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
+  SimResult result;
+  AgentResult straight;  // reached a goal 10 m away along a 12 m path, no collision
+  straight.reached_goal = true;
+  straight.time_to_goal_s = 10.0;
+  straight.path_length_m = 12.0;
+  straight.straight_line_m = 10.0;
+  straight.active_time_s = 10.0;
+  straight.kinetic_energy_sum = 20.0;
+  straight.min_clearance_m = 0.4;
+  AgentResult bumped;  // two collisions, did not arrive
+  bumped.path_length_m = 5.0;
+  bumped.straight_line_m = 8.0;
+  bumped.active_time_s = 30.0;
+  bumped.kinetic_energy_sum = 4.0;
+  bumped.collisions = 2;
+  bumped.min_clearance_m = -0.1;
+  result.agents = {straight, bumped};
+  result.collisions.resize(1);  // one contact between two agents counts once for the run
+  const RunSummary s = summarize(result);
+  EXPECT_EQ(s.collisions, 1);
+  EXPECT_EQ(s.goals_reached, 1);
+  EXPECT_FALSE(s.clean());
+  EXPECT_DOUBLE_EQ(s.mean_path_length_ratio, 1.2);  // only agents that arrived
+  EXPECT_DOUBLE_EQ(s.min_clearance_m, -0.1);
+  EXPECT_DOUBLE_EQ(s.composite01, ((0 + 10 + 20) + (100 + 30 + 4)) / 2.0);
+}
+
+TEST(SuiteScore, AnAgentsEffortStopsWhenItReachesItsGoal) {
+  SimOptions options;
+  options.write_outputs = false;
+  options.resolution = 32;
+  const sim_camera::WorldSpec world = config::parse_scenario(
+      "step_s: 0.1\nduration_s: 8\nagents:\n"
+      "  - {start: [0, 0], heading_deg: 0, speed_mps: 1, goal: [2, 0]}\n",
+      "walk.yaml");
+  std::ostream quiet(nullptr);
+  const SimResult result = run_simulation(world, options, quiet);
+  ASSERT_EQ(result.agents.size(), 1U);
+  const AgentResult& a = result.agents[0];
+  ASSERT_TRUE(a.reached_goal);
+  EXPECT_NEAR(a.active_time_s, a.time_to_goal_s, 0.1 + 1e-9);
+  EXPECT_LT(a.active_time_s, result.duration_s);
+  EXPECT_DOUBLE_EQ(a.straight_line_m, 2.0);
+  const RunSummary s = summarize(result);
+  EXPECT_GE(s.mean_path_length_ratio, (2.0 - world.agents[0].goal_radius_m) / 2.0);
+  EXPECT_NEAR(s.composite01, a.active_time_s + a.kinetic_energy_sum, 1e-9);
+}
+
+TEST(SuiteShard, BadSpecsAreRefusedByName) {
+  for (const char* spec : {"3/2", "x/4", "1/0", "-1/2", "1/2x", "2", "1/2/3"}) {
+    const std::string error = error_of([&] { parse_shard(spec); });
+    EXPECT_NE(error.find(std::string("--shard ") + spec), std::string::npos) << error;
+  }
+  const Shard shard = parse_shard("2/5");
+  EXPECT_EQ(shard.index, 2);
+  EXPECT_EQ(shard.count, 5);
+}
+
+SuiteCase walk_case(const std::string& name, double goal_x_m) {
+  const std::string text = "step_s: 0.1\nduration_s: 3\nagents:\n"
+                           "  - {start: [0, 0], heading_deg: 0, speed_mps: 1, goal: [" +
+                           std::to_string(goal_x_m) + ", 0]}\n";
+  return {name, name + ".yaml", text, config::parse_scenario(text, name + ".yaml")};
+}
+
+// A follower cannot steer by motion energy: with --controller motion_energy this case's run fails
+// in its worker.
+SuiteCase follower_case() {
+  const std::string text = "step_s: 0.1\nduration_s: 3\nagents:\n"
+                           "  - {start: [0, 0], heading_deg: 0, goal: [3, 0]}\n"
+                           "  - {start: [-2, 0], heading_deg: 0, leader: 0}\n";
+  return {"follow", "follow.yaml", text, config::parse_scenario(text, "follow.yaml")};
+}
+
+class SuiteRunTest : public ::testing::Test {
+ protected:
+  std::filesystem::path dir_ = std::filesystem::temp_directory_path() / "flowsteer_suite_test";
+  std::vector<SuiteCase> cases_ = {walk_case("near", 1.5), walk_case("far", 30.0),
+                                   follower_case()};
+  void SetUp() override { std::filesystem::remove_all(dir_); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  SuiteOptions options(const std::string& out) const {
+    SuiteOptions o;
+    o.controllers = {servo::SteeringModel::geometric, servo::SteeringModel::motion_energy};
+    o.resolutions = {24};
+    o.jobs = 2;
+    o.out_dir = dir_ / out;
+    return o;
+  }
+};
+
+TEST_F(SuiteRunTest, EveryCaseRunsUnderEveryConfigurationAndAFailureStopsNoOther) {
+  std::ostringstream log;
+  const SuiteResult result = run_suite(cases_, options("all"), log);
+  ASSERT_EQ(result.runs.size(), 6U);
+  EXPECT_EQ(result.suite_runs, 6U);
+  for (std::size_t k = 0; k < 6; ++k) {
+    EXPECT_EQ(result.runs[k].index, k);
+  }
+  EXPECT_TRUE(result.runs[0].clean()) << result.runs[0].error;  // near, geometric
+  EXPECT_FALSE(result.runs[2].clean());                         // far: not reached in 3 s
+  EXPECT_FALSE(result.runs[2].failed());
+  EXPECT_TRUE(result.runs[4].clean()) << result.runs[4].error;  // follow, geometric
+  ASSERT_TRUE(result.runs[5].failed());                         // follow, motion energy
+  EXPECT_NE(result.runs[5].error.find("motion"), std::string::npos) << result.runs[5].error;
+
+  const std::filesystem::path out = dir_ / "all";
+  const std::string csv = file_text(out / "suite.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
+  EXPECT_NE(csv.find("5,follow,own,own,motion_energy,24,failed,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("0,near,own,own,geometric,24,clean,1,1,1,0,"), std::string::npos) << csv;
+  EXPECT_TRUE(std::filesystem::exists(out / "contact_sheet.png"));
+  EXPECT_TRUE(std::filesystem::exists(out / "suite.json"));
+  EXPECT_NE(file_text(out / "suite.txt").find("clean 2 of 3 cases"), std::string::npos);
+  // Top views of every run that got one; folders only for the runs that are not clean.
+  EXPECT_TRUE(std::filesystem::exists(out / "topviews" / "near.own.own.geometric.24.png"));
+  EXPECT_FALSE(std::filesystem::exists(out / "runs" / "near.own.own.geometric.24"));
+  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "far.own.own.geometric.24" / "trajectories.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "follow.own.own.motion_energy.24" / "error.txt"));
+  for (const auto& entry : std::filesystem::directory_iterator(out)) {
+    EXPECT_EQ(entry.path().filename().string().rfind(".staging", 0), std::string::npos);
+  }
+}
+
+TEST_F(SuiteRunTest, ThreeShardsMergedAreTheUnshardedSuite) {
+  std::ostringstream log;
+  run_suite(cases_, options("whole"), log);
+  std::vector<std::filesystem::path> shards;
+  for (int i = 0; i < 3; ++i) {
+    SuiteOptions o = options("shard" + std::to_string(i));
+    o.shard = {i, 3};
+    o.jobs = 1;
+    EXPECT_EQ(run_suite(cases_, o, log).runs.size(), 2U);
+    shards.push_back(o.out_dir);
+  }
+  const SuiteResult merged = merge_suite_shards({shards[2], shards[0], shards[1]}, dir_ / "merged");
+  EXPECT_EQ(merged.runs.size(), 6U);
+  for (const char* file : {"suite.csv", "suite.txt"}) {
+    EXPECT_EQ(file_text(dir_ / "merged" / file), file_text(dir_ / "whole" / file)) << file;
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "contact_sheet.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "runs" / "far.own.own.geometric.24"));
+
+  // A shard missing, one given twice, or a shard of another suite are refused by name.
+  EXPECT_NE(error_of([&] { merge_suite_shards({shards[0], shards[1]}, dir_ / "m2"); })
+                .find("shard 2/3 of suite"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { merge_suite_shards({shards[0], shards[0], shards[1]}, dir_ / "m3"); })
+                .find("is also in"),
+            std::string::npos);
+  SuiteOptions other = options("other");
+  other.shard = {1, 3};
+  other.seed = 7;
+  run_suite(cases_, other, log);
+  const std::string mixed =
+      error_of([&] { merge_suite_shards({shards[0], other.out_dir, shards[2]}, dir_ / "m4"); });
+  EXPECT_NE(mixed.find("other"), std::string::npos) << mixed;
+  EXPECT_NE(mixed.find("not of suite"), std::string::npos) << mixed;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "m4" / "suite.csv"));
+  EXPECT_NE(error_of([&] { merge_suite_shards({dir_}, dir_ / "m5"); }).find("no suite.json"),
+            std::string::npos);
+}
+
+TEST_F(SuiteRunTest, RepeatedConfigurationsAndCaseNamesAreRefused) {
+  std::ostringstream log;
+  SuiteOptions o = options("bad");
+  o.resolutions = {24, 24};
+  EXPECT_NE(error_of([&] { run_suite(cases_, o, log); }).find("--resolution 24: given twice"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              run_suite({walk_case("a", 1.0), walk_case("a", 2.0)}, options("bad"), log);
+            }).find("a second case named 'a'"),
+            std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "bad" / "suite.csv"));
+}
+
+}  // namespace
+}  // namespace flowsteer::eval
