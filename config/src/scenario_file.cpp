@@ -1,5 +1,6 @@
 #include "flowsteer/config/scenario_file.hpp"
 
+#include <filesystem>
 #include <numbers>
 #include <optional>
 
@@ -416,6 +417,18 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
 
 sim_camera::WorldSpec load_scenario(const std::string& path) {
   return parse_scenario(base::read_text_file(path, "scenario file"), path);
+}
+
+LoadedCase load_case(const std::filesystem::path& path, std::uint32_t seed) {
+  const std::string extension = path.extension().string();
+  if (extension == ".xml") {
+    return load_steersuite(path.string(), seed);
+  }
+  if (extension == ".yaml" || extension == ".yml") {
+    return {load_scenario(path.string()), {}};
+  }
+  throw base::ConfigError(
+      path.string(), "unknown kind of scenario: .xml (SteerSuite) and .yaml or .yml are known");
 }
 
 std::vector<BuiltinScenario> builtin_scenarios() {

@@ -206,7 +206,7 @@ TEST(ScenarioFile, FollowersFollowWithBetaOneUnlessToldOtherwise) {
 }
 
 TEST(SteerSuite, TestCaseBecomesAWorld) {
-  const sim_camera::WorldSpec w = load_steersuite(FLOWSTEER_TEST_DATA "/corridor.xml");
+  const sim_camera::WorldSpec w = load_steersuite(FLOWSTEER_TEST_DATA "/corridor.xml").world;
   EXPECT_EQ(w.name, "corridor");
   ASSERT_EQ(w.obstacles.size(), 2U);
   // SteerSuite z ∈ [3, 4] is world y ∈ [−4, −3].
@@ -227,7 +227,7 @@ TEST(SteerSuite, TestCaseBecomesAWorld) {
     EXPECT_LE(std::abs(w.agents[i].start_m.y()), 2.0);
   }
   // The same file gives the same world: random placements are seeded.
-  const sim_camera::WorldSpec again = load_steersuite(FLOWSTEER_TEST_DATA "/corridor.xml");
+  const sim_camera::WorldSpec again = load_steersuite(FLOWSTEER_TEST_DATA "/corridor.xml").world;
   EXPECT_EQ(again.agents[3].start_m, w.agents[3].start_m);
 }
 
@@ -243,8 +243,9 @@ TEST(SteerSuite, MalformedFilesAreRejectedWithTheirLine) {
   EXPECT_NE(error_of_xml("<SteerBenchTestCase><header>").find("case.xml:"), std::string::npos);
   EXPECT_NE(error_of_xml("<Other/>").find("<SteerBenchTestCase>"), std::string::npos);
   const std::string no_position =
-      "<SteerBenchTestCase>\n<header><worldBounds><xmin>-5</xmin><xmax>5</xmax><zmin>-5</zmin>"
-      "<zmax>5</zmax></worldBounds></header>\n<agent>\n<initialConditions><radius>0.5</radius>"
+      "<SteerBenchTestCase>\n<header><worldBounds><xmin>-5</xmin><xmax>5</xmax><ymin>0</ymin>"
+      "<ymax>0</ymax><zmin>-5</zmin><zmax>5</zmax></worldBounds></header>\n<agent>\n"
+      "<initialConditions><radius>0.5</radius><direction><x>1</x><y>0</y><z>0</z></direction>"
       "</initialConditions>\n</agent>\n</SteerBenchTestCase>";
   EXPECT_NE(error_of_xml(no_position).find("case.xml:4:"), std::string::npos)
       << error_of_xml(no_position);

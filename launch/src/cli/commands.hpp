@@ -4,6 +4,7 @@
 // subcommand (and its options struct) to the app and returns what runs it once the command line
 // has been parsed; main runs the one the user chose.
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -49,9 +50,10 @@ struct ScenarioChoice {
   std::string file;        // positional SCENARIO_FILE
   std::string name;        // --scenario
   std::string steersuite;  // --steersuite, where the command has it
+  std::uint32_t seed = 1;  // --seed: the SteerSuite test case's random placements
 };
 sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice);
-// Adds SCENARIO_FILE, --scenario and --steersuite to a command that runs a scenario.
+// Adds SCENARIO_FILE, --scenario, --steersuite and --seed to a command that runs a scenario.
 void add_scenario_options(CLI::App& command, ScenarioChoice& choice);
 
 }  // namespace flowsteer::cli

@@ -1,3 +1,4 @@
+#include <iostream>
 #include <string>
 
 #include "commands.hpp"
@@ -35,7 +36,11 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
     return config::load_scenario(choice.file);
   }
   if (!choice.steersuite.empty()) {
-    return config::load_steersuite(choice.steersuite);
+    config::LoadedCase loaded = config::load_steersuite(choice.steersuite, choice.seed);
+    for (const std::string& warning : loaded.warnings) {
+      std::cerr << "flowsteer " << command << ": warning: " << warning << "\n";
+    }
+    return std::move(loaded.world);
   }
   return config::builtin_scenario(choice.name.empty() ? "room" : choice.name);
 }
@@ -46,6 +51,11 @@ void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
   command.add_option("--scenario", choice.name,
                      "a built-in scenario (flowsteer scenarios lists them)");
   command.add_option("--steersuite", choice.steersuite, "a SteerSuite test case (XML)");
+  command
+      .add_option("--seed", choice.seed,
+                  "where a SteerSuite test case's random agents, obstacles, targets and "
+                  "directions go")
+      ->capture_default_str();
 }
 
 }  // namespace flowsteer::cli
