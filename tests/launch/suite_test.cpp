@@ -77,12 +77,13 @@ TEST(SuiteScore, AnAgentsEffortStopsWhenItReachesItsGoal) {
   options.write_outputs = false;
   options.resolution = 32;
   const sim_camera::WorldSpec world = config::parse_scenario(
-      "step_s: 0.1\nduration_s: 8\nagents:\n"
-      "  - {start: [0, 0], heading_deg: 0, speed_mps: 1, goal: [2, 0]}\n",
+      "step_s: 0.1\nduration_s: 5\nagents:\n"
+      "  - {start: [0, 0], heading_deg: 0, speed_mps: 1, goal: [2, 0]}\n"
+      "  - {start: [0, 5], heading_deg: 0, speed_mps: 1, goal: [30, 5]}\n",
       "walk.yaml");
   std::ostream quiet(nullptr);
   const SimResult result = run_simulation(world, options, quiet);
-  ASSERT_EQ(result.agents.size(), 1U);
+  ASSERT_EQ(result.agents.size(), 2U);
   const AgentResult& a = result.agents[0];
   ASSERT_TRUE(a.reached_goal);
   EXPECT_NEAR(a.active_time_s, a.time_to_goal_s, 0.1 + 1e-9);
@@ -90,7 +91,11 @@ TEST(SuiteScore, AnAgentsEffortStopsWhenItReachesItsGoal) {
   EXPECT_DOUBLE_EQ(a.straight_line_m, 2.0);
   const RunSummary s = summarize(result);
   EXPECT_GE(s.mean_path_length_ratio, (2.0 - world.agents[0].goal_radius_m) / 2.0);
-  EXPECT_NEAR(s.composite01, a.active_time_s + a.kinetic_energy_sum, 1e-9);
+  const AgentResult& b = result.agents[1];  // walks the whole run
+  EXPECT_NEAR(b.active_time_s, result.duration_s, 1e-9);
+  EXPECT_NEAR(s.composite01,
+              (a.active_time_s + a.kinetic_energy_sum + b.active_time_s + b.kinetic_energy_sum) / 2,
+              1e-9);
 }
 
 TEST(SuiteShard, BadSpecsAreRefusedByName) {
@@ -121,7 +126,11 @@ SuiteCase follower_case() {
 
 class SuiteRunTest : public ::testing::Test {
  protected:
-  std::filesystem::path dir_ = std::filesystem::temp_directory_path() / "flowsteer_suite_test";
+  // One folder per test: ctest runs them in parallel.
+  std::filesystem::path dir_ =
+      std::filesystem::temp_directory_path() /
+      (std::string("flowsteer_suite_test_") +
+       ::testing::UnitTest::GetInstance()->current_test_info()->name());
   std::vector<SuiteCase> cases_ = {walk_case("near", 1.5), walk_case("far", 30.0),
                                    follower_case()};
   void SetUp() override { std::filesystem::remove_all(dir_); }

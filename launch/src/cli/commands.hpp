@@ -53,6 +53,9 @@ struct ScenarioChoice {
   std::uint32_t seed = 1;  // --seed: the SteerSuite test case's random placements
 };
 sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice);
+// Makes each of the command's repeatable options take one value per use (`--flow a --flow b`),
+// so that a positional argument after one is not read as another of its values.
+void one_value_per_use(CLI::App& command);
 // Adds SCENARIO_FILE, --scenario, --steersuite and --seed to a command that runs a scenario.
 void add_scenario_options(CLI::App& command, ScenarioChoice& choice);
 

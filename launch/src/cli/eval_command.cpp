@@ -124,6 +124,7 @@ Subcommand add_eval_robustness(CLI::App& eval) {
       ->capture_default_str();
   robustness->add_option("--out", command->out_dir, "folder for robustness.csv and robustness.txt")
       ->capture_default_str();
+  one_value_per_use(*robustness);
   return {robustness, [command] { return run_eval_robustness(*command); }};
 }
 

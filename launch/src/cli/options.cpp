@@ -45,6 +45,14 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
   return config::builtin_scenario(choice.name.empty() ? "room" : choice.name);
 }
 
+void one_value_per_use(CLI::App& command) {
+  for (CLI::Option* option : command.get_options()) {
+    if (!option->get_positional()) {
+      option->allow_extra_args(false);
+    }
+  }
+}
+
 void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
   command.add_option("scenario_file", choice.file,
                      "scenario YAML (see launch/scenarios/room.yaml)");

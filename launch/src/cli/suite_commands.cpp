@@ -143,6 +143,7 @@ Subcommand add_eval_suite(CLI::App& eval) {
   suite->add_option("--steps", command->steps, "stop each run after N control steps")
       ->check(CLI::PositiveNumber);
   suite->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
+  one_value_per_use(*suite);
   return {suite, [command] { return run_eval_suite(*command); }};
 }
 
