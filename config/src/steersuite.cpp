@@ -546,7 +546,9 @@ void read_header(XmlReader& r, const XMLElement* e, sim_camera::WorldSpec& w, Te
   const RawBounds b = read_raw_bounds(r, bounds);
   if (b.empty) {
     // Published cases (circle-20.xml) have them inverted; SteerSuite runs them all the same.
-    r.warn(bounds, "empty or inverted <worldBounds> ignored: nothing in the file can be random");
+    r.warn(bounds,
+           "empty or inverted <worldBounds> ignored (only random positions and targets need "
+           "them)");
   } else {
     tc.world = b.ground;
   }
