@@ -298,6 +298,9 @@ class SimulationRun {
       r.straight_line_m += (goal - from).norm();
       from = goal;
     }
+    if (!spec.goals.empty()) {  // it arrives on its last goal's circle
+      r.straight_line_m = std::max(0.0, r.straight_line_m - spec.goal_radius_m);
+    }
     const Effort effort = steersuite_effort(
         std::span(paths_[i]).first(r.turn_rates.size() + 1), spec_.step_s);
     r.active_time_s = effort.active_time_s;

@@ -175,6 +175,50 @@ void file_runs(const std::vector<SuiteRun>& runs, KeepRuns keep, OutputDir& out)
   }
 }
 
+// Two decimals and the unit; "-" where there is no value (no other body, no agent arrived).
+std::string measure(double value, const char* unit) {
+  if (!std::isfinite(value)) {
+    return "-";
+  }
+  char text[48];
+  std::snprintf(text, sizeof text, "%.2f%s", value, unit);
+  return text;
+}
+
+// Per configuration, in the order they first appear: the clean cases and the total score.
+void print_configuration_totals(const std::vector<SuiteRun>& runs, std::ostream& out) {
+  std::vector<std::string> configurations;
+  for (const SuiteRun& run : runs) {
+    const std::string configuration = to_string(run.configuration);
+    if (std::find(configurations.begin(), configurations.end(), configuration) ==
+        configurations.end()) {
+      configurations.push_back(configuration);
+    }
+  }
+  for (const std::string& configuration : configurations) {
+    int cases = 0;
+    int clean = 0;
+    int failed = 0;
+    double score = 0.0;
+    for (const SuiteRun& run : runs) {
+      if (to_string(run.configuration) != configuration) {
+        continue;
+      }
+      ++cases;
+      clean += run.clean() ? 1 : 0;
+      failed += run.failed() ? 1 : 0;
+      score += run.failed() || !std::isfinite(run.summary.composite01) ? 0.0
+                                                                        : run.summary.composite01;
+    }
+    out << "configuration " << configuration << ": clean " << clean << " of " << cases
+        << " cases, total composite01 " << measure(score, "");
+    if (failed > 0) {
+      out << " (" << failed << " failed runs not scored)";
+    }
+    out << "\n";
+  }
+}
+
 }  // namespace
 
 std::string to_string(const SuiteConfiguration& c) {
@@ -344,54 +388,36 @@ SuiteResult merge_suite_shards(const std::vector<std::filesystem::path>& shard_d
 }
 
 void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
-  std::ostringstream table;
-  table << std::left << std::setw(26) << "case" << std::setw(40) << "configuration"
-        << std::setw(10) << "status" << std::right << std::setw(11) << "collisions"
-        << std::setw(8) << "goals" << std::setw(15) << "min_clearance" << std::setw(13)
-        << "time_to_goal" << std::setw(11) << "path_ratio" << std::setw(12) << "composite01"
-        << "\n"
-        << std::fixed << std::setprecision(2);
-  std::vector<std::string> configurations;  // in the order they first appear
+  std::size_t case_width = 6;
+  std::size_t configuration_width = 15;
   for (const SuiteRun& run : runs) {
-    const std::string configuration = to_string(run.configuration);
-    if (std::find(configurations.begin(), configurations.end(), configuration) ==
-        configurations.end()) {
-      configurations.push_back(configuration);
-    }
-    table << std::left << std::setw(26) << run.case_name << std::setw(40) << configuration
-          << std::setw(10) << (run.failed() ? "failed" : run.clean() ? "clean" : "not clean")
-          << std::right;
+    case_width = std::max(case_width, run.case_name.size() + 2);
+    configuration_width = std::max(configuration_width, to_string(run.configuration).size() + 2);
+  }
+  const auto w = [](std::size_t width) { return std::setw(static_cast<int>(width)); };
+  std::ostringstream table;
+  table << std::left << w(case_width) << "case" << w(configuration_width) << "configuration"
+        << std::setw(11) << "status" << std::right << std::setw(10) << "collisions"
+        << std::setw(8) << "goals" << std::setw(15) << "min_clearance" << std::setw(14)
+        << "time_to_goal" << std::setw(11) << "path_ratio" << std::setw(12) << "composite01"
+        << "\n";
+  for (const SuiteRun& run : runs) {
+    table << std::left << w(case_width) << run.case_name << w(configuration_width)
+          << to_string(run.configuration) << std::setw(11)
+          << (run.failed() ? "failed" : run.clean() ? "clean" : "not clean") << std::right;
     if (run.failed()) {
-      table << "  " << run.error << "\n";
+      table << run.error << "\n";
       continue;
     }
     const RunSummary& s = run.summary;
-    table << std::setw(11) << s.collisions << std::setw(8)
+    table << std::setw(10) << s.collisions << std::setw(8)
           << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents_with_goal()))
-          << std::setw(13) << s.min_clearance_m << " m" << std::setw(11) << s.mean_time_to_goal_s
-          << " s" << std::setw(11) << s.mean_path_length_ratio << std::setw(12) << s.composite01
+          << std::setw(15) << measure(s.min_clearance_m, " m") << std::setw(14)
+          << measure(s.mean_time_to_goal_s, " s") << std::setw(11)
+          << measure(s.mean_path_length_ratio, "") << std::setw(12) << measure(s.composite01, "")
           << "\n";
   }
-  for (const std::string& configuration : configurations) {
-    int cases = 0;
-    int clean = 0;
-    int failed = 0;
-    double score = 0.0;
-    for (const SuiteRun& run : runs) {
-      if (to_string(run.configuration) == configuration) {
-        ++cases;
-        clean += run.clean() ? 1 : 0;
-        failed += run.failed() ? 1 : 0;
-        score += run.failed() || std::isnan(run.summary.composite01) ? 0.0 : run.summary.composite01;
-      }
-    }
-    table << "configuration " << configuration << ": clean " << clean << " of " << cases
-          << " cases, total composite01 " << score;
-    if (failed > 0) {
-      table << " (" << failed << " failed runs not scored)";
-    }
-    table << "\n";
-  }
+  print_configuration_totals(runs, table);
   out << table.str();
 }
 

@@ -34,7 +34,8 @@ struct AgentResult {
   double min_clearance_m = 0.0;
   int collisions = 0;
   double final_distance_to_leader_m = -1.0;  // followers only
-  // From its start through its goals in order; NaN for followers.
+  // From its start through its goals in order to its last goal's circle, where it arrives; NaN
+  // for followers.
   double straight_line_m = 0.0;
   // SteerSuite's effort over the steps the agent steered (see steersuite_effort).
   double active_time_s = 0.0;
