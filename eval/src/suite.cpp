@@ -151,9 +151,11 @@ class SuiteProgress {
 };
 
 // Copies each run's top view to topviews/ and keeps or drops its folder as options ask; a
-// failed run's folder gets its error.
+// failed run's folder gets its error. Both folders are made even when empty, so that they replace
+// those of an earlier suite in the same output folder.
 void file_runs(const std::vector<SuiteRun>& runs, KeepRuns keep, OutputDir& out) {
   const std::filesystem::path runs_dir = out.staging_path("runs");
+  std::filesystem::create_directories(runs_dir);
   std::filesystem::create_directories(out.staging_path("topviews"));
   for (const SuiteRun& run : runs) {
     const std::filesystem::path folder = runs_dir / run.folder_name();
@@ -169,9 +171,6 @@ void file_runs(const std::vector<SuiteRun>& runs, KeepRuns keep, OutputDir& out)
       std::filesystem::create_directories(folder);
       write_text(folder / "error.txt", run.error + "\n");
     }
-  }
-  if (std::filesystem::exists(runs_dir) && std::filesystem::is_empty(runs_dir)) {
-    std::filesystem::remove(runs_dir);
   }
 }
 
@@ -217,6 +216,50 @@ void print_configuration_totals(const std::vector<SuiteRun>& runs, std::ostream&
     }
     out << "\n";
   }
+}
+
+// The runs of every shard of one suite, by index; base::ConfigError for a folder of another
+// suite, a shard given twice or one missing.
+SuiteResult join_shards(const std::vector<std::filesystem::path>& shard_dirs) {
+  if (shard_dirs.empty()) {
+    throw base::ConfigError("eval merge", "give the output folders of a suite's shards");
+  }
+  SuiteResult merged = read_suite_files(shard_dirs.front());
+  merged.runs.clear();
+  merged.wall_s = 0.0;
+  const int count = merged.shard.count;
+  std::vector<const std::filesystem::path*> by_index(static_cast<std::size_t>(count), nullptr);
+  for (const std::filesystem::path& dir : shard_dirs) {
+    const SuiteResult shard = read_suite_files(dir);
+    if (shard.suite_id.empty() || shard.suite_id != merged.suite_id ||
+        shard.shard.count != count) {
+      throw base::ConfigError(dir.string(), "shard " + std::to_string(shard.shard.index) + "/" +
+                                                std::to_string(shard.shard.count) + " of suite " +
+                                                shard.suite_id + ", not of suite " +
+                                                merged.suite_id + " in " + std::to_string(count) +
+                                                " shards like " + shard_dirs.front().string());
+    }
+    const std::filesystem::path*& slot = by_index.at(static_cast<std::size_t>(shard.shard.index));
+    if (slot != nullptr) {
+      throw base::ConfigError(dir.string(), "shard " + std::to_string(shard.shard.index) +
+                                                " is also in " + slot->string());
+    }
+    slot = &dir;
+    merged.wall_s += shard.wall_s;
+    merged.jobs = std::max(merged.jobs, shard.jobs);
+    merged.runs.insert(merged.runs.end(), shard.runs.begin(), shard.runs.end());
+  }
+  for (int i = 0; i < count; ++i) {
+    if (by_index[static_cast<std::size_t>(i)] == nullptr) {
+      throw base::ConfigError("eval merge", "shard " + std::to_string(i) + "/" +
+                                                std::to_string(count) + " of suite " +
+                                                merged.suite_id + " is missing");
+    }
+  }
+  std::sort(merged.runs.begin(), merged.runs.end(),
+            [](const SuiteRun& a, const SuiteRun& b) { return a.index < b.index; });
+  merged.shard = {0, 1};
+  return merged;
 }
 
 }  // namespace
@@ -329,52 +372,11 @@ SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& o
 
 SuiteResult merge_suite_shards(const std::vector<std::filesystem::path>& shard_dirs,
                                const std::filesystem::path& out_dir) {
-  if (shard_dirs.empty()) {
-    throw base::ConfigError("eval merge", "give the output folders of a suite's shards");
-  }
-  std::vector<SuiteResult> shards;
-  for (const std::filesystem::path& dir : shard_dirs) {
-    shards.push_back(read_suite_files(dir));
-  }
-  SuiteResult merged;
-  merged.suite_id = shards.front().suite_id;
-  merged.seed = shards.front().seed;
-  merged.suite_runs = shards.front().suite_runs;
-  merged.jobs = 0;
-  const int count = shards.front().shard.count;
-  std::vector<const std::filesystem::path*> by_index(static_cast<std::size_t>(count), nullptr);
-  for (std::size_t k = 0; k < shards.size(); ++k) {
-    const SuiteResult& s = shards[k];
-    const std::string where = shard_dirs[k].string();
-    if (s.suite_id.empty() || s.suite_id != merged.suite_id || s.shard.count != count) {
-      throw base::ConfigError(where, "shard " + std::to_string(s.shard.index) + "/" +
-                                         std::to_string(s.shard.count) + " of suite " +
-                                         s.suite_id + ", not of suite " + merged.suite_id +
-                                         " in " + std::to_string(count) + " shards like " +
-                                         shard_dirs.front().string());
-    }
-    auto& slot = by_index.at(static_cast<std::size_t>(s.shard.index));
-    if (slot != nullptr) {
-      throw base::ConfigError(where, "shard " + std::to_string(s.shard.index) +
-                                         " is also in " + slot->string());
-    }
-    slot = &shard_dirs[k];
-    merged.wall_s += s.wall_s;
-    merged.jobs = std::max(merged.jobs, s.jobs);
-    merged.runs.insert(merged.runs.end(), s.runs.begin(), s.runs.end());
-  }
-  for (int i = 0; i < count; ++i) {
-    if (by_index[static_cast<std::size_t>(i)] == nullptr) {
-      throw base::ConfigError("eval merge", "shard " + std::to_string(i) + "/" +
-                                                std::to_string(count) + " of suite " +
-                                                merged.suite_id + " is missing");
-    }
-  }
-  std::sort(merged.runs.begin(), merged.runs.end(),
-            [](const SuiteRun& a, const SuiteRun& b) { return a.index < b.index; });
+  SuiteResult merged = join_shards(shard_dirs);
   OutputDir out(out_dir);
-  for (const std::filesystem::path& dir : shard_dirs) {
-    for (const char* folder : {"topviews", "runs"}) {
+  for (const char* folder : {"topviews", "runs"}) {
+    std::filesystem::create_directories(out.staging_path(folder));
+    for (const std::filesystem::path& dir : shard_dirs) {
       if (std::filesystem::is_directory(dir / folder)) {
         std::filesystem::copy(dir / folder, out.staging_path(folder),
                               std::filesystem::copy_options::recursive |

@@ -51,17 +51,11 @@ const char* status(const SuiteRun& run) {
   return run.failed() ? "failed" : run.clean() ? "clean" : "not_clean";
 }
 
-template <typename Method>
-std::string name_or_own(const std::optional<Method>& method) {
-  return method ? std::string(servo::to_string(*method)) : std::string("own");
-}
-
 std::string csv_row(const SuiteRun& run) {
-  const SuiteConfiguration& c = run.configuration;
+  std::string configuration = to_string(run.configuration);  // flow/segmentation/...
+  std::replace(configuration.begin(), configuration.end(), '/', ',');
   std::ostringstream row;
-  row << run.index << ',' << run.case_name << ',' << name_or_own(c.flow) << ','
-      << name_or_own(c.segmentation) << ',' << name_or_own(c.controller) << ','
-      << (c.resolution ? std::to_string(*c.resolution) : "own") << ',' << status(run) << ','
+  row << run.index << ',' << run.case_name << ',' << configuration << ',' << status(run) << ','
       << (run.failed() ? std::string(kScoreColumns - 1, ',') : summary_fields(run.summary)) << ','
       << as_cell(run.error);
   return row.str();

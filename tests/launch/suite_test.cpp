@@ -2,15 +2,19 @@
 // trajectories, a suite run in worker processes, shards merged into the unsharded result, and the
 // errors of bad shards and failing runs.
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/eval/suite.hpp"
+#include "process_pool.hpp"
 
 namespace flowsteer::eval {
 namespace {
@@ -98,6 +102,32 @@ TEST(SuiteScore, AnAgentsEffortStopsWhenItReachesItsGoal) {
   EXPECT_NEAR(s.composite01,
               (a.active_time_s + a.kinetic_energy_sum + b.active_time_s + b.kinetic_energy_sum) / 2,
               1e-9);
+}
+
+TEST(WorkerProcesses, EachTaskEndsOnItsOwnAndNoneStopsTheOthers) {
+  std::vector<TaskOutcome> outcomes(5);
+  run_in_processes(
+      outcomes.size(), 3,
+      [](std::size_t i) -> std::string {
+        switch (i) {
+          case 1:
+            throw std::runtime_error("task 1 threw");
+          case 2:
+            std::abort();
+          case 3:
+            std::_Exit(3);
+          default:
+            return "task " + std::to_string(i) + std::string(i == 4 ? 2 * kMaxTaskRecord : 0, '!');
+        }
+      },
+      [&](std::size_t i, const TaskOutcome& outcome) { outcomes.at(i) = outcome; });
+  EXPECT_EQ(outcomes[0].record, "task 0");
+  EXPECT_TRUE(outcomes[0].ok());
+  EXPECT_EQ(outcomes[1].error, "task 1 threw");
+  EXPECT_NE(outcomes[2].error.find("killed by signal 6"), std::string::npos) << outcomes[2].error;
+  EXPECT_NE(outcomes[3].error.find("exited with status 3 without a result"), std::string::npos)
+      << outcomes[3].error;
+  EXPECT_EQ(outcomes[4].record.size(), kMaxTaskRecord);  // cut, not blocking the worker
 }
 
 TEST(SuiteShard, BadSpecsAreRefusedByName) {

@@ -84,9 +84,9 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
   return options;
 }
 
-void report(const eval::SuiteResult& result, const std::string& out_dir) {
+void report(const char* command, const eval::SuiteResult& result, const std::string& out_dir) {
   eval::print_suite_table(result.runs, std::cout);
-  std::cerr << "flowsteer eval suite: " << result.runs.size() << " runs of suite "
+  std::cerr << "flowsteer " << command << ": " << result.runs.size() << " runs of suite "
             << result.suite_id << " (shard " << result.shard.index << "/" << result.shard.count
             << ") in " << result.wall_s << " s with " << result.jobs << " jobs -> " << out_dir
             << "\n";
@@ -95,12 +95,13 @@ void report(const eval::SuiteResult& result, const std::string& out_dir) {
 int run_eval_suite(const EvalSuiteCommand& command) {
   const eval::SuiteOptions options = suite_options(command);
   const std::vector<eval::SuiteCase> cases = load_cases(command.paths, command.seed);
-  report(eval::run_suite(cases, options, std::cerr), command.out_dir);
+  report("eval suite", eval::run_suite(cases, options, std::cerr), command.out_dir);
   return 0;
 }
 
 int run_eval_merge(const EvalMergeCommand& command) {
-  report(eval::merge_suite_shards({command.shard_dirs.begin(), command.shard_dirs.end()},
+  report("eval merge",
+         eval::merge_suite_shards({command.shard_dirs.begin(), command.shard_dirs.end()},
                                   command.out_dir),
          command.out_dir);
   return 0;
