@@ -60,8 +60,8 @@ std::vector<CaseFile> read_case_files(const std::vector<std::filesystem::path>& 
 std::vector<CaseFile> builtin_suite() {
   std::vector<CaseFile> files;
   for (const auto& [name, text] : builtin::kSuite) {
-    files.push_back({std::filesystem::path(name).stem().string(),
-                     std::string("launch/suite/") + name, text});
+    files.push_back(
+        {std::filesystem::path(name).stem().string(), std::string("launch/suite/") + name, text});
   }
   return files;
 }

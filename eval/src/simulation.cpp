@@ -301,8 +301,8 @@ class SimulationRun {
     if (!spec.goals.empty()) {  // it arrives on its last goal's circle
       r.straight_line_m = std::max(0.0, r.straight_line_m - spec.goal_radius_m);
     }
-    const Effort effort = steersuite_effort(
-        std::span(paths_[i]).first(r.turn_rates.size() + 1), spec_.step_s);
+    const Effort effort =
+        steersuite_effort(std::span(paths_[i]).first(r.turn_rates.size() + 1), spec_.step_s);
     r.active_time_s = effort.active_time_s;
     r.kinetic_energy_sum = effort.kinetic_energy_sum;
     return r;
@@ -399,8 +399,7 @@ RunSummary summarize(const SimResult& result) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   summary.mean_time_to_goal_s = summary.goals_reached > 0 ? time_sum / summary.goals_reached : nan;
   summary.mean_path_length_m = summary.agents > 0 ? path_sum / summary.agents : nan;
-  summary.mean_path_length_ratio =
-      ratios > 0 ? ratio_sum / ratios : nan;
+  summary.mean_path_length_ratio = ratios > 0 ? ratio_sum / ratios : nan;
   summary.composite01 = summary.agents > 0 ? score_sum / summary.agents : nan;
   return summary;
 }

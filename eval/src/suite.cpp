@@ -124,8 +124,8 @@ class SuiteProgress {
     ++done_;
     not_clean_ += run.clean() ? 0 : 1;
     failed_ += run.failed() ? 1 : 0;
-    const double left_s =
-        (clock_.elapsed_ms() / 1e3) / static_cast<double>(done_) * static_cast<double>(total_ - done_);
+    const double left_s = (clock_.elapsed_ms() / 1e3) / static_cast<double>(done_) *
+                          static_cast<double>(total_ - done_);
     std::ostringstream counts;
     counts << done_ << "/" << total_ << " runs, " << not_clean_ << " not clean (" << failed_
            << " failed), " << static_cast<int>(std::ceil(left_s / 60.0)) << " min left";
@@ -135,7 +135,9 @@ class SuiteProgress {
            << counts.str() << "   " << (done_ == total_ ? "\n" : "") << std::flush;
     } else {
       log_ << "flowsteer eval suite: " << run.folder_name() << ": "
-           << (run.failed() ? "failed: " + run.error : run.clean() ? "clean" : "not clean")
+           << (run.failed()  ? "failed: " + run.error
+               : run.clean() ? "clean"
+                             : "not clean")
            << " [" << counts.str() << "]\n";
     }
   }
@@ -206,8 +208,8 @@ void print_configuration_totals(const std::vector<SuiteRun>& runs, std::ostream&
       ++cases;
       clean += run.clean() ? 1 : 0;
       failed += run.failed() ? 1 : 0;
-      score += run.failed() || !std::isfinite(run.summary.composite01) ? 0.0
-                                                                        : run.summary.composite01;
+      score +=
+          run.failed() || !std::isfinite(run.summary.composite01) ? 0.0 : run.summary.composite01;
     }
     out << "configuration " << configuration << ": clean " << clean << " of " << cases
         << " cases, total composite01 " << measure(score, "");
@@ -231,8 +233,7 @@ SuiteResult join_shards(const std::vector<std::filesystem::path>& shard_dirs) {
   std::vector<const std::filesystem::path*> by_index(static_cast<std::size_t>(count), nullptr);
   for (const std::filesystem::path& dir : shard_dirs) {
     const SuiteResult shard = read_suite_files(dir);
-    if (shard.suite_id.empty() || shard.suite_id != merged.suite_id ||
-        shard.shard.count != count) {
+    if (shard.suite_id.empty() || shard.suite_id != merged.suite_id || shard.shard.count != count) {
       throw base::ConfigError(dir.string(), "shard " + std::to_string(shard.shard.index) + "/" +
                                                 std::to_string(shard.shard.count) + " of suite " +
                                                 shard.suite_id + ", not of suite " +
@@ -265,9 +266,8 @@ SuiteResult join_shards(const std::vector<std::filesystem::path>& shard_dirs) {
 }  // namespace
 
 std::string to_string(const SuiteConfiguration& c) {
-  return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" +
-         name_or_own(c.controller) + "/" +
-         (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
+  return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" + name_or_own(c.controller) +
+         "/" + (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
 }
 
 std::string SuiteRun::folder_name() const {
@@ -282,8 +282,8 @@ Shard parse_shard(const std::string& text) {
   int count = 0;
   char end = 0;
   if (slash == std::string::npos ||
-      std::sscanf(text.c_str(), "%d/%d%c", &index, &count, &end) != 2 || count < 1 ||
-      index < 0 || index >= count) {
+      std::sscanf(text.c_str(), "%d/%d%c", &index, &count, &end) != 2 || count < 1 || index < 0 ||
+      index >= count) {
     throw base::ConfigError("--shard " + text,
                             "expected i/n: the i-th of n slices, 0 <= i < n (e.g. 0/4)");
   }
@@ -340,10 +340,14 @@ SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& o
   result.jobs = options.jobs;
   for (std::size_t i = static_cast<std::size_t>(options.shard.index); i < result.suite_runs;
        i += static_cast<std::size_t>(options.shard.count)) {
-    result.runs.push_back({i, cases[i / configurations.size()].name,
-                           configurations[i % configurations.size()], {}, ""});
+    result.runs.push_back({i,
+                           cases[i / configurations.size()].name,
+                           configurations[i % configurations.size()],
+                           {},
+                           ""});
   }
-  OutputDir out(options.out_dir);  // before the first run: a folder that cannot be written fails now
+  OutputDir out(
+      options.out_dir);  // before the first run: a folder that cannot be written fails now
   const std::filesystem::path runs_dir = out.staging_path("runs");
   const base::Stopwatch clock;
   SuiteProgress progress(log, options.progress_bar, result.runs.size());
@@ -351,9 +355,8 @@ SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& o
       result.runs.size(), options.jobs,
       [&](std::size_t k) {
         const SuiteRun& run = result.runs[k];
-        return summary_fields(run_case(cases[run.index / configurations.size()],
-                                       run.configuration, options,
-                                       runs_dir / run.folder_name()));
+        return summary_fields(run_case(cases[run.index / configurations.size()], run.configuration,
+                                       options, runs_dir / run.folder_name()));
       },
       [&](std::size_t k, const TaskOutcome& outcome) {
         SuiteRun& run = result.runs[k];
@@ -399,14 +402,17 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
   const auto w = [](std::size_t width) { return std::setw(static_cast<int>(width)); };
   std::ostringstream table;
   table << std::left << w(case_width) << "case" << w(configuration_width) << "configuration"
-        << std::setw(11) << "status" << std::right << std::setw(10) << "collisions"
-        << std::setw(8) << "goals" << std::setw(15) << "min_clearance" << std::setw(14)
-        << "time_to_goal" << std::setw(11) << "path_ratio" << std::setw(12) << "composite01"
+        << std::setw(11) << "status" << std::right << std::setw(10) << "collisions" << std::setw(8)
+        << "goals" << std::setw(15) << "min_clearance" << std::setw(14) << "time_to_goal"
+        << std::setw(11) << "path_ratio" << std::setw(12) << "composite01"
         << "\n";
   for (const SuiteRun& run : runs) {
     table << std::left << w(case_width) << run.case_name << w(configuration_width)
           << to_string(run.configuration) << std::setw(11)
-          << (run.failed() ? "failed" : run.clean() ? "clean" : "not clean") << std::right;
+          << (run.failed()  ? "failed"
+              : run.clean() ? "clean"
+                            : "not clean")
+          << std::right;
     if (run.failed()) {
       table << run.error << "\n";
       continue;

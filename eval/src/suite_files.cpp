@@ -159,11 +159,11 @@ cv::Mat contact_sheet(const std::vector<SuiteRun>& runs, const std::filesystem::
     const cv::Mat view = cv::imread((topviews / (run.folder_name() + ".png")).string());
     if (view.empty()) {
       sheet(cell).setTo(cv::Scalar(225, 225, 225));
-      cv::putText(sheet, "no top view", {cell.x + 12, cell.y + kCell / 2},
-                  cv::FONT_HERSHEY_SIMPLEX, 0.6, red, 1, cv::LINE_AA);
+      cv::putText(sheet, "no top view", {cell.x + 12, cell.y + kCell / 2}, cv::FONT_HERSHEY_SIMPLEX,
+                  0.6, red, 1, cv::LINE_AA);
     } else {
-      const double scale = std::min(static_cast<double>(kCell) / view.cols,
-                                    static_cast<double>(kCell) / view.rows);
+      const double scale =
+          std::min(static_cast<double>(kCell) / view.cols, static_cast<double>(kCell) / view.rows);
       cv::Mat fitted;
       cv::resize(view, fitted, {}, scale, scale, cv::INTER_AREA);
       fitted.copyTo(sheet(cv::Rect(cell.x + (kCell - fitted.cols) / 2,
@@ -263,8 +263,8 @@ SuiteResult read_suite_files(const std::filesystem::path& dir) {
   std::ifstream csv(csv_path);
   std::string line;
   if (!std::getline(csv, line) || line != kHeader) {
-    throw base::ConfigError(csv_path, 1, 1, "", "not a suite.csv: expected the header " +
-                                                    std::string(kHeader));
+    throw base::ConfigError(csv_path, 1, 1, "",
+                            "not a suite.csv: expected the header " + std::string(kHeader));
   }
   for (int line_number = 2; std::getline(csv, line); ++line_number) {
     try {

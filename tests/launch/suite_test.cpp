@@ -97,7 +97,7 @@ TEST(SuiteScore, AnAgentsEffortStopsWhenItReachesItsGoal) {
   const RunSummary s = summarize(result);
   EXPECT_GE(s.mean_path_length_ratio, 1.0);
   EXPECT_LT(s.mean_path_length_ratio, 1.1);  // straight, overshooting the circle by a step
-  const AgentResult& b = result.agents[1];  // walks the whole run
+  const AgentResult& b = result.agents[1];   // walks the whole run
   EXPECT_NEAR(b.active_time_s, result.duration_s, 1e-9);
   EXPECT_NEAR(s.composite01,
               (a.active_time_s + a.kinetic_energy_sum + b.active_time_s + b.kinetic_energy_sum) / 2,
@@ -141,30 +141,30 @@ TEST(SuiteShard, BadSpecsAreRefusedByName) {
 }
 
 SuiteCase walk_case(const std::string& name, double goal_x_m) {
-  const std::string text = "step_s: 0.1\nduration_s: 3\nagents:\n"
-                           "  - {start: [0, 0], heading_deg: 0, speed_mps: 1, goal: [" +
-                           std::to_string(goal_x_m) + ", 0]}\n";
+  const std::string text =
+      "step_s: 0.1\nduration_s: 3\nagents:\n"
+      "  - {start: [0, 0], heading_deg: 0, speed_mps: 1, goal: [" +
+      std::to_string(goal_x_m) + ", 0]}\n";
   return {name, name + ".yaml", text, config::parse_scenario(text, name + ".yaml")};
 }
 
 // A follower cannot steer by motion energy: with --controller motion_energy this case's run fails
 // in its worker.
 SuiteCase follower_case() {
-  const std::string text = "step_s: 0.1\nduration_s: 3\nagents:\n"
-                           "  - {start: [0, 0], heading_deg: 0, goal: [3, 0]}\n"
-                           "  - {start: [-2, 0], heading_deg: 0, leader: 0}\n";
+  const std::string text =
+      "step_s: 0.1\nduration_s: 3\nagents:\n"
+      "  - {start: [0, 0], heading_deg: 0, goal: [3, 0]}\n"
+      "  - {start: [-2, 0], heading_deg: 0, leader: 0}\n";
   return {"follow", "follow.yaml", text, config::parse_scenario(text, "follow.yaml")};
 }
 
 class SuiteRunTest : public ::testing::Test {
  protected:
   // One folder per test: ctest runs them in parallel.
-  std::filesystem::path dir_ =
-      std::filesystem::temp_directory_path() /
-      (std::string("flowsteer_suite_test_") +
-       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  std::vector<SuiteCase> cases_ = {walk_case("near", 1.5), walk_case("far", 30.0),
-                                   follower_case()};
+  std::filesystem::path dir_ = std::filesystem::temp_directory_path() /
+                               (std::string("flowsteer_suite_test_") +
+                                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::vector<SuiteCase> cases_ = {walk_case("near", 1.5), walk_case("far", 30.0), follower_case()};
   void SetUp() override { std::filesystem::remove_all(dir_); }
   void TearDown() override { std::filesystem::remove_all(dir_); }
 
@@ -204,8 +204,10 @@ TEST_F(SuiteRunTest, EveryCaseRunsUnderEveryConfigurationAndAFailureStopsNoOther
   // Top views of every run that got one; folders only for the runs that are not clean.
   EXPECT_TRUE(std::filesystem::exists(out / "topviews" / "near.own.own.geometric.24.png"));
   EXPECT_FALSE(std::filesystem::exists(out / "runs" / "near.own.own.geometric.24"));
-  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "far.own.own.geometric.24" / "trajectories.csv"));
-  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "follow.own.own.motion_energy.24" / "error.txt"));
+  EXPECT_TRUE(
+      std::filesystem::exists(out / "runs" / "far.own.own.geometric.24" / "trajectories.csv"));
+  EXPECT_TRUE(
+      std::filesystem::exists(out / "runs" / "follow.own.own.motion_energy.24" / "error.txt"));
   for (const auto& entry : std::filesystem::directory_iterator(out)) {
     EXPECT_EQ(entry.path().filename().string().rfind(".staging", 0), std::string::npos);
   }
@@ -231,18 +233,21 @@ TEST_F(SuiteRunTest, ThreeShardsMergedAreTheUnshardedSuite) {
   EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "runs" / "far.own.own.geometric.24"));
 
   // A shard missing, one given twice, or a shard of another suite are refused by name.
-  EXPECT_NE(error_of([&] { merge_suite_shards({shards[0], shards[1]}, dir_ / "m2"); })
-                .find("shard 2/3 of suite"),
+  EXPECT_NE(error_of([&] {
+              merge_suite_shards({shards[0], shards[1]}, dir_ / "m2");
+            }).find("shard 2/3 of suite"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { merge_suite_shards({shards[0], shards[0], shards[1]}, dir_ / "m3"); })
-                .find("is also in"),
+  EXPECT_NE(error_of([&] {
+              merge_suite_shards({shards[0], shards[0], shards[1]}, dir_ / "m3");
+            }).find("is also in"),
             std::string::npos);
   SuiteOptions other = options("other");
   other.shard = {1, 3};
   other.seed = 7;
   run_suite(cases_, other, log);
-  const std::string mixed =
-      error_of([&] { merge_suite_shards({shards[0], other.out_dir, shards[2]}, dir_ / "m4"); });
+  const std::string mixed = error_of([&] {
+    merge_suite_shards({shards[0], other.out_dir, shards[2]}, dir_ / "m4");
+  });
   EXPECT_NE(mixed.find("other"), std::string::npos) << mixed;
   EXPECT_NE(mixed.find("not of suite"), std::string::npos) << mixed;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "m4" / "suite.csv"));

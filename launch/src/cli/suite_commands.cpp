@@ -62,16 +62,15 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
   for (const std::string& name : command.controllers) {
     const auto model = servo::parse_steering_model(name);
     if (!model) {
-      throw CLI::ValidationError("--controller", "unknown steering model '" + name +
-                                                     "' (known: " +
+      throw CLI::ValidationError("--controller", "unknown steering model '" + name + "' (known: " +
                                                      servo::steering_model_names() + ")");
     }
     options.controllers.push_back(*model);
   }
   const auto keep = eval::parse_keep_runs(command.keep_runs);
   if (!keep) {
-    throw CLI::ValidationError("--keep-runs", "expected failed, all or none; got '" +
-                                                  command.keep_runs + "'");
+    throw CLI::ValidationError("--keep-runs",
+                               "expected failed, all or none; got '" + command.keep_runs + "'");
   }
   options.keep_runs = *keep;
   options.resolutions = command.resolutions;
@@ -132,14 +131,17 @@ Subcommand add_eval_suite(CLI::App& eval) {
   suite->add_option("--jobs,-j", command->jobs, "runs at once, each in its own process")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
-  suite->add_option("--shard", command->shard,
-                    "run only the i-th of n slices of the runs, i/n (merge them with eval merge)")
+  suite
+      ->add_option("--shard", command->shard,
+                   "run only the i-th of n slices of the runs, i/n (merge them with eval merge)")
       ->capture_default_str();
-  suite->add_option("--keep-runs", command->keep_runs,
-                    "which runs keep their folder (what flowsteer sim writes): failed, all, none")
+  suite
+      ->add_option("--keep-runs", command->keep_runs,
+                   "which runs keep their folder (what flowsteer sim writes): failed, all, none")
       ->capture_default_str();
-  suite->add_option("--seed", command->seed,
-                    "where SteerSuite's agent and obstacle regions and random targets are placed")
+  suite
+      ->add_option("--seed", command->seed,
+                   "where SteerSuite's agent and obstacle regions and random targets are placed")
       ->capture_default_str();
   suite->add_option("--steps", command->steps, "stop each run after N control steps")
       ->check(CLI::PositiveNumber);
@@ -152,8 +154,7 @@ Subcommand add_eval_merge(CLI::App& eval) {
   auto command = std::make_shared<EvalMergeCommand>();
   CLI::App* merge = eval.add_subcommand(
       "merge", "Join the output folders of a suite's shards (eval suite --shard) into one");
-  merge->add_option("shard_dirs", command->shard_dirs, "every shard's output folder")
-      ->required();
+  merge->add_option("shard_dirs", command->shard_dirs, "every shard's output folder")->required();
   merge->add_option("--out", command->out_dir, "folder for the merged suite")
       ->capture_default_str();
   return {merge, [command] { return run_eval_merge(*command); }};

@@ -42,9 +42,10 @@ std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
 
 // Every flow × segmentation × resolution, in that order, each run as `flowsteer sim` with those
 // overrides and without its files, in options.jobs worker processes. Throws std::runtime_error
-// naming the first run that failed, once all have ended. Then, with write_outputs, robustness.csv and robustness.txt
-// (the printed table) in out_dir, each written whole or not at all; out_dir is created before the
-// first run, so a folder that cannot be written fails at once. Progress goes to `log`.
+// naming the first run that failed, once all have ended. Then, with write_outputs, robustness.csv
+// and robustness.txt (the printed table) in out_dir, each written whole or not at all; out_dir is
+// created before the first run, so a folder that cannot be written fails at once. Progress goes to
+// `log`.
 std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& world,
                                                const RobustnessOptions& options, std::ostream& log);
 
