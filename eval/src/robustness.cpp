@@ -44,6 +44,44 @@ void write_tables(const std::vector<RobustnessRun>& runs, OutputDir& out) {
   out.commit();
 }
 
+// Each value, or one "the scenario's own" for none.
+template <typename Method>
+std::vector<std::optional<Method>> or_scenarios(const std::vector<Method>& methods) {
+  std::vector<std::optional<Method>> choices(methods.begin(), methods.end());
+  if (choices.empty()) {
+    choices.emplace_back();
+  }
+  return choices;
+}
+
+// Every flow × segmentation × resolution, in that order, not run yet.
+std::vector<RobustnessRun> planned_runs(const sim_camera::WorldSpec& world,
+                                        const RobustnessOptions& options) {
+  const std::vector<int> resolutions = robustness_resolutions(world, options);
+  std::vector<RobustnessRun> runs;
+  for (const auto& flow : or_scenarios(options.flows)) {
+    for (const auto& segmentation : or_scenarios(options.segmentations)) {
+      for (const int resolution : resolutions) {
+        runs.push_back({flow, segmentation, resolution, {}});
+      }
+    }
+  }
+  return runs;
+}
+
+// The run as `flowsteer sim` with its overrides, without files or progress lines.
+RunSummary run_once(const sim_camera::WorldSpec& world, const RobustnessRun& run,
+                    std::optional<int> steps) {
+  SimOptions sim;
+  sim.resolution = run.resolution;
+  sim.steps = steps;
+  sim.flow = run.flow;
+  sim.segmentation = run.segmentation;
+  sim.write_outputs = false;
+  std::ostream quiet(nullptr);
+  return summarize(run_simulation(world, sim, quiet));
+}
+
 }  // namespace
 
 std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
@@ -80,42 +118,15 @@ std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
 std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& world,
                                                const RobustnessOptions& options,
                                                std::ostream& log) {
-  const std::vector<int> resolutions = robustness_resolutions(world, options);
+  std::vector<RobustnessRun> runs = planned_runs(world, options);
   std::optional<OutputDir> out;
   if (options.write_outputs) {
     out.emplace(options.out_dir);
   }
-  std::vector<std::optional<servo::FlowMethod>> flows(options.flows.begin(), options.flows.end());
-  if (flows.empty()) {
-    flows.emplace_back();
-  }
-  std::vector<std::optional<servo::SegmentationMethod>> segmentations(options.segmentations.begin(),
-                                                                      options.segmentations.end());
-  if (segmentations.empty()) {
-    segmentations.emplace_back();
-  }
-
-  std::vector<RobustnessRun> runs;
-  for (const auto& flow : flows) {
-    for (const auto& segmentation : segmentations) {
-      for (const int resolution : resolutions) {
-        runs.push_back({flow, segmentation, resolution, {}});
-      }
-    }
-  }
   std::string first_error;
   run_in_processes(
       runs.size(), options.jobs,
-      [&](std::size_t k) {
-        SimOptions sim;
-        sim.resolution = runs[k].resolution;
-        sim.steps = options.steps;
-        sim.flow = runs[k].flow;
-        sim.segmentation = runs[k].segmentation;
-        sim.write_outputs = false;
-        std::ostream quiet(nullptr);  // one line per run, not the run's own progress lines
-        return summary_fields(summarize(run_simulation(world, sim, quiet)));
-      },
+      [&](std::size_t k) { return summary_fields(run_once(world, runs[k], options.steps)); },
       [&](std::size_t k, const TaskOutcome& outcome) {
         RobustnessRun& run = runs[k];
         log << "flowsteer eval robustness: " << world.name << ", flow " << method_name(run.flow)
