@@ -245,6 +245,7 @@ TEST_F(SuiteRunTest, ThreeShardsMergedAreTheUnshardedSuite) {
   other.shard = {1, 3};
   other.seed = 7;
   run_suite(cases_, other, log);
+  EXPECT_NE(file_text(other.out_dir / "suite.json").find("\"seed\": 7,"), std::string::npos);
   const std::string mixed = error_of([&] {
     merge_suite_shards({shards[0], other.out_dir, shards[2]}, dir_ / "m4");
   });
