@@ -9,6 +9,7 @@
 #include <cstring>
 #include <iostream>
 #include <map>
+#include <stdexcept>
 #include <system_error>
 
 #include <opencv2/core/utility.hpp>
@@ -50,10 +51,52 @@ std::string read_all(int fd) {
   }
 }
 
+// The signal that interrupted the pool (SIGINT, SIGTERM), 0 while none has.
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void note_interrupt(int signal) {
+  g_interrupted = signal;
+}
+
+// While workers run, Ctrl-C or a termination request ends the wait with an exception instead of
+// killing this process at once: the workers are then stopped, and the callers unwind, removing
+// what they had staged, so an interrupted suite leaves its output folder as it was.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    g_interrupted = 0;
+    struct sigaction action {};
+    action.sa_handler = note_interrupt;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = 0;  // no SA_RESTART: a waiting waitpid returns with EINTR
+    ::sigaction(SIGINT, &action, &previous_int_);
+    ::sigaction(SIGTERM, &action, &previous_term_);
+  }
+  ~InterruptGuard() {
+    ::sigaction(SIGINT, &previous_int_, nullptr);
+    ::sigaction(SIGTERM, &previous_term_, nullptr);
+  }
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+  static void throw_if_interrupted() {
+    if (g_interrupted != 0) {
+      throw std::runtime_error(std::string("interrupted (") + strsignal(g_interrupted) +
+                               "): the runs in progress were stopped");
+    }
+  }
+
+ private:
+  struct sigaction previous_int_ {};
+  struct sigaction previous_term_ {};
+};
+
 // The worker: runs the task, writes its record and ends without running this process's exit
-// handlers (they belong to the parent: its buffers, its GL state).
+// handlers (they belong to the parent: its buffers, its GL state). Ctrl-C and SIGTERM end it.
 [[noreturn]] void run_worker(int fd, std::size_t index, int jobs,
                              const std::function<std::string(std::size_t)>& task) {
+  ::signal(SIGINT, SIG_DFL);
+  ::signal(SIGTERM, SIG_DFL);
   if (jobs > 1) {
     cv::setNumThreads(1);
   }
@@ -136,6 +179,7 @@ class Workers {
       int status = 0;
       const pid_t pid = ::waitpid(-1, &status, 0);
       if (pid < 0 && errno == EINTR) {
+        InterruptGuard::throw_if_interrupted();
         continue;
       }
       if (pid < 0) {
@@ -162,9 +206,11 @@ class Workers {
 void run_in_processes(std::size_t count, int jobs,
                       const std::function<std::string(std::size_t)>& task,
                       const std::function<void(std::size_t, const TaskOutcome&)>& done) {
-  Workers workers;
+  const InterruptGuard interrupts;
+  Workers workers;  // after the guard: stopped before the guard restores the signal handlers
   std::size_t next = 0;
   while (next < count || workers.size() > 0) {
+    InterruptGuard::throw_if_interrupted();
     while (next < count && workers.size() < static_cast<std::size_t>(std::max(jobs, 1))) {
       workers.start(next++, jobs, task);
     }

@@ -18,8 +18,9 @@ struct TaskOutcome {
 // from one run to the next. A task returns a short record (at most kMaxTaskRecord bytes; longer
 // ones are cut) that done(i, outcome) receives in this process, in the order the tasks end.
 // With several jobs, each worker gives OpenCV one thread: the workers already fill the cores.
-// Throws std::system_error when a process cannot be started; workers still running are then
-// stopped first.
+// Throws std::system_error when a process cannot be started, and std::runtime_error when
+// SIGINT or SIGTERM arrives while it waits (it handles both meanwhile); workers still running
+// are then stopped first.
 inline constexpr std::size_t kMaxTaskRecord = 16384;
 void run_in_processes(std::size_t count, int jobs,
                       const std::function<std::string(std::size_t)>& task,

@@ -1,7 +1,10 @@
 // `flowsteer eval suite` and `eval merge` (issue 20): SteerSuite's composite score on hand-made
 // trajectories, a suite run in worker processes, shards merged into the unsharded result, and the
 // errors of bad shards and failing runs.
+#include <unistd.h>
+
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -128,6 +131,26 @@ TEST(WorkerProcesses, EachTaskEndsOnItsOwnAndNoneStopsTheOthers) {
   EXPECT_NE(outcomes[3].error.find("exited with status 3 without a result"), std::string::npos)
       << outcomes[3].error;
   EXPECT_EQ(outcomes[4].record.size(), kMaxTaskRecord);  // cut, not blocking the worker
+}
+
+TEST(WorkerProcesses, ATerminationRequestStopsTheWorkersAndThrows) {
+  std::size_t ended = 0;
+  const std::string error = error_of([&] {
+    run_in_processes(
+        3, 3,
+        [](std::size_t i) -> std::string {
+          if (i > 0) {
+            ::sleep(600);  // stopped long before
+          }
+          return "";
+        },
+        [&](std::size_t, const TaskOutcome&) {
+          ++ended;
+          std::raise(SIGTERM);
+        });
+  });
+  EXPECT_EQ(ended, 1U);
+  EXPECT_NE(error.find("interrupted"), std::string::npos) << error;
 }
 
 TEST(SuiteShard, BadSpecsAreRefusedByName) {
