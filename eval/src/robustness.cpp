@@ -44,23 +44,13 @@ void write_tables(const std::vector<RobustnessRun>& runs, OutputDir& out) {
   out.commit();
 }
 
-// Each value, or one "the scenario's own" for none.
-template <typename Method>
-std::vector<std::optional<Method>> or_scenarios(const std::vector<Method>& methods) {
-  std::vector<std::optional<Method>> choices(methods.begin(), methods.end());
-  if (choices.empty()) {
-    choices.emplace_back();
-  }
-  return choices;
-}
-
 // Every flow × segmentation × resolution, in that order, not run yet.
 std::vector<RobustnessRun> planned_runs(const sim_camera::WorldSpec& world,
                                         const RobustnessOptions& options) {
   const std::vector<int> resolutions = robustness_resolutions(world, options);
   std::vector<RobustnessRun> runs;
-  for (const auto& flow : or_scenarios(options.flows)) {
-    for (const auto& segmentation : or_scenarios(options.segmentations)) {
+  for (const auto& flow : each_or_own(options.flows)) {
+    for (const auto& segmentation : each_or_own(options.segmentations)) {
       for (const int resolution : resolutions) {
         runs.push_back({flow, segmentation, resolution, {}});
       }

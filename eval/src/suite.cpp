@@ -40,16 +40,6 @@ void refuse_repeats(const std::vector<T>& values, const std::string& option) {
   }
 }
 
-// Each value of a list, or one "the case's own" for an empty list.
-template <typename T>
-std::vector<std::optional<T>> or_own(const std::vector<T>& values) {
-  std::vector<std::optional<T>> choices(values.begin(), values.end());
-  if (choices.empty()) {
-    choices.emplace_back();
-  }
-  return choices;
-}
-
 // FNV-1a, 64 bits: a fingerprint of what makes a suite (not a security hash).
 class Fingerprint {
  public:
@@ -316,10 +306,10 @@ std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options
     }
   }
   std::vector<SuiteConfiguration> configurations;
-  for (const auto& flow : or_own(options.flows)) {
-    for (const auto& segmentation : or_own(options.segmentations)) {
-      for (const auto& controller : or_own(options.controllers)) {
-        for (const auto& resolution : or_own(options.resolutions)) {
+  for (const auto& flow : each_or_own(options.flows)) {
+    for (const auto& segmentation : each_or_own(options.segmentations)) {
+      for (const auto& controller : each_or_own(options.controllers)) {
+        for (const auto& resolution : each_or_own(options.resolutions)) {
           configurations.push_back({flow, segmentation, controller, resolution});
         }
       }
