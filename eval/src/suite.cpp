@@ -118,7 +118,10 @@ class SuiteProgress {
                           static_cast<double>(total_ - done_);
     std::ostringstream counts;
     counts << done_ << "/" << total_ << " runs, " << not_clean_ << " not clean (" << failed_
-           << " failed), " << static_cast<int>(std::ceil(left_s / 60.0)) << " min left";
+           << " failed), "
+           << (left_s < 60.0 ? std::to_string(static_cast<int>(std::ceil(left_s))) + " s"
+                             : std::to_string(static_cast<int>(std::ceil(left_s / 60.0))) + " min")
+           << " left";
     if (bar_) {
       const std::size_t filled = 30 * done_ / std::max<std::size_t>(total_, 1);
       log_ << "\r[" << std::string(filled, '#') << std::string(30 - filled, ' ') << "] "
