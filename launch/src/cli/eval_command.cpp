@@ -131,7 +131,8 @@ Subcommand add_eval_robustness(CLI::App& eval) {
 }  // namespace
 
 std::vector<Subcommand> add_eval(CLI::App& app) {
-  CLI::App* eval = app.add_subcommand("eval", "Measure parts of the pipeline against the truth");
+  CLI::App* eval = app.add_subcommand(
+      "eval", "Measure the pipeline: flow against the truth, robustness sweeps, benchmark suites");
   eval->require_subcommand(1);
   return {add_eval_flow(*eval), add_eval_robustness(*eval), add_eval_suite(*eval),
           add_eval_merge(*eval)};
