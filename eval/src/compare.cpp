@@ -11,6 +11,7 @@
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/eval/output_files.hpp"
+#include "run_choices.hpp"
 
 namespace flowsteer::eval {
 
@@ -25,11 +26,7 @@ void check_controllers(const std::vector<servo::SteeringModel>& models) {
     throw base::ConfigError(
         "--controllers", "no controller given (known ones: " + servo::steering_model_names() + ")");
   }
-  for (auto it = models.begin(); it != models.end(); ++it) {
-    if (std::find(models.begin(), it, *it) != it) {
-      throw base::ConfigError("--controllers " + std::string(servo::to_string(*it)), "given twice");
-    }
-  }
+  refuse_repeats(models, "--controllers");
 }
 
 // A caption band above an image.

@@ -9,14 +9,13 @@
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/eval/output_files.hpp"
 #include "process_pool.hpp"
+#include "run_choices.hpp"
 #include "suite_files.hpp"
 
 namespace flowsteer::eval {
 
 namespace {
 
-constexpr int kMinResolution = 16;
-constexpr int kMaxResolution = 4096;
 constexpr int kDefaultStepPx = 8;
 constexpr int kDefaultSteps = 4;  // either side of the scenario's own resolution
 
@@ -77,18 +76,7 @@ RunSummary run_once(const sim_camera::WorldSpec& world, const RobustnessRun& run
 std::vector<int> robustness_resolutions(const sim_camera::WorldSpec& world,
                                         const RobustnessOptions& options) {
   if (!options.resolutions.empty()) {
-    for (std::size_t i = 0; i < options.resolutions.size(); ++i) {
-      const int n = options.resolutions[i];
-      if (n < kMinResolution || n > kMaxResolution) {
-        throw base::ConfigError("--resolution " + std::to_string(n),
-                                "must be from " + std::to_string(kMinResolution) + " to " +
-                                    std::to_string(kMaxResolution) + " pixels");
-      }
-      if (std::find(options.resolutions.begin(), options.resolutions.begin() + static_cast<long>(i),
-                    n) != options.resolutions.begin() + static_cast<long>(i)) {
-        throw base::ConfigError("--resolution " + std::to_string(n), "given twice");
-      }
-    }
+    check_resolutions(options.resolutions);
     return options.resolutions;
   }
   if (world.agents.empty()) {

@@ -143,6 +143,21 @@ void write_trajectories(const std::filesystem::path& path, const std::vector<Tra
   csv.write(path);
 }
 
+// From the agent's start through its goals in order to its last goal's circle, where it
+// arrives; NaN for a follower, which has no goal of its own.
+double straight_line_m(const sim_camera::AgentSpec& agent) {
+  if (agent.leader || agent.goals.empty()) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  double length_m = 0.0;
+  Eigen::Vector2d from = agent.start_m;
+  for (const Eigen::Vector2d& goal : agent.goals) {
+    length_m += (goal - from).norm();
+    from = goal;
+  }
+  return std::max(0.0, length_m - agent.goal_radius_m);
+}
+
 // One run of a world: the world, its renderer, one loop per agent and what the run records for
 // its result and its files. Everything that grows per step is reserved up front, so a step
 // allocates nothing of its own.
@@ -291,16 +306,8 @@ class SimulationRun {
       r.final_distance_to_leader_m =
           (world_.agents()[static_cast<std::size_t>(*spec.leader)].position_m - s.position_m)
               .norm();
-      r.straight_line_m = std::numeric_limits<double>::quiet_NaN();
     }
-    Eigen::Vector2d from = spec.start_m;
-    for (const Eigen::Vector2d& goal : spec.goals) {
-      r.straight_line_m += (goal - from).norm();
-      from = goal;
-    }
-    if (!spec.goals.empty()) {  // it arrives on its last goal's circle
-      r.straight_line_m = std::max(0.0, r.straight_line_m - spec.goal_radius_m);
-    }
+    r.straight_line_m = straight_line_m(spec);
     const Effort effort =
         steersuite_effort(std::span(paths_[i]).first(r.turn_rates.size() + 1), spec_.step_s);
     r.active_time_s = effort.active_time_s;

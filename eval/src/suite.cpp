@@ -10,34 +10,16 @@
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "process_pool.hpp"
+#include "run_choices.hpp"
 #include "suite_files.hpp"
 
 namespace flowsteer::eval {
 
 namespace {
 
-constexpr int kMinResolution = 16;
-constexpr int kMaxResolution = 4096;
-
 template <typename Method>
 std::string name_or_own(const std::optional<Method>& method) {
   return method ? std::string(servo::to_string(*method)) : std::string("own");
-}
-
-template <typename T>
-void refuse_repeats(const std::vector<T>& values, const std::string& option) {
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (std::find(values.begin(), values.begin() + static_cast<long>(i), values[i]) !=
-        values.begin() + static_cast<long>(i)) {
-      std::ostringstream value;
-      if constexpr (std::is_same_v<T, int>) {
-        value << values[i];
-      } else {
-        value << servo::to_string(values[i]);
-      }
-      throw base::ConfigError(option + " " + value.str(), "given twice");
-    }
-  }
 }
 
 // FNV-1a, 64 bits: a fingerprint of what makes a suite (not a security hash).
@@ -300,14 +282,7 @@ std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options
   refuse_repeats(options.flows, "--flow");
   refuse_repeats(options.segmentations, "--segmentation");
   refuse_repeats(options.controllers, "--controller");
-  refuse_repeats(options.resolutions, "--resolution");
-  for (const int n : options.resolutions) {
-    if (n < kMinResolution || n > kMaxResolution) {
-      throw base::ConfigError("--resolution " + std::to_string(n),
-                              "must be from " + std::to_string(kMinResolution) + " to " +
-                                  std::to_string(kMaxResolution) + " pixels");
-    }
-  }
+  check_resolutions(options.resolutions);
   std::vector<SuiteConfiguration> configurations;
   for (const auto& flow : each_or_own(options.flows)) {
     for (const auto& segmentation : each_or_own(options.segmentations)) {

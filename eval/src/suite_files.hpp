@@ -1,24 +1,12 @@
 #pragma once
 
 #include <filesystem>
-#include <optional>
 #include <string>
-#include <vector>
 
 #include "flowsteer/eval/output_files.hpp"
 #include "flowsteer/eval/suite.hpp"
 
 namespace flowsteer::eval {
-
-// Each value given, or one empty value (the case's or scenario's own) when none is.
-template <typename T>
-std::vector<std::optional<T>> each_or_own(const std::vector<T>& values) {
-  std::vector<std::optional<T>> choices(values.begin(), values.end());
-  if (choices.empty()) {
-    choices.emplace_back();
-  }
-  return choices;
-}
 
 // A run's summary as suite.csv's score columns (agents ... composite01). A worker sends these
 // as its record, so a run read back from a shard's suite.csv is the run its worker reported.

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <ostream>
 #include <span>
@@ -36,7 +37,7 @@ struct AgentResult {
   double final_distance_to_leader_m = -1.0;  // followers only
   // From its start through its goals in order to its last goal's circle, where it arrives; NaN
   // for followers.
-  double straight_line_m = 0.0;
+  double straight_line_m = std::numeric_limits<double>::quiet_NaN();
   // SteerSuite's effort over the steps the agent steered (see steersuite_effort).
   double active_time_s = 0.0;
   double kinetic_energy_sum = 0.0;
