@@ -1,5 +1,7 @@
 #include "flowsteer/config/controller_reader.hpp"
 
+#include <utility>
+
 namespace flowsteer::config {
 
 namespace {
@@ -59,11 +61,28 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
                                                 to_c_str(servo::to_string(c.model))));
   c.kind = *servo::parse_navigation_kind(r.word(node, field, "kind", {"goal_reaching", "following"},
                                                 to_c_str(servo::to_string(c.kind))));
-  c.alpha = r.non_negative(node, field, "alpha", c.alpha);
-  c.beta = r.non_negative(node, field, "beta", c.beta);
-  c.gamma = r.non_negative(node, field, "gamma", c.gamma);
-  c.delta = r.non_negative(node, field, "delta", c.delta);
-  if (c.delta > c.gamma) {
+  c.law = *servo::parse_navigation_law(r.word(node, field, "law",
+                                               {"flowsteer", "cgf2019", "mig2019"},
+                                               to_c_str(servo::to_string(c.law))));
+  for (auto [key, weight] : {std::pair{"alpha", &c.alpha}, std::pair{"beta", &c.beta},
+                             std::pair{"gamma", &c.gamma}, std::pair{"delta", &c.delta},
+                             std::pair{"braking", &c.braking}}) {
+    if (node[key]) {
+      *weight = r.non_negative(node, field, key, 0.0);
+    }
+  }
+  if (c.law != servo::NavigationLaw::flowsteer) {
+    for (const char* key : {"braking", "follow_gap_m"}) {
+      if (node[key]) {
+        r.fail(node[key], base::YamlReader::join(field, key),
+               "only for law: flowsteer (this controller's law is " +
+                   std::string(servo::to_string(c.law)) + ")");
+      }
+    }
+  }
+  c.follow_gap_m = r.non_negative(node, field, "follow_gap_m", c.follow_gap_m);
+  const servo::NavigationWeights weights = servo::navigation_weights(c);
+  if (weights.delta > weights.gamma) {
     r.fail(node["delta"] ? node["delta"] : node, field + ".delta",
            "must not exceed gamma (MIG 2019: visible obstacles weigh at least as much)");
   }

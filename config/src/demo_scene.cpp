@@ -81,12 +81,12 @@ servo::SceneObject read_object(const base::YamlReader& r, const YAML::Node& node
 // Eq. 18: beta 1) unless told otherwise.
 void read_controller(const base::YamlReader& r, const YAML::Node& node, DemoScene& d) {
   r.only_keys(node, "controller",
-              {"kind", "alpha", "beta", "gamma", "delta", "preferred_speed_mps", "lambda",
+              {"kind", "law", "alpha", "beta", "gamma", "delta", "braking", "follow_gap_m",
+               "preferred_speed_mps", "lambda",
                "max_accel_mps2", "max_turn_rate", "use_depth", "leader"});
   const bool following = r.word(node, "controller", "kind", {"goal_reaching", "following"},
                                 "goal_reaching") == "following";
   if (following) {
-    d.controller.beta = 1.0;
     for (const char* key : {"delta", "preferred_speed_mps"}) {
       if (node[key]) {
         r.fail(node[key], std::string("controller.") + key,

@@ -134,10 +134,13 @@ servo::ControllerConfig read_scenario_controller(const base::YamlReader& r, cons
     r.only_keys(node, field,
                 {"type",
                  "kind",
+                 "law",
                  "alpha",
                  "beta",
                  "gamma",
                  "delta",
+                 "braking",
+                 "follow_gap_m",
                  "lambda",
                  "max_accel_mps2",
                  "max_turn_rate",
@@ -269,7 +272,7 @@ struct AgentDefaults {
 
 // The agent's leader, agents[index] of `agent_count`. Unless its controller names its kind, an
 // agent with a leader follows it.
-void read_leader(const base::YamlReader& r, const YAML::Node& root, const YAML::Node& node,
+void read_leader(const base::YamlReader& r, const YAML::Node& node,
                  const std::string& field, std::size_t agent_count, std::size_t self,
                  AgentSpec& a) {
   const YAML::Node leader = node["leader"];
@@ -280,12 +283,6 @@ void read_leader(const base::YamlReader& r, const YAML::Node& root, const YAML::
   a.leader = index;
   if (!node["controller"] || !node["controller"]["kind"]) {
     a.controller.kind = servo::NavigationKind::following;
-    // CGF §8.2 follows with β = 1 where goal reaching uses 0.1; a β written anywhere wins.
-    const bool beta_given = (node["controller"] && node["controller"]["beta"]) ||
-                            (root["controller"] && root["controller"]["beta"]);
-    if (!beta_given) {
-      a.controller.beta = 1.0;
-    }
   }
 }
 
@@ -316,8 +313,8 @@ sim_camera::PointLight read_carried_light(const base::YamlReader& r, const YAML:
   return p;
 }
 
-// agents[i]: `root` for the scenario's controller, `agents` for the leader's index.
-AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& root, const YAML::Node& agents,
+// agents[i], with `agents` for the leader's index.
+AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& agents,
                      std::size_t i, const AgentDefaults& defaults) {
   const std::string field = "agents[" + std::to_string(i) + "]";
   const YAML::Node node = agents[i];
@@ -349,7 +346,7 @@ AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& root, const YA
   a.controller =
       read_scenario_controller(r, node["controller"], field + ".controller", defaults.controller);
   if (node["leader"]) {
-    read_leader(r, root, node, field, agents.size(), i, a);
+    read_leader(r, node, field, agents.size(), i, a);
   }
   check_navigation(r, node, field, a);
   a.camera = read_camera(r, node["camera"], field + ".camera", defaults.camera);
@@ -405,7 +402,7 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
     r.fail(agents ? agents : root, "agents", "expected a list of one agent or more");
   }
   for (std::size_t i = 0; i < agents.size(); ++i) {
-    w.agents.push_back(read_agent(r, root, agents, i, defaults));
+    w.agents.push_back(read_agent(r, agents, i, defaults));
   }
   try {
     sim_camera::World check(w);

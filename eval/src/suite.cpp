@@ -71,10 +71,9 @@ void refuse_repeated_names(const std::vector<SuiteCase>& cases) {
 RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& configuration,
                     const SuiteOptions& options, const std::filesystem::path& folder) {
   sim_camera::WorldSpec world = suite_case.world;
-  if (configuration.controller) {
-    for (sim_camera::AgentSpec& agent : world.agents) {
-      agent.controller.model = *configuration.controller;
-    }
+  for (sim_camera::AgentSpec& agent : world.agents) {
+    agent.controller.model = configuration.controller.value_or(agent.controller.model);
+    agent.controller.law = configuration.law.value_or(agent.controller.law);
   }
   SimOptions sim;
   sim.out_dir = folder;
@@ -242,7 +241,7 @@ SuiteResult join_shards(const std::vector<std::filesystem::path>& shard_dirs) {
 
 std::string to_string(const SuiteConfiguration& c) {
   return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" + name_or_own(c.controller) +
-         "/" + (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
+         "/" + name_or_own(c.law) + "/" + (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
 }
 
 std::string SuiteRun::folder_name() const {
@@ -282,13 +281,16 @@ std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options
   refuse_repeats(options.flows, "--flow");
   refuse_repeats(options.segmentations, "--segmentation");
   refuse_repeats(options.controllers, "--controller");
+  refuse_repeats(options.laws, "--law");
   check_resolutions(options.resolutions);
   std::vector<SuiteConfiguration> configurations;
   for (const auto& flow : each_or_own(options.flows)) {
     for (const auto& segmentation : each_or_own(options.segmentations)) {
       for (const auto& controller : each_or_own(options.controllers)) {
-        for (const auto& resolution : each_or_own(options.resolutions)) {
-          configurations.push_back({flow, segmentation, controller, resolution});
+        for (const auto& law : each_or_own(options.laws)) {
+          for (const auto& resolution : each_or_own(options.resolutions)) {
+            configurations.push_back({flow, segmentation, controller, law, resolution});
+          }
         }
       }
     }

@@ -18,11 +18,11 @@ namespace flowsteer::eval {
 namespace {
 
 const char* const kHeader =
-    "run,case,flow,segmentation,controller,resolution,status,agents,goals_reached,"
+    "run,case,flow,segmentation,controller,law,resolution,status,agents,goals_reached,"
     "agents_with_goal,collisions,min_clearance_m,mean_time_to_goal_s,mean_path_length_m,"
     "mean_path_length_ratio,"
     "composite01,error";
-constexpr std::size_t kLabelColumns = 7;  // run ... status
+constexpr std::size_t kLabelColumns = 8;  // run ... status
 constexpr std::size_t kScoreColumns = 9;  // agents ... composite01
 
 std::vector<std::string> split(const std::string& line, char separator) {
@@ -111,9 +111,11 @@ SuiteRun parse_csv_row(const std::string& line, const std::string& where) {
       cells[3], [](const std::string& s) { return servo::parse_segmentation_method(s); }, where);
   run.configuration.controller = own_or<servo::SteeringModel>(
       cells[4], [](const std::string& s) { return servo::parse_steering_model(s); }, where);
-  run.configuration.resolution = own_or<int>(cells[5], parse_int, where + ": resolution");
+  run.configuration.law = own_or<servo::NavigationLaw>(
+      cells[5], [](const std::string& s) { return servo::parse_navigation_law(s); }, where);
+  run.configuration.resolution = own_or<int>(cells[6], parse_int, where + ": resolution");
   run.error = cells.back();
-  if (cells[6] == "failed") {
+  if (cells[7] == "failed") {
     run.error = run.error.empty() ? "failed" : run.error;
     return run;
   }

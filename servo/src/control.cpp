@@ -6,85 +6,23 @@
 #include <stdexcept>
 #include <string>
 
+#include "cost_term_helpers.hpp"
 #include "flowsteer/servo/dynamics.hpp"
 
 namespace flowsteer::servo {
 
 namespace {
 
-// ln 10: σ = w / ln 10 makes exp(−|Δx|/σ) fall to 1/10 at |Δx| = w (CGF §6.2).
-constexpr double kLn10 = 2.302585092994046;
+using detail::accumulate;
+using detail::exp_falloff;
+using detail::find_leader;
+using detail::floored_speed;
+using detail::half_square;
+using detail::kLn10;
+
 // Goals further than this from the heading are treated as at this bearing; t_x = tan(bearing)
 // has no meaning behind the camera.
 constexpr double kMaxGoalBearing = 80.0 * std::numbers::pi / 180.0;
-
-// The gradient of L = w·exp(−|s|/σ) (w constant) through the rate of s: L̇ = −L sign(s)/σ · ṡ.
-// `side` is the sign of s that the gradient takes (see SideMemory).
-TermGradient exp_falloff(double weight, double s, double side, double sigma,
-                         const FeatureRate& rate) {
-  const double value = weight * std::exp(-std::abs(s) / sigma);
-  const double d = -value * side / sigma;
-  return {value, d * rate.per_accel, d * rate.per_turn};
-}
-
-// Which side of the cusp of exp(−|s|/σ) an object is on: sign(s), except that an object whose
-// s is within band·σ of the cusp keeps the side it had at the previous step. At the cusp the
-// gradient flips with the sign of s, and a saturated command that carries s across it in one
-// control period flips back at the next: the agent chatters between both sides and goes
-// straight on. Keeping the side taken commits the agent to passing on one side, as a person
-// does. Objects are recognised by source id; those without one (-1) get no memory.
-class SideMemory {
- public:
-  double side(std::int32_t id, double s, double sigma, double band) {
-    double side = s >= 0.0 ? 1.0 : -1.0;
-    if (id >= 0) {
-      for (const auto& [previous_id, previous_side] : previous_) {
-        if (previous_id == id && std::abs(s) < band * sigma) {
-          side = previous_side;
-        }
-      }
-      current_.emplace_back(id, side);
-    }
-    return side;
-  }
-  // Call once per step, after every object: forgets the objects no longer seen.
-  void next_step() {
-    previous_.swap(current_);
-    current_.clear();
-  }
-
- private:
-  std::vector<std::pair<std::int32_t, double>> previous_;
-  std::vector<std::pair<std::int32_t, double>> current_;
-};
-
-// The gradient of L = ½ s² through the rate of s: L̇ = s ṡ.
-TermGradient half_square(double s, const FeatureRate& rate) {
-  return {0.5 * s * s, s * rate.per_accel, s * rate.per_turn};
-}
-
-void accumulate(TermGradient& sum, const TermGradient& g, double weight = 1.0) {
-  sum.cost += weight * g.cost;
-  sum.per_accel += weight * g.per_accel;
-  sum.per_turn += weight * g.per_turn;
-}
-
-double floored_speed(const AgentState& agent, const AvoidanceOptions& options) {
-  return std::max(std::abs(agent.speed_mps), options.min_speed_mps);
-}
-
-const ObjectFeatures* find_leader(const Percept& percept) {
-  if (!percept.leader_id) {
-    return nullptr;
-  }
-  for (const ObjectFeatures& object : percept.objects) {
-    if (object.source_id == *percept.leader_id && object.kind == RegionKind::visible &&
-        object.pixel_count > object.invalid_flow_count) {
-      return &object;
-    }
-  }
-  return nullptr;
-}
 
 class GoalTerm final : public CostTerm {
  public:
@@ -124,24 +62,12 @@ class AvoidanceTerm final : public CostTerm {
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {
-      if (object.kind != RegionKind::visible || object.status != MotionStatus::approaching ||
-          !(object.ttc_s <= options_.horizon_s) || !object.foe.allFinite() ||
-          !object.centre.allFinite()) {
+      if (!detail::is_threat(object, options_)) {
         continue;
       }
       const double tau = object.ttc_s;
-      const double importance =
-          std::max(0.0, options_.importance_slope * tau + options_.importance_intercept);
-      double tau_over_depth = 0.0;
-      double depth = 0.0;
-      if (options_.use_depth && object.depth_m && *object.depth_m > 0.0) {
-        depth = *object.depth_m;
-        tau_over_depth = tau / depth;
-      } else {
-        const double speed = floored_speed(agent, options_);
-        tau_over_depth = options_.depth_free_ratio / speed;
-        depth = tau / tau_over_depth;
-      }
+      const double importance = detail::importance(tau, options_);
+      const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, options_);
       const double sigma = (object.width + options_.agent_width_m / depth) / kLn10;
       const double foe = object.foe.x();
       double centre = object.centre.x();
@@ -169,7 +95,7 @@ class AvoidanceTerm final : public CostTerm {
 
  private:
   AvoidanceOptions options_;
-  SideMemory sides_;
+  detail::SideMemory sides_;
 };
 
 class DarkTerm final : public CostTerm {
@@ -204,7 +130,7 @@ class DarkTerm final : public CostTerm {
 
  private:
   AvoidanceOptions options_;
-  SideMemory sides_;
+  detail::SideMemory sides_;
 };
 
 class AlignTerm final : public CostTerm {
@@ -268,6 +194,23 @@ class LeaderSpeedTerm final : public CostTerm {
   AvoidanceOptions options_;
 };
 
+}  // namespace
+
+namespace detail {
+
+const ObjectFeatures* find_leader(const Percept& percept) {
+  if (!percept.leader_id) {
+    return nullptr;
+  }
+  for (const ObjectFeatures& object : percept.objects) {
+    if (object.source_id == *percept.leader_id && object.kind == RegionKind::visible &&
+        object.pixel_count > object.invalid_flow_count) {
+      return &object;
+    }
+  }
+  return nullptr;
+}
+
 void validate(const AvoidanceOptions& o) {
   auto require = [](bool ok, const std::string& what) {
     if (!ok) {
@@ -284,6 +227,10 @@ void validate(const AvoidanceOptions& o) {
           "min_speed_mps must be positive, got " + std::to_string(o.min_speed_mps));
   require(std::isfinite(o.importance_slope) && std::isfinite(o.importance_intercept),
           "importance slope and intercept must be finite");
+  require(std::isfinite(o.commit_band) && o.commit_band >= 0.0,
+          "commit_band must be >= 0, got " + std::to_string(o.commit_band));
+  require(std::isfinite(o.passing_band) && o.passing_band >= 0.0,
+          "passing_band must be >= 0, got " + std::to_string(o.passing_band));
 }
 
 void require_weight(double value, const char* name) {
@@ -293,7 +240,10 @@ void require_weight(double value, const char* name) {
   }
 }
 
-}  // namespace
+}  // namespace detail
+
+using detail::require_weight;
+using detail::validate;
 
 std::unique_ptr<CostTerm> goal_term() {
   return std::make_unique<GoalTerm>();

@@ -456,6 +456,8 @@ struct FeatureExtractor::Accumulator {
   double sum_y = 0.0;
   double min_x = std::numeric_limits<double>::infinity();
   double max_x = -std::numeric_limits<double>::infinity();
+  double min_x_depth = std::numeric_limits<double>::infinity();  // nearest in that column
+  double max_x_depth = std::numeric_limits<double>::infinity();
   double sum_u = 0.0;
   double sum_xu = 0.0;
   int depth_count = 0;  // over all pixels: the region's depth
@@ -484,9 +486,14 @@ struct FeatureExtractor::Accumulator {
     ++pixels;
     sum_x += x;
     sum_y += y;
+    const bool has_depth = std::isfinite(depth) && depth > 0.0F;
+    const double column_depth = has_depth ? depth : std::numeric_limits<double>::infinity();
+    min_x_depth = x < min_x ? column_depth : x == min_x ? std::min(min_x_depth, column_depth)
+                                                        : min_x_depth;
+    max_x_depth = x > max_x ? column_depth : x == max_x ? std::min(max_x_depth, column_depth)
+                                                        : max_x_depth;
     min_x = std::min(min_x, x);
     max_x = std::max(max_x, x);
-    const bool has_depth = std::isfinite(depth) && depth > 0.0F;
     if (has_depth) {
       ++depth_count;
       sum_depth += depth;
@@ -521,6 +528,10 @@ struct FeatureExtractor::Accumulator {
     f.cut_right = max_x >= field.x(field.width() - 1);
     if (depth_count > 0) {
       f.depth_m = sum_depth / depth_count;
+      if (std::isfinite(min_x_depth) && std::isfinite(max_x_depth)) {
+        f.min_x_depth_m = min_x_depth;
+        f.max_x_depth_m = max_x_depth;
+      }
     }
     if (valid() > 0) {
       f.moments.mean_u = sum_u / valid();

@@ -88,8 +88,15 @@ std::span<const ObjectFeatures> GeometricFeatures::compute(std::span<const Geome
     f.max_x = -f.min_x;
     double depth = std::numeric_limits<double>::infinity();
     for (const Eigen::Vector2d& p : clip_in_) {
-      f.min_x = std::min(f.min_x, p.x() / p.y());
-      f.max_x = std::max(f.max_x, p.x() / p.y());
+      const double x = p.x() / p.y();
+      if (x < f.min_x) {
+        f.min_x = x;
+        f.min_x_depth_m = p.y();
+      }
+      if (x > f.max_x) {
+        f.max_x = x;
+        f.max_x_depth_m = p.y();
+      }
       depth = std::min(depth, p.y());
     }
     f.cut_left = cut_left;

@@ -1,6 +1,7 @@
 #include "flowsteer/servo/steering.hpp"
 
 #include <array>
+#include <cstdlib>
 #include <utility>
 
 namespace flowsteer::servo {
@@ -20,6 +21,21 @@ constexpr std::array<std::pair<MassSource, std::string_view>, 2> kMassSources{{
     {MassSource::ids, "ids"},
     {MassSource::ground, "ground"},
 }};
+
+constexpr std::array<std::pair<NavigationLaw, std::string_view>, 3> kLaws{{
+    {NavigationLaw::flowsteer, "flowsteer"},
+    {NavigationLaw::cgf2019, "cgf2019"},
+    {NavigationLaw::mig2019, "mig2019"},
+}};
+
+template <typename Enum, std::size_t N>
+std::string names_of(const std::array<std::pair<Enum, std::string_view>, N>& table) {
+  std::string names;
+  for (const auto& [value, name] : table) {
+    names += (names.empty() ? "" : ", ") + std::string(name);
+  }
+  return names;
+}
 
 template <typename Enum, std::size_t N>
 std::string_view name_of(const std::array<std::pair<Enum, std::string_view>, N>& table, Enum e) {
@@ -61,12 +77,35 @@ std::optional<MassSource> parse_mass_source(std::string_view name) {
   return value_of(kMassSources, name);
 }
 
+std::string_view to_string(NavigationLaw law) {
+  return name_of(kLaws, law);
+}
+std::optional<NavigationLaw> parse_navigation_law(std::string_view name) {
+  return value_of(kLaws, name);
+}
+
 std::string steering_model_names() {
-  std::string names;
-  for (const auto& [model, name] : kModels) {
-    names += (names.empty() ? "" : ", ") + std::string(name);
+  return names_of(kModels);
+}
+std::string navigation_law_names() {
+  return names_of(kLaws);
+}
+
+NavigationWeights navigation_weights(const ControllerConfig& c) {
+  NavigationWeights w;  // flowsteer's
+  if (c.law == NavigationLaw::flowsteer) {
+    w.braking = 2.0;
+  } else if (c.law == NavigationLaw::mig2019) {
+    w.delta = 1.0;
+  } else if (c.kind == NavigationKind::goal_reaching) {
+    w.beta = 0.1;
   }
-  return names;
+  w.alpha = c.alpha.value_or(w.alpha);
+  w.beta = c.beta.value_or(w.beta);
+  w.gamma = c.gamma.value_or(w.gamma);
+  w.delta = c.delta.value_or(w.delta);
+  w.braking = c.braking.value_or(w.braking);
+  return w;
 }
 
 Controller make_controller(const ControllerConfig& c, double agent_width_m,
@@ -75,15 +114,25 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
   avoidance.agent_width_m = agent_width_m + c.clearance_margin_m;
   avoidance.use_depth = c.use_depth;
   const ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
-  if (c.kind == NavigationKind::following) {
-    return Controller(following({c.alpha, c.beta, c.gamma}, avoidance), c.lambda, limits);
+  NavigationWeights w = navigation_weights(c);
+  if (c.law == NavigationLaw::flowsteer) {
+    if (const char* e = std::getenv("FS_PB")) avoidance.passing_band = std::atof(e);  // TEMP
+    if (const char* e = std::getenv("FS_CB")) avoidance.commit_band = std::atof(e);  // TEMP
+    if (const char* e = std::getenv("FS_BR")) w.braking = std::atof(e);  // TEMP
+    if (const char* e = std::getenv("FS_HZ")) avoidance.horizon_s = std::atof(e);  // TEMP
+    if (const char* e = std::getenv("FS_IS")) { avoidance.importance_slope = -std::atof(e); avoidance.importance_intercept = std::atof(e) * avoidance.horizon_s; }  // TEMP
+    const FlowsteerWeights weights{w.alpha,          w.beta,          w.gamma,
+                                   w.delta,          w.braking,       preferred_speed_mps,
+                                   c.max_turn_rate,  c.follow_gap_m,  1.0};
+    return Controller(c.kind == NavigationKind::following
+                          ? flowsteer_following(weights, avoidance)
+                          : flowsteer_goal_reaching(weights, avoidance),
+                      c.lambda, limits);
   }
-  GoalReachingWeights weights;
-  weights.alpha = c.alpha;
-  weights.beta = c.beta;
-  weights.gamma = c.gamma;
-  weights.delta = c.delta;
-  weights.preferred_speed_mps = preferred_speed_mps;
+  if (c.kind == NavigationKind::following) {
+    return Controller(following({w.alpha, w.beta, w.gamma}, avoidance), c.lambda, limits);
+  }
+  const GoalReachingWeights weights{w.alpha, w.beta, w.gamma, w.delta, preferred_speed_mps};
   return Controller(goal_reaching(weights, avoidance), c.lambda, limits);
 }
 

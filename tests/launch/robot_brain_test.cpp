@@ -48,8 +48,8 @@ TEST(RobotLaunchSections, PerceptionAndControllerAreRead) {
   ASSERT_TRUE(l.perception.mount);
   EXPECT_DOUBLE_EQ(l.perception.mount->height_m, 0.3);
   EXPECT_NEAR(l.perception.mount->pitch_rad, 10.0 * M_PI / 180.0, 1e-12);
-  EXPECT_DOUBLE_EQ(l.controller.spec.alpha, 2.0);
-  EXPECT_DOUBLE_EQ(l.controller.spec.delta, 0.5);
+  EXPECT_DOUBLE_EQ(*l.controller.spec.alpha, 2.0);
+  EXPECT_DOUBLE_EQ(*l.controller.spec.delta, 0.5);
   EXPECT_FALSE(l.controller.spec.use_depth);
   EXPECT_DOUBLE_EQ(l.controller.preferred_speed_mps, 0.4);
   EXPECT_DOUBLE_EQ(l.controller.robot_width_m, 0.5);

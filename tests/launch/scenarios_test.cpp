@@ -200,9 +200,9 @@ TEST(ScenarioFile, FollowersFollowWithBetaOneUnlessToldOtherwise) {
       "  - {start: [-6, 0], leader: 1, controller: {beta: 0.3}}\n",
       "scenario.yaml");
   EXPECT_EQ(w.agents[1].controller.kind, servo::NavigationKind::following);
-  EXPECT_DOUBLE_EQ(w.agents[1].controller.beta, 1.0);
+  EXPECT_DOUBLE_EQ(servo::navigation_weights(w.agents[1].controller).beta, 1.0);
   EXPECT_EQ(w.agents[2].controller.kind, servo::NavigationKind::following);
-  EXPECT_DOUBLE_EQ(w.agents[2].controller.beta, 0.3);
+  EXPECT_DOUBLE_EQ(*w.agents[2].controller.beta, 0.3);
 }
 
 TEST(SteerSuite, TestCaseBecomesAWorld) {

@@ -2,6 +2,7 @@
 // simulation (DESIGN.md, "Signs").
 #include "flowsteer/servo/dynamics.hpp"
 
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -58,6 +59,19 @@ TEST(FeatureDynamics, GoalRateMatchesSimulation) {
   }
 }
 
+TEST(FeatureDynamics, GoalBearingRateMatchesSimulation) {
+  for (TwoBody s : random_configurations()) {
+    s.point_velocity.setZero();
+    const double distance = (s.point - s.agent_position).norm();
+    for (const Controls& c : kControls) {
+      const double measured =
+          rate_of(s, c.accel, c.turn, [](const TwoBody& b) { return std::atan(b.image_x()); });
+      expect_rate(goal_bearing_rate(std::atan(s.image_x()), distance, s.agent_speed), measured, c,
+                  "theta");
+    }
+  }
+}
+
 TEST(FeatureDynamics, CentreRateMatchesSimulation) {
   for (const TwoBody& s : random_configurations()) {
     for (const Controls& c : kControls) {
@@ -98,6 +112,31 @@ TEST(FeatureDynamics, FlowRateMatchesSimulation) {
       // τ of the point itself: −Z / v_z.
       expect_rate(flow_x_rate(s.image_x(), s.flow_x(), s.ttc(), s.depth(), s.agent_speed), measured,
                   c, "u");
+    }
+  }
+}
+
+TEST(FeatureDynamics, InverseTtcRateMatchesSimulation) {
+  for (const TwoBody& s : random_configurations()) {
+    for (const Controls& c : kControls) {
+      const double measured =
+          rate_of(s, c.accel, c.turn, [](const TwoBody& b) { return 1.0 / b.ttc(); });
+      expect_rate(inverse_ttc_rate(s.image_x(), s.foe_x(), s.ttc(), s.ttc() / s.depth()), measured,
+                  c, "1/tau");
+    }
+  }
+}
+
+TEST(FeatureDynamics, GapErrorRateMatchesSimulation) {
+  constexpr double kGap = 2.0;
+  constexpr double kGapTime = 1.5;
+  auto gap_error = [](const TwoBody& b) {
+    return b.relative_vz() + (b.depth() - kGap) / kGapTime;
+  };
+  for (const TwoBody& s : random_configurations()) {
+    for (const Controls& c : kControls) {
+      expect_rate(gap_error_rate(s.relative_vx(), s.relative_vz(), s.image_x(), s.depth(), kGapTime),
+                  rate_of(s, c.accel, c.turn, gap_error), c, "gap error");
     }
   }
 }

@@ -1,4 +1,5 @@
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include "commands.hpp"
@@ -27,7 +28,18 @@ servo::SegmentationMethod segmentation_method_option(const std::string& option,
   return *method;
 }
 
-sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice) {
+servo::NavigationLaw navigation_law_option(const std::string& option, const std::string& name) {
+  const auto law = servo::parse_navigation_law(name);
+  if (!law) {
+    throw CLI::ValidationError(option, "unknown navigation law '" + name +
+                                           "' (known: " + servo::navigation_law_names() + ")");
+  }
+  return *law;
+}
+
+namespace {
+
+sim_camera::WorldSpec load_chosen_world(const std::string& command, const ScenarioChoice& choice) {
   const int given = !choice.file.empty() + !choice.name.empty() + !choice.steersuite.empty();
   if (given > 1) {
     throw CLI::ValidationError(command, "give one of SCENARIO_FILE, --scenario, --steersuite");
@@ -43,6 +55,20 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
     return std::move(loaded.world);
   }
   return config::builtin_scenario(choice.name.empty() ? "room" : choice.name);
+}
+
+}  // namespace
+
+sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice) {
+  std::optional<servo::NavigationLaw> law;
+  if (!choice.law.empty()) {
+    law = navigation_law_option("--law", choice.law);
+  }
+  sim_camera::WorldSpec world = load_chosen_world(command, choice);
+  for (sim_camera::AgentSpec& agent : world.agents) {
+    agent.controller.law = law.value_or(agent.controller.law);
+  }
+  return world;
 }
 
 void one_value_per_use(CLI::App& command) {
@@ -64,6 +90,9 @@ void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
                   "where a SteerSuite test case's random agents, obstacles, targets and "
                   "directions go")
       ->capture_default_str();
+  command.add_option("--law", choice.law,
+                     "every agent's navigation law (default: the scenario's): " +
+                         servo::navigation_law_names());
 }
 
 }  // namespace flowsteer::cli

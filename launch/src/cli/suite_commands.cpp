@@ -20,6 +20,7 @@ struct EvalSuiteCommand {
   std::vector<std::string> flows;
   std::vector<std::string> segmentations;
   std::vector<std::string> controllers;
+  std::vector<std::string> laws;
   std::vector<int> resolutions;
   int jobs = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
   std::string shard = "0/1";
@@ -66,6 +67,9 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
                                                      servo::steering_model_names() + ")");
     }
     options.controllers.push_back(*model);
+  }
+  for (const std::string& name : command.laws) {
+    options.laws.push_back(navigation_law_option("--law", name));
   }
   const auto keep = eval::parse_keep_runs(command.keep_runs);
   if (!keep) {
@@ -126,6 +130,9 @@ Subcommand add_eval_suite(CLI::App& eval) {
   suite->add_option("--controller", command->controllers,
                     "every agent's steering model (default: the case's); repeat for several: " +
                         servo::steering_model_names());
+  suite->add_option("--law", command->laws,
+                    "every agent's navigation law (default: the case's); repeat for several: " +
+                        servo::navigation_law_names());
   suite->add_option("--resolution", command->resolutions,
                     "every agent's camera, N x N pixels (default: the case's); repeat for several");
   suite->add_option("--jobs,-j", command->jobs, "runs at once, each in its own process")

@@ -30,10 +30,11 @@ struct SuiteConfiguration {
   std::optional<servo::FlowMethod> flow;
   std::optional<servo::SegmentationMethod> segmentation;
   std::optional<servo::SteeringModel> controller;
+  std::optional<servo::NavigationLaw> law;
   std::optional<int> resolution;  // N × N pixels
   bool operator==(const SuiteConfiguration&) const = default;
 };
-// "flow/segmentation/controller/resolution", "own" for what is not overridden.
+// "flow/segmentation/controller/law/resolution", "own" for what is not overridden.
 std::string to_string(const SuiteConfiguration& configuration);
 
 // The i-th of n slices of a suite's runs (runs i, i + n, i + 2n, ...).
@@ -53,6 +54,7 @@ struct SuiteOptions {
   std::vector<servo::FlowMethod> flows;
   std::vector<servo::SegmentationMethod> segmentations;
   std::vector<servo::SteeringModel> controllers;
+  std::vector<servo::NavigationLaw> laws;
   std::vector<int> resolutions;
   std::optional<int> steps;  // stop each run after this many steps
   std::uint32_t seed = 1;    // the seed the cases were placed with, recorded with the suite
@@ -72,7 +74,8 @@ struct SuiteRun {
   std::string error;   // why the run failed (its exception, or how its process ended)
   bool failed() const { return !error.empty(); }
   bool clean() const { return !failed() && summary.clean(); }
-  // The run's folder and top view are named this: "case.flow.segmentation.controller.resolution".
+  // The run's folder and top view are named this:
+  // "case.flow.segmentation.controller.law.resolution".
   std::string folder_name() const;
 };
 
@@ -86,7 +89,7 @@ struct SuiteResult {
   int jobs = 1;                // a merge: the most any shard had
 };
 
-// The suite's configurations, every flow × segmentation × controller × resolution in that
+// The suite's configurations, every flow × segmentation × controller × law × resolution in that
 // nesting. Throws base::ConfigError for a resolution out of 16..4096 or any value given twice.
 std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options);
 

@@ -47,6 +47,11 @@ class CostTerm {
   virtual TermGradient evaluate(const Percept& percept, const AgentState& agent) = 0;
 };
 
+// Which way an agent turns to pass an object met head-on, when neither side is clearly shorter.
+// People agree on one (keep right, in most countries), which breaks the symmetry of two agents
+// meeting head-on that would otherwise mirror each other's moves.
+enum class PassingSide { none, keep_right, keep_left };
+
 // How the avoidance terms size objects and guess what depth does not tell them.
 struct AvoidanceOptions {
   double agent_width_m = 0.5;  // added to each object's image width (CGF §6.2)
@@ -64,6 +69,10 @@ struct AvoidanceOptions {
   // agent chose to pass it on at the previous step, instead of flipping with the sign of g − f
   // (0 turns this off). Needs objects with a source id.
   double commit_band = 1.0;
+  // The clearance term only: the passing convention, and how strongly it leans (in σ: an object
+  // whose two ways round differ by less than this is passed on the convention's side).
+  PassingSide passing_side = PassingSide::keep_right;
+  double passing_band = 1.0;
 };
 
 // L_t = ½ t_x² (CGF Eq. 7). Needs the goal's bearing; zero without one.
@@ -78,6 +87,31 @@ std::unique_ptr<CostTerm> dark_term(const AvoidanceOptions& options = {});
 std::unique_ptr<CostTerm> align_term(const AvoidanceOptions& options = {});
 // L_τ = ½ v_z² of the leader (CGF Eq. 13).
 std::unique_ptr<CostTerm> leader_speed_term(const AvoidanceOptions& options = {});
+
+// The flowsteer law's terms (clearance_terms.cpp): the papers' structure, with what their law
+// collides in replaced.
+//
+// L_θ = ½ θ², θ = atan t_x the goal's bearing: ω = λ α θ stays bounded for a goal beside or behind
+// the agent, where L_t's t_x (1 + t_x²) grows without bound and outweighs any avoidance.
+std::unique_ptr<CostTerm> heading_term();
+// L_v = ½ (v_c − v_t)² with v_t = min(v*, ω_t d / (2 sin|θ|)): no faster than lets the agent turn
+// onto a goal d away at bearing θ at turn rate ω_t (half the controller's limit), so that it does
+// not circle a goal inside its turning circle (sin|θ| taken as 1 beyond 90°).
+std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate);
+// L_c = Σ_i I(τ_i) φ(c_i / σ_i) over approaching visible objects: c_i is the FOE's clearance from
+// the object's extent [min_x, max_x] widened at each end by half the agent's width at that end's
+// depth, on the side the agent passes it on; φ(u) = exp(−u) outside (u ≥ 0), 1 − u inside.
+// Its extent, unlike CGF Eq. 9's centre, makes a wall along the path cost nothing and one across
+// it cost everything. See clearance_terms.cpp.
+std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options = {});
+// L_b = Σ_i ψ_i ½ (1/τ_i)², ψ_i = min(1, exp(−c_i/σ_i)) on the better side: brakes for an object
+// whose widened extent holds the FOE, which no turning term does for a static obstacle met
+// head-on (its FOE is straight ahead, f = 0, and CGF Eq. 10's f a_c term vanishes).
+std::unique_ptr<CostTerm> braking_term(const AvoidanceOptions& options = {});
+// L_g = ½ (v_z + (Z − G)/T)² of the leader: close the gap to G metres with time constant T,
+// then match its speed (CGF Eq. 13's L_τ is the case G = 0, T → ∞). Needs the leader's depth.
+std::unique_ptr<CostTerm> leader_gap_term(double gap_m, double gap_time_s,
+                                          const AvoidanceOptions& options = {});
 
 struct TermEvaluation {
   std::string name;
@@ -108,6 +142,19 @@ struct GoalReachingWeights {  // CGF Eq. 16, MIG Eq. 4
   double delta = 0.0;         // dark regions; MIG uses 1 and asks for γ ≥ δ
   double preferred_speed_mps = 1.0;
 };
+// The flowsteer law's weights; the papers' α..δ keep their roles.
+struct FlowsteerWeights {
+  double alpha = 1.0;    // heading
+  double beta = 1.0;     // approach speed (a walker reaches its speed in about a second)
+  double gamma = 1.0;    // clearance
+  double delta = 0.0;    // dark regions (MIG Eq. 3), at most gamma
+  double braking = 2.0;  // braking
+  double preferred_speed_mps = 1.0;
+  double max_turn_rate = 1.0;  // the controller's limit, for the approach speed
+  double follow_gap_m = 2.0;   // following: the gap kept behind the leader
+  double gap_time_s = 1.0;
+};
+
 struct FollowingWeights {  // CGF Eq. 18
   double alpha = 1.0;      // alignment
   double beta = 1.0;       // leader speed
@@ -119,6 +166,13 @@ NavigationFunction goal_reaching(const GoalReachingWeights& weights,
                                  const AvoidanceOptions& avoidance = {});
 NavigationFunction following(const FollowingWeights& weights,
                              const AvoidanceOptions& avoidance = {});
+
+// The flowsteer law: L = α L_θ + β L_v + γ L_c + ε L_b (+ δ L_dark), and for following
+// L = α L_min + β L_g + γ L_c + ε L_b. Throws std::invalid_argument like goal_reaching.
+NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& weights,
+                                           const AvoidanceOptions& avoidance = {});
+NavigationFunction flowsteer_following(const FlowsteerWeights& weights,
+                                       const AvoidanceOptions& avoidance = {});
 
 struct ControlLimits {
   double max_accel_mps2 = 1.0;

@@ -60,6 +60,10 @@ struct ObjectFeatures {
   bool cut_left = false;
   bool cut_right = false;
   std::optional<double> depth_m;  // mean depth when the field has depth
+  // Depth of the nearest point in the leftmost / rightmost column, when the field has depth: the
+  // two ends of a wall along the path are at very different depths.
+  std::optional<double> min_x_depth_m;
+  std::optional<double> max_x_depth_m;
 
   MotionStatus status = MotionStatus::no_flow;
   Eigen::Vector2d foe = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());

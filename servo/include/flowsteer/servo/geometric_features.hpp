@@ -29,7 +29,8 @@ struct GeometricBody {
 // to the part in front of the camera and inside the field of view, at the camera's height:
 //   min_x, max_x  the extent of that part in normalised image coordinates, width = max − min,
 //                 centre g at the middle of the extent, cut_left/right where the view cuts it;
-//   depth Z       the smallest depth of that part (where the agent would touch it first);
+//   depth Z       the smallest depth of that part (where the agent would touch it first), and
+//                 the depths of the corners at min_x and max_x;
 //   v             relative velocity (body − agent) in the camera frame, FOE f = (v_x, v_y)/v_z
 //                 (CGF Eq. 3), τ = −Z/v_z, status from the sign of τ like the flow fit's;
 //   moments       those of the flow u = (v_x − x v_z)/Z (CGF Eq. 2) at the centre, standing for

@@ -17,6 +17,10 @@ namespace flowsteer::servo {
 enum class SteeringModel { vision, geometric, motion_energy };
 // The navigation function of CGF §6.3: towards goals, or after a leader.
 enum class NavigationKind { goal_reaching, following };
+// The navigation function that models vision and geometric descend: the project's own law, or
+// the papers' as published (with DESIGN.md's sign corrections), kept exactly so that comparisons
+// with the papers stay honest. mig2019 is cgf2019 with MIG 2019's weights, dark regions included.
+enum class NavigationLaw { flowsteer, cgf2019, mig2019 };
 // Where motion energy's "mass" and "floor" pixels come from: the renderer's object ids, or the
 // flat-ground test on the flow, as a real camera would give them.
 enum class MassSource { ids, ground };
@@ -24,22 +28,31 @@ enum class MassSource { ids, ground };
 std::string_view to_string(SteeringModel model);
 std::string_view to_string(NavigationKind kind);
 std::string_view to_string(MassSource source);
+std::string_view to_string(NavigationLaw law);
 std::optional<SteeringModel> parse_steering_model(std::string_view name);
 std::optional<NavigationKind> parse_navigation_kind(std::string_view name);
 std::optional<MassSource> parse_mass_source(std::string_view name);
+std::optional<NavigationLaw> parse_navigation_law(std::string_view name);
 // "vision, geometric, motion_energy", for messages and help texts.
 std::string steering_model_names();
+// "flowsteer, cgf2019, mig2019".
+std::string navigation_law_names();
 
 // A controller's settings, as scenario files, robot launch files and demo scenes give them.
 struct ControllerConfig {
   SteeringModel model = SteeringModel::vision;
   NavigationKind kind = NavigationKind::goal_reaching;
-  double alpha = 1.0;
-  double beta = 0.1;
-  double gamma = 1.0;
+  NavigationLaw law = NavigationLaw::flowsteer;
+  // The weights of the law's terms; each one not set is the law's own (navigation_weights).
   // Dark regions (MIG 2019): with delta > 0 the agent looks for them and avoids them; with 0 it
-  // ignores them, as MIG's agents without dark-region awareness do.
-  double delta = 0.0;
+  // ignores them, as MIG's agents without dark-region awareness do. braking: law flowsteer only.
+  std::optional<double> alpha;
+  std::optional<double> beta;
+  std::optional<double> gamma;
+  std::optional<double> delta;
+  std::optional<double> braking;
+  // Law flowsteer, following: the gap kept behind the leader.
+  double follow_gap_m = 2.0;
   double lambda = 1.0;
   double max_accel_mps2 = 1.0;
   double max_turn_rate = 1.0;
@@ -58,6 +71,19 @@ struct PerceptionConfig {
   FlowMethod flow = FlowMethod::synthetic;
   SegmentationMethod segmentation = SegmentationMethod::semantic;
 };
+
+// A config's weights, the law's own where it sets none:
+//   cgf2019  goal reaching α 1, β 0.1, γ 1, δ 0 (CGF Eq. 16); following α = β = γ = 1 (§8.2)
+//   mig2019  α = β = γ = δ = 1 (MIG §7)
+//   flowsteer α 1, β 1, γ 1, δ 0, braking 2, for both kinds
+struct NavigationWeights {
+  double alpha = 1.0;
+  double beta = 1.0;
+  double gamma = 1.0;
+  double delta = 0.0;
+  double braking = 0.0;
+};
+NavigationWeights navigation_weights(const ControllerConfig& config);
 
 // The navigation-function controller a config asks for, for an agent agent_width_m wide that
 // prefers preferred_speed_mps (goal reaching's v*).

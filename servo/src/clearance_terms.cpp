@@ -1,0 +1,302 @@
+// The flowsteer law's cost terms (control.hpp). Each keeps the papers' form, a cost over visual
+// features whose gradient on (a_c, ω) comes from the features' rates (dynamics.hpp), and fixes a
+// way the papers' law collides: see DESIGN.md, "The flowsteer law".
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "cost_term_helpers.hpp"
+#include "flowsteer/servo/control.hpp"
+#include "flowsteer/servo/dynamics.hpp"
+
+namespace flowsteer::servo {
+
+namespace {
+
+using detail::accumulate;
+using detail::half_square;
+
+// φ(u) = exp(−u) for u ≥ 0 and its tangent 1 − u below: the cost keeps rising, but no faster than
+// linearly, as the FOE goes deeper into an object's extent (a wall's extent is wide).
+struct Falloff {
+  double value;
+  double slope;  // dφ/du
+};
+Falloff falloff(double u) {
+  if (u >= 0.0) {
+    const double e = std::exp(-u);
+    return {e, -e};
+  }
+  return {1.0 - u, -1.0};
+}
+
+// An approaching object's extent widened by half the agent's width at each end, and the FOE's
+// clearance from it on either side, in units of σ at that end (σ = the agent's width there / ln 10,
+// so the cost falls to a tenth one agent width clear of the widened edge).
+struct Cone {
+  double tau_over_depth = 0.0;
+  double foe = 0.0;
+  double edge[2] = {0.0, 0.0};   // [0] left (min_x side), [1] right
+  double depth[2] = {0.0, 0.0};  // of each end
+  double sigma[2] = {0.0, 0.0};
+  // clearance[0]: the FOE left of the left edge, the object passed on the agent's right;
+  // clearance[1]: the FOE right of the right edge, the object passed on its left.
+  double clearance[2] = {0.0, 0.0};
+
+  double best_clearance() const { return std::max(clearance[0], clearance[1]); }
+};
+
+Cone cone_of(const ObjectFeatures& object, const AgentState& agent,
+             const AvoidanceOptions& options) {
+  const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, options);
+  Cone c;
+  c.tau_over_depth = tau_over_depth;
+  c.foe = object.foe.x();
+  const bool depths = options.use_depth && object.min_x_depth_m && object.max_x_depth_m;
+  c.depth[0] = depths ? *object.min_x_depth_m : depth;
+  c.depth[1] = depths ? *object.max_x_depth_m : depth;
+  // Where the image cuts an end, the object may go on past it: an FOE beyond that end may lie on
+  // its hidden part, so the end is taken at least as far out as the FOE (the papers' law takes
+  // such an FOE as on the object too).
+  const double left = object.cut_left ? std::min(object.min_x, c.foe) : object.min_x;
+  const double right = object.cut_right ? std::max(object.max_x, c.foe) : object.max_x;
+  for (int end = 0; end < 2; ++end) {
+    const double width = options.agent_width_m / std::max(c.depth[end], 1e-3);
+    c.sigma[end] = width / detail::kLn10;
+    c.edge[end] = (end == 0 ? left - 0.5 * width : right + 0.5 * width);
+  }
+  c.clearance[0] = (c.edge[0] - c.foe) / c.sigma[0];
+  c.clearance[1] = (c.foe - c.edge[1]) / c.sigma[1];
+  return c;
+}
+
+class ClearanceTerm final : public CostTerm {
+ public:
+  explicit ClearanceTerm(const AvoidanceOptions& options) : options_(options) {}
+  std::string_view name() const override { return "clearance"; }
+
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
+    TermGradient sum;
+    for (const ObjectFeatures& object : percept.objects) {
+      if (!detail::is_threat(object, options_)) {
+        continue;
+      }
+      const Cone cone = cone_of(object, agent, options_);
+      const int end = passing_end(object.source_id, cone);
+      // The widened end is a point of the object (same τ/Z, its own depth): its separation from
+      // the FOE moves by CGF Eq. 10. The clearance is that separation, signed to be positive
+      // outside, over σ.
+      const double tau_end = cone.depth[end] * cone.tau_over_depth;
+      const FeatureRate separation = separation_rate(cone.edge[end], cone.foe, tau_end,
+                                                     cone.tau_over_depth, agent.speed_mps);
+      const double sign = (end == 0 ? 1.0 : -1.0) / cone.sigma[end];
+      const Falloff phi = falloff(cone.clearance[end]);
+      const double importance = detail::importance(object.ttc_s, options_);
+      const double d = importance * phi.slope * sign;
+      if (std::getenv("FS_DEBUG")) std::fprintf(stderr, "id %d tau %.2f f %.3f edges %.3f %.3f clr %.2f %.2f end %d v %.2f dturn %.3f dacc %.3f\n", object.source_id, object.ttc_s, cone.foe, cone.edge[0], cone.edge[1], cone.clearance[0], cone.clearance[1], end, agent.speed_mps, d*separation.per_turn, d*separation.per_accel);  // TEMP
+      accumulate(sum, {importance * phi.value, d * separation.per_accel, d * separation.per_turn});
+    }
+    sides_.next_step();
+    return sum;
+  }
+
+ private:
+  // The end the agent passes the object by: the one with more clearance, except that the end
+  // chosen at the previous step keeps commit_band σ of advantage (no chatter between both ways
+  // round) and the passing convention's end passing_band σ (two agents meeting head-on pass
+  // each other on the same side instead of mirroring each other).
+  int passing_end(std::int32_t id, const Cone& cone) {
+    double score[2] = {cone.clearance[0], cone.clearance[1]};
+    if (options_.passing_side != PassingSide::none) {
+      // Keeping right passes an object on its left: the FOE goes right of it, out by end 1.
+      score[options_.passing_side == PassingSide::keep_right ? 1 : 0] += options_.passing_band;
+    }
+    if (const double* previous = sides_.previous_side(id)) {
+      score[*previous > 0.0 ? 0 : 1] += options_.commit_band;
+    }
+    const int end = score[0] >= score[1] ? 0 : 1;
+    sides_.remember(id, end == 0 ? 1.0 : -1.0);
+    return end;
+  }
+
+  AvoidanceOptions options_;
+  detail::SideMemory sides_;
+};
+
+class BrakingTerm final : public CostTerm {
+ public:
+  explicit BrakingTerm(const AvoidanceOptions& options) : options_(options) {}
+  std::string_view name() const override { return "braking"; }
+
+  // ψ is held constant in the gradient, as CGF §6.2 holds σ and I(τ).
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
+    TermGradient sum;
+    for (const ObjectFeatures& object : percept.objects) {
+      if (!detail::is_threat(object, options_)) {
+        continue;
+      }
+      const Cone cone = cone_of(object, agent, options_);
+      const double on_course = std::min(1.0, falloff(cone.best_clearance()).value);
+      const double inverse_ttc = 1.0 / object.ttc_s;
+      const FeatureRate rate = inverse_ttc_rate(object.centre.x(), cone.foe, object.ttc_s,
+                                                cone.tau_over_depth);
+      const TermGradient g = half_square(inverse_ttc, rate);
+      accumulate(sum, g, on_course);
+    }
+    return sum;
+  }
+
+ private:
+  AvoidanceOptions options_;
+};
+
+class HeadingTerm final : public CostTerm {
+ public:
+  std::string_view name() const override { return "heading"; }
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
+    if (!percept.goal_bearing_rad || !std::isfinite(*percept.goal_bearing_rad)) {
+      return {};
+    }
+    const double bearing = std::remainder(*percept.goal_bearing_rad, 2.0 * std::numbers::pi);
+    const double distance = percept.goal_distance_m.value_or(std::numeric_limits<double>::infinity());
+    return half_square(bearing, goal_bearing_rate(bearing, distance, agent.speed_mps));
+  }
+};
+
+class ApproachSpeedTerm final : public CostTerm {
+ public:
+  ApproachSpeedTerm(double preferred_speed_mps, double max_turn_rate)
+      : preferred_(preferred_speed_mps), turn_rate_(0.5 * max_turn_rate) {}
+  std::string_view name() const override { return "approach_speed"; }
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
+    double target = preferred_;
+    if (percept.goal_bearing_rad && percept.goal_distance_m &&
+        std::isfinite(*percept.goal_bearing_rad)) {
+      const double bearing = std::abs(std::remainder(*percept.goal_bearing_rad, 2.0 * std::numbers::pi));
+      const double sine = bearing >= 0.5 * std::numbers::pi ? 1.0 : std::sin(bearing);
+      if (sine > 0.0) {
+        target = std::min(target, turn_rate_ * *percept.goal_distance_m / (2.0 * sine));
+      }
+    }
+    // v̇_c = a_c.
+    return half_square(agent.speed_mps - target, FeatureRate{0.0, 1.0, 0.0});
+  }
+
+ private:
+  double preferred_;
+  double turn_rate_;
+};
+
+class LeaderGapTerm final : public CostTerm {
+ public:
+  LeaderGapTerm(double gap_m, double gap_time_s, const AvoidanceOptions& options)
+      : gap_m_(gap_m), gap_time_s_(gap_time_s), options_(options) {}
+  std::string_view name() const override { return "leader_gap"; }
+
+  // v_z = −Z/τ and v_x = f v_z from the leader's fit; a leader moving only sideways has v_z = 0.
+  TermGradient evaluate(const Percept& percept, const AgentState&) override {
+    const ObjectFeatures* leader = detail::find_leader(percept);
+    if (leader == nullptr || !options_.use_depth || !leader->depth_m) {
+      return {};
+    }
+    double vz = 0.0;
+    double vx = 0.0;
+    if (leader->has_foe() && std::isfinite(leader->ttc_s)) {
+      vz = -*leader->depth_m / leader->ttc_s;
+      vx = leader->foe.x() * vz;
+    } else if (leader->status != MotionStatus::lateral) {
+      return {};
+    }
+    const double depth = *leader->depth_m;
+    const double error = vz + (depth - gap_m_) / gap_time_s_;
+    return half_square(error,
+                       gap_error_rate(vx, vz, leader->centre.x(), depth, gap_time_s_));
+  }
+
+ private:
+  double gap_m_;
+  double gap_time_s_;
+  AvoidanceOptions options_;
+};
+
+void require_positive(double value, const char* what) {
+  if (!std::isfinite(value) || value <= 0.0) {
+    throw std::invalid_argument(std::string(what) + " must be positive, got " +
+                                std::to_string(value));
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<CostTerm> heading_term() {
+  return std::make_unique<HeadingTerm>();
+}
+
+std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate) {
+  if (!std::isfinite(preferred_speed_mps)) {
+    throw std::invalid_argument("preferred speed must be finite");
+  }
+  require_positive(max_turn_rate, "approach speed: max_turn_rate");
+  return std::make_unique<ApproachSpeedTerm>(preferred_speed_mps, max_turn_rate);
+}
+
+std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options) {
+  detail::validate(options);
+  return std::make_unique<ClearanceTerm>(options);
+}
+
+std::unique_ptr<CostTerm> braking_term(const AvoidanceOptions& options) {
+  detail::validate(options);
+  return std::make_unique<BrakingTerm>(options);
+}
+
+std::unique_ptr<CostTerm> leader_gap_term(double gap_m, double gap_time_s,
+                                          const AvoidanceOptions& options) {
+  detail::validate(options);
+  if (!std::isfinite(gap_m) || gap_m < 0.0) {
+    throw std::invalid_argument("leader gap must be >= 0, got " + std::to_string(gap_m));
+  }
+  require_positive(gap_time_s, "leader gap time");
+  return std::make_unique<LeaderGapTerm>(gap_m, gap_time_s, options);
+}
+
+NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& w,
+                                           const AvoidanceOptions& avoidance) {
+  detail::require_weight(w.alpha, "alpha");
+  detail::require_weight(w.beta, "beta");
+  detail::require_weight(w.gamma, "gamma");
+  detail::require_weight(w.delta, "delta");
+  detail::require_weight(w.braking, "braking");
+  if (w.delta > w.gamma) {
+    throw std::invalid_argument("navigation weights: delta (" + std::to_string(w.delta) +
+                                ") must not exceed gamma (" + std::to_string(w.gamma) + ")");
+  }
+  NavigationFunction f;
+  f.add(w.alpha, heading_term())
+      .add(w.beta, approach_speed_term(w.preferred_speed_mps, w.max_turn_rate))
+      .add(w.gamma, clearance_term(avoidance))
+      .add(w.braking, braking_term(avoidance));
+  if (w.delta > 0.0) {
+    f.add(w.delta, dark_term(avoidance));
+  }
+  return f;
+}
+
+NavigationFunction flowsteer_following(const FlowsteerWeights& w,
+                                       const AvoidanceOptions& avoidance) {
+  detail::require_weight(w.braking, "braking");
+  NavigationFunction f;
+  f.add(w.alpha, align_term(avoidance))
+      .add(w.beta, leader_gap_term(w.follow_gap_m, w.gap_time_s, avoidance))
+      .add(w.gamma, clearance_term(avoidance))
+      .add(w.braking, braking_term(avoidance));
+  return f;
+}
+
+}  // namespace flowsteer::servo

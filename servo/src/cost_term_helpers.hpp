@@ -1,0 +1,118 @@
+#pragma once
+
+// What the cost terms of control.cpp (the papers' law) and clearance_terms.cpp (the flowsteer law)
+// share: the falloff of a cost with a feature, the side memory and the sums.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "flowsteer/servo/control.hpp"
+#include "flowsteer/servo/dynamics.hpp"
+
+namespace flowsteer::servo::detail {
+
+// ln 10: σ = w / ln 10 makes exp(−|Δx|/σ) fall to 1/10 at |Δx| = w (CGF §6.2).
+constexpr double kLn10 = 2.302585092994046;
+
+// The gradient of L = w·exp(−|s|/σ) (w constant) through the rate of s: L̇ = −L sign(s)/σ · ṡ.
+// `side` is the sign of s that the gradient takes (see SideMemory).
+inline TermGradient exp_falloff(double weight, double s, double side, double sigma,
+                                const FeatureRate& rate) {
+  const double value = weight * std::exp(-std::abs(s) / sigma);
+  const double d = -value * side / sigma;
+  return {value, d * rate.per_accel, d * rate.per_turn};
+}
+
+// The gradient of L = ½ s² through the rate of s: L̇ = s ṡ.
+inline TermGradient half_square(double s, const FeatureRate& rate) {
+  return {0.5 * s * s, s * rate.per_accel, s * rate.per_turn};
+}
+
+inline void accumulate(TermGradient& sum, const TermGradient& g, double weight = 1.0) {
+  sum.cost += weight * g.cost;
+  sum.per_accel += weight * g.per_accel;
+  sum.per_turn += weight * g.per_turn;
+}
+
+inline double floored_speed(const AgentState& agent, const AvoidanceOptions& options) {
+  return std::max(std::abs(agent.speed_mps), options.min_speed_mps);
+}
+
+// τ/Z of an approaching object and its depth: from the object's depth where the options use it
+// and it has one, else from the depth-free guess τ v_c / Z = depth_free_ratio (MIG §7.1).
+struct DepthScale {
+  double tau_over_depth;
+  double depth_m;
+};
+inline DepthScale depth_scale(const ObjectFeatures& object, const AgentState& agent,
+                              const AvoidanceOptions& options) {
+  if (options.use_depth && object.depth_m && *object.depth_m > 0.0) {
+    return {object.ttc_s / *object.depth_m, *object.depth_m};
+  }
+  const double tau_over_depth = options.depth_free_ratio / floored_speed(agent, options);
+  return {tau_over_depth, object.ttc_s / tau_over_depth};
+}
+
+// An object the avoidance terms weigh: visible, approaching within the horizon, fitted.
+inline bool is_threat(const ObjectFeatures& object, const AvoidanceOptions& options) {
+  return object.kind == RegionKind::visible && object.status == MotionStatus::approaching &&
+         object.ttc_s <= options.horizon_s && object.foe.allFinite() && object.centre.allFinite();
+}
+
+// I(τ) of CGF Eq. 9.
+inline double importance(double ttc_s, const AvoidanceOptions& options) {
+  return std::max(0.0, options.importance_slope * ttc_s + options.importance_intercept);
+}
+
+// The leader's features: the visible object of percept.leader_id with valid flow, if seen.
+const ObjectFeatures* find_leader(const Percept& percept);
+// Throws std::invalid_argument naming the option that is out of range.
+void validate(const AvoidanceOptions& options);
+// Throws std::invalid_argument for a negative or non-finite weight.
+void require_weight(double value, const char* name);
+
+// Which side of the cusp of exp(−|s|/σ) an object is on: sign(s), except that an object whose
+// s is within band·σ of the cusp keeps the side it had at the previous step. At the cusp the
+// gradient flips with the sign of s, and a saturated command that carries s across it in one
+// control period flips back at the next: the agent chatters between both sides and goes
+// straight on. Keeping the side taken commits the agent to passing on one side, as a person
+// does. Objects are recognised by source id; those without one (-1) get no memory.
+class SideMemory {
+ public:
+  double side(std::int32_t id, double s, double sigma, double band) {
+    double side = s >= 0.0 ? 1.0 : -1.0;
+    if (const double* previous = previous_side(id); previous && std::abs(s) < band * sigma) {
+      side = *previous;
+    }
+    remember(id, side);
+    return side;
+  }
+  // The side `id` had at the previous step, if it was seen then.
+  const double* previous_side(std::int32_t id) const {
+    for (const auto& [previous_id, previous_side] : previous_) {
+      if (previous_id == id && id >= 0) {
+        return &previous_side;
+      }
+    }
+    return nullptr;
+  }
+  void remember(std::int32_t id, double side) {
+    if (id >= 0) {
+      current_.emplace_back(id, side);
+    }
+  }
+  // Call once per step, after every object: forgets the objects no longer seen.
+  void next_step() {
+    previous_.swap(current_);
+    current_.clear();
+  }
+
+ private:
+  std::vector<std::pair<std::int32_t, double>> previous_;
+  std::vector<std::pair<std::int32_t, double>> current_;
+};
+
+}  // namespace flowsteer::servo::detail
