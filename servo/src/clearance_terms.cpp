@@ -9,7 +9,9 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "cost_term_helpers.hpp"
 #include "flowsteer/servo/control.hpp"
@@ -41,6 +43,7 @@ Falloff falloff(double u) {
 // so the cost falls to a tenth one agent width clear of the widened edge).
 struct Cone {
   double tau_over_depth = 0.0;
+  double depth_m = 0.0;  // the object's (or the depth-free guess)
   double foe = 0.0;
   double edge[2] = {0.0, 0.0};   // [0] left (min_x side), [1] right
   double depth[2] = {0.0, 0.0};  // of each end
@@ -57,6 +60,7 @@ Cone cone_of(const ObjectFeatures& object, const AgentState& agent,
   const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, options);
   Cone c;
   c.tau_over_depth = tau_over_depth;
+  c.depth_m = depth;
   c.foe = object.foe.x();
   const bool depths = options.use_depth && object.min_x_depth_m && object.max_x_depth_m;
   c.depth[0] = depths ? *object.min_x_depth_m : depth;
@@ -76,19 +80,83 @@ Cone cone_of(const ObjectFeatures& object, const AgentState& agent,
   return c;
 }
 
+// The approaching objects of a percept as cones, grouped where no path passes between them: two
+// objects whose widened extents overlap, measured from each one's own FOE (where the agent's
+// relative motion points), leave no gap for the FOE to go through. A corner of two walls, a door
+// narrower than the agent or two people walking close side by side are each one obstacle, passed
+// on the outside.
+class ThreatCones {
+ public:
+  struct Entry {
+    const ObjectFeatures* object;
+    Cone cone;
+    int group;
+  };
+  struct Group {
+    double clearance[2];  // of its outermost members, as Cone::clearance
+    double sigma[2];      // σ of those ends
+    double best_clearance() const { return std::max(clearance[0], clearance[1]); }
+  };
+
+  void build(const Percept& percept, const AgentState& agent, const AvoidanceOptions& options) {
+    entries_.clear();
+    groups_.clear();
+    for (const ObjectFeatures& object : percept.objects) {
+      if (detail::is_threat(object, options)) {
+        entries_.push_back({&object, cone_of(object, agent, options), -1});
+      }
+    }
+    order_.resize(entries_.size());
+    for (std::size_t i = 0; i < order_.size(); ++i) {
+      order_[i] = i;
+    }
+    std::sort(order_.begin(), order_.end(), [this](std::size_t a, std::size_t b) {
+      return relative_edge(entries_[a], 0) < relative_edge(entries_[b], 0);
+    });
+    double reach = -std::numeric_limits<double>::infinity();
+    for (const std::size_t i : order_) {
+      Entry& e = entries_[i];
+      if (groups_.empty() || relative_edge(e, 0) > reach) {
+        groups_.push_back({{e.cone.clearance[0], 0.0}, {e.cone.sigma[0], 0.0}});
+        reach = -std::numeric_limits<double>::infinity();
+      }
+      e.group = static_cast<int>(groups_.size()) - 1;
+      if (relative_edge(e, 1) > reach) {
+        reach = relative_edge(e, 1);
+        Group& g = groups_.back();
+        g.clearance[1] = e.cone.clearance[1];
+        g.sigma[1] = e.cone.sigma[1];
+      }
+    }
+  }
+
+  std::span<Entry> entries() { return entries_; }
+  std::span<const Group> groups() const { return groups_; }
+
+ private:
+  static double relative_edge(const Entry& e, int end) { return e.cone.edge[end] - e.cone.foe; }
+
+  std::vector<Entry> entries_;
+  std::vector<Group> groups_;
+  std::vector<std::size_t> order_;
+};
+
 class ClearanceTerm final : public CostTerm {
  public:
   explicit ClearanceTerm(const AvoidanceOptions& options) : options_(options) {}
   std::string_view name() const override { return "clearance"; }
 
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
+    cones_.build(percept, agent, options_);
+    group_ends_.clear();
+    for (std::size_t g = 0; g < cones_.groups().size(); ++g) {
+      group_ends_.push_back(passing_end(static_cast<int>(g)));
+    }
     TermGradient sum;
-    for (const ObjectFeatures& object : percept.objects) {
-      if (!detail::is_threat(object, options_)) {
-        continue;
-      }
-      const Cone cone = cone_of(object, agent, options_);
-      const int end = passing_end(object.source_id, cone);
+    for (const ThreatCones::Entry& entry : cones_.entries()) {
+      const Cone& cone = entry.cone;
+      const int end = group_ends_[static_cast<std::size_t>(entry.group)];
+      sides_.remember(entry.object->source_id, end == 0 ? 1.0 : -1.0);
       // The widened end is a point of the object (same τ/Z, its own depth): its separation from
       // the FOE moves by CGF Eq. 10. The clearance is that separation, signed to be positive
       // outside, over σ.
@@ -97,9 +165,9 @@ class ClearanceTerm final : public CostTerm {
                                                      cone.tau_over_depth, agent.speed_mps);
       const double sign = (end == 0 ? 1.0 : -1.0) / cone.sigma[end];
       const Falloff phi = falloff(cone.clearance[end]);
-      const double importance = detail::importance(object.ttc_s, options_);
+      const double importance = detail::importance(entry.object->ttc_s, options_);
       const double d = importance * phi.slope * sign;
-      if (std::getenv("FS_DEBUG")) std::fprintf(stderr, "id %d tau %.2f f %.3f edges %.3f %.3f clr %.2f %.2f end %d v %.2f dturn %.3f dacc %.3f\n", object.source_id, object.ttc_s, cone.foe, cone.edge[0], cone.edge[1], cone.clearance[0], cone.clearance[1], end, agent.speed_mps, d*separation.per_turn, d*separation.per_accel);  // TEMP
+      if (std::getenv("FS_DEBUG")) std::fprintf(stderr, "id %d g %d tau %.2f f %.3f edges %.3f %.3f clr %.2f %.2f end %d v %.2f dturn %.3f dacc %.3f\n", entry.object->source_id, entry.group, entry.object->ttc_s, cone.foe, cone.edge[0], cone.edge[1], cone.clearance[0], cone.clearance[1], end, agent.speed_mps, d*separation.per_turn, d*separation.per_accel);  // TEMP
       accumulate(sum, {importance * phi.value, d * separation.per_accel, d * separation.per_turn});
     }
     sides_.next_step();
@@ -107,25 +175,35 @@ class ClearanceTerm final : public CostTerm {
   }
 
  private:
-  // The end the agent passes the object by: the one with more clearance, except that the end
-  // chosen at the previous step keeps commit_band σ of advantage (no chatter between both ways
-  // round) and the passing convention's end passing_band σ (two agents meeting head-on pass
-  // each other on the same side instead of mirroring each other).
-  int passing_end(std::int32_t id, const Cone& cone) {
-    double score[2] = {cone.clearance[0], cone.clearance[1]};
+  // The end a group is passed by: the one with more clearance, except that the end its members
+  // were passed by at the previous step keeps commit_band σ of advantage (no chatter between
+  // both ways round) and the passing convention's end passing_band σ (two agents meeting
+  // head-on pass each other on the same side instead of mirroring each other). The ends are
+  // compared in image units over their mean σ: a near end's σ is wider, so a wall met at a slant
+  // is passed by its far end, the way it recedes, even where the image cuts both.
+  int passing_end(int group) {
+    const ThreatCones::Group& g = cones_.groups()[static_cast<std::size_t>(group)];
+    const double sigma = 0.5 * (g.sigma[0] + g.sigma[1]);
+    double score[2] = {g.clearance[0] * g.sigma[0] / sigma, g.clearance[1] * g.sigma[1] / sigma};
     if (options_.passing_side != PassingSide::none) {
       // Keeping right passes an object on its left: the FOE goes right of it, out by end 1.
       score[options_.passing_side == PassingSide::keep_right ? 1 : 0] += options_.passing_band;
     }
-    if (const double* previous = sides_.previous_side(id)) {
-      score[*previous > 0.0 ? 0 : 1] += options_.commit_band;
+    double previous = 0.0;  // the members' votes: +1 passed by end 0, -1 by end 1
+    for (const ThreatCones::Entry& entry : cones_.entries()) {
+      const double* side = entry.group == group ? sides_.previous_side(entry.object->source_id)
+                                                : nullptr;
+      previous += side != nullptr ? *side : 0.0;
     }
-    const int end = score[0] >= score[1] ? 0 : 1;
-    sides_.remember(id, end == 0 ? 1.0 : -1.0);
-    return end;
+    if (previous != 0.0) {
+      score[previous > 0.0 ? 0 : 1] += options_.commit_band;
+    }
+    return score[0] >= score[1] ? 0 : 1;
   }
 
   AvoidanceOptions options_;
+  ThreatCones cones_;
+  std::vector<int> group_ends_;
   detail::SideMemory sides_;
 };
 
@@ -134,26 +212,26 @@ class BrakingTerm final : public CostTerm {
   explicit BrakingTerm(const AvoidanceOptions& options) : options_(options) {}
   std::string_view name() const override { return "braking"; }
 
-  // ψ is held constant in the gradient, as CGF §6.2 holds σ and I(τ).
+  // ψ and the stopping speed are held constant in the gradient, as CGF §6.2 holds σ and I(τ):
+  // v̇_c = a_c is all that moves. ψ is the object's group's: the FOE between two objects too
+  // close to pass between is on course.
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
+    cones_.build(percept, agent, options_);
     TermGradient sum;
-    for (const ObjectFeatures& object : percept.objects) {
-      if (!detail::is_threat(object, options_)) {
-        continue;
-      }
-      const Cone cone = cone_of(object, agent, options_);
-      const double on_course = std::min(1.0, falloff(cone.best_clearance()).value);
-      const double inverse_ttc = 1.0 / object.ttc_s;
-      const FeatureRate rate = inverse_ttc_rate(object.centre.x(), cone.foe, object.ttc_s,
-                                                cone.tau_over_depth);
-      const TermGradient g = half_square(inverse_ttc, rate);
-      accumulate(sum, g, on_course);
+    for (const ThreatCones::Entry& entry : cones_.entries()) {
+      const ThreatCones::Group& group = cones_.groups()[static_cast<std::size_t>(entry.group)];
+      const double on_course = std::min(1.0, falloff(group.best_clearance()).value);
+      const double room = std::max(0.0, entry.cone.depth_m - 0.5 * options_.agent_width_m);
+      const double stopping_speed = std::sqrt(2.0 * options_.stop_decel_mps2 * room);
+      const double excess = std::max(0.0, agent.speed_mps - stopping_speed);
+      accumulate(sum, half_square(excess, FeatureRate{0.0, 1.0, 0.0}), on_course);
     }
     return sum;
   }
 
  private:
   AvoidanceOptions options_;
+  ThreatCones cones_;
 };
 
 class HeadingTerm final : public CostTerm {

@@ -73,6 +73,8 @@ struct AvoidanceOptions {
   // whose two ways round differ by less than this is passed on the convention's side).
   PassingSide passing_side = PassingSide::keep_right;
   double passing_band = 1.0;
+  // The braking term only: the deceleration it plans to stop with, short of an object ahead.
+  double stop_decel_mps2 = 0.5;
 };
 
 // L_t = ½ t_x² (CGF Eq. 7). Needs the goal's bearing; zero without one.
@@ -104,9 +106,11 @@ std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double
 // Its extent, unlike CGF Eq. 9's centre, makes a wall along the path cost nothing and one across
 // it cost everything. See clearance_terms.cpp.
 std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options = {});
-// L_b = Σ_i ψ_i ½ (1/τ_i)², ψ_i = min(1, exp(−c_i/σ_i)) on the better side: brakes for an object
-// whose widened extent holds the FOE, which no turning term does for a static obstacle met
-// head-on (its FOE is straight ahead, f = 0, and CGF Eq. 10's f a_c term vanishes).
+// L_b = Σ_i ψ_i ½ max(0, v_c − v_i)², v_i = √(2 a_b (Z_i − w/2)) the speed from which the agent
+// stops at a_b (stop_decel_mps2) half its width w short of object i, ψ_i = min(1, φ(c_i/σ_i)) on
+// the better side: brakes for an object whose widened extent holds the FOE, which no turning
+// term does for a static obstacle met head-on (its FOE is straight ahead, f = 0, and CGF Eq. 10's
+// f a_c term vanishes).
 std::unique_ptr<CostTerm> braking_term(const AvoidanceOptions& options = {});
 // L_g = ½ (v_z + (Z − G)/T)² of the leader: close the gap to G metres with time constant T,
 // then match its speed (CGF Eq. 13's L_τ is the case G = 0, T → ∞). Needs the leader's depth.
