@@ -61,12 +61,11 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
                                                 to_c_str(servo::to_string(c.model))));
   c.kind = *servo::parse_navigation_kind(r.word(node, field, "kind", {"goal_reaching", "following"},
                                                 to_c_str(servo::to_string(c.kind))));
-  c.law = *servo::parse_navigation_law(r.word(node, field, "law",
-                                               {"flowsteer", "cgf2019", "mig2019"},
-                                               to_c_str(servo::to_string(c.law))));
-  for (auto [key, weight] : {std::pair{"alpha", &c.alpha}, std::pair{"beta", &c.beta},
-                             std::pair{"gamma", &c.gamma}, std::pair{"delta", &c.delta},
-                             std::pair{"braking", &c.braking}}) {
+  c.law = *servo::parse_navigation_law(r.word(
+      node, field, "law", {"flowsteer", "cgf2019", "mig2019"}, to_c_str(servo::to_string(c.law))));
+  for (auto [key, weight] :
+       {std::pair{"alpha", &c.alpha}, std::pair{"beta", &c.beta}, std::pair{"gamma", &c.gamma},
+        std::pair{"delta", &c.delta}, std::pair{"braking", &c.braking}}) {
     if (node[key]) {
       *weight = r.non_negative(node, field, key, 0.0);
     }

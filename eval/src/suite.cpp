@@ -241,7 +241,8 @@ SuiteResult join_shards(const std::vector<std::filesystem::path>& shard_dirs) {
 
 std::string to_string(const SuiteConfiguration& c) {
   return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" + name_or_own(c.controller) +
-         "/" + name_or_own(c.law) + "/" + (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
+         "/" + name_or_own(c.law) + "/" +
+         (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
 }
 
 std::string SuiteRun::folder_name() const {

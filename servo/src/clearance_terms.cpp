@@ -1,15 +1,13 @@
 // The flowsteer law's cost terms (control.hpp). Each keeps the papers' form, a cost over visual
 // features whose gradient on (a_c, ω) comes from the features' rates (dynamics.hpp), and fixes a
-// way the papers' law collides: see DESIGN.md, "The flowsteer law".
+// way the papers' law collides: see docs/NAVIGATION.md.
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <numbers>
-#include <stdexcept>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -43,9 +41,9 @@ Falloff falloff(double u) {
 // so the cost falls to a tenth one agent width clear of the widened edge).
 struct Cone {
   double tau_over_depth = 0.0;
-  double depth_m = 0.0;  // the object's (or the depth-free guess)
   double foe = 0.0;
-  double edge[2] = {0.0, 0.0};   // [0] left (min_x side), [1] right
+  double end_x[2] = {0.0, 0.0};  // the object's ends, min_x and max_x
+  double edge[2] = {0.0, 0.0};   // [0] left (min_x side), [1] right: the ends widened
   double depth[2] = {0.0, 0.0};  // of each end
   double sigma[2] = {0.0, 0.0};
   // clearance[0]: the FOE left of the left edge, the object passed on the agent's right;
@@ -53,6 +51,19 @@ struct Cone {
   double clearance[2] = {0.0, 0.0};
 
   double best_clearance() const { return std::max(clearance[0], clearance[1]); }
+
+  // The depth of the object along image column x, taken as a vertical plane through its two
+  // ends: on a plane, inverse depth is affine in the image coordinate. For a person both ends
+  // are at about one depth; for a wall met at a slant this is the depth where the FOE points,
+  // which the mean depth of its pixels is not.
+  double depth_at(double x) const {
+    const double span = end_x[1] - end_x[0];
+    if (!(span > 0.0)) {
+      return std::min(depth[0], depth[1]);
+    }
+    const double t = std::clamp((x - end_x[0]) / span, 0.0, 1.0);
+    return 1.0 / ((1.0 - t) / depth[0] + t / depth[1]);
+  }
 };
 
 Cone cone_of(const ObjectFeatures& object, const AgentState& agent,
@@ -60,8 +71,9 @@ Cone cone_of(const ObjectFeatures& object, const AgentState& agent,
   const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, options);
   Cone c;
   c.tau_over_depth = tau_over_depth;
-  c.depth_m = depth;
   c.foe = object.foe.x();
+  c.end_x[0] = object.min_x;
+  c.end_x[1] = object.max_x;
   const bool depths = options.use_depth && object.min_x_depth_m && object.max_x_depth_m;
   c.depth[0] = depths ? *object.min_x_depth_m : depth;
   c.depth[1] = depths ? *object.max_x_depth_m : depth;
@@ -161,13 +173,12 @@ class ClearanceTerm final : public CostTerm {
       // the FOE moves by CGF Eq. 10. The clearance is that separation, signed to be positive
       // outside, over σ.
       const double tau_end = cone.depth[end] * cone.tau_over_depth;
-      const FeatureRate separation = separation_rate(cone.edge[end], cone.foe, tau_end,
-                                                     cone.tau_over_depth, agent.speed_mps);
+      const FeatureRate separation =
+          separation_rate(cone.edge[end], cone.foe, tau_end, cone.tau_over_depth, agent.speed_mps);
       const double sign = (end == 0 ? 1.0 : -1.0) / cone.sigma[end];
       const Falloff phi = falloff(cone.clearance[end]);
       const double importance = detail::importance(entry.object->ttc_s, options_);
       const double d = importance * phi.slope * sign;
-      if (std::getenv("FS_DEBUG")) std::fprintf(stderr, "id %d g %d tau %.2f f %.3f edges %.3f %.3f clr %.2f %.2f end %d v %.2f dturn %.3f dacc %.3f\n", entry.object->source_id, entry.group, entry.object->ttc_s, cone.foe, cone.edge[0], cone.edge[1], cone.clearance[0], cone.clearance[1], end, agent.speed_mps, d*separation.per_turn, d*separation.per_accel);  // TEMP
       accumulate(sum, {importance * phi.value, d * separation.per_accel, d * separation.per_turn});
     }
     sides_.next_step();
@@ -179,11 +190,12 @@ class ClearanceTerm final : public CostTerm {
   // were passed by at the previous step keeps commit_band σ of advantage (no chatter between
   // both ways round) and the passing convention's end passing_band σ (two agents meeting
   // head-on pass each other on the same side instead of mirroring each other). The ends are
-  // compared in image units over their mean σ: a near end's σ is wider, so a wall met at a slant
-  // is passed by its far end, the way it recedes, even where the image cuts both.
+  // compared by their image gaps over the smaller σ, the far end's: over the near end's σ,
+  // which grows without bound as the agent closes in, the bands would outweigh any difference
+  // between the ways round, and an agent at a wall's near corner would be sent along the wall.
   int passing_end(int group) {
     const ThreatCones::Group& g = cones_.groups()[static_cast<std::size_t>(group)];
-    const double sigma = 0.5 * (g.sigma[0] + g.sigma[1]);
+    const double sigma = std::min(g.sigma[0], g.sigma[1]);
     double score[2] = {g.clearance[0] * g.sigma[0] / sigma, g.clearance[1] * g.sigma[1] / sigma};
     if (options_.passing_side != PassingSide::none) {
       // Keeping right passes an object on its left: the FOE goes right of it, out by end 1.
@@ -191,8 +203,8 @@ class ClearanceTerm final : public CostTerm {
     }
     double previous = 0.0;  // the members' votes: +1 passed by end 0, -1 by end 1
     for (const ThreatCones::Entry& entry : cones_.entries()) {
-      const double* side = entry.group == group ? sides_.previous_side(entry.object->source_id)
-                                                : nullptr;
+      const double* side =
+          entry.group == group ? sides_.previous_side(entry.object->source_id) : nullptr;
       previous += side != nullptr ? *side : 0.0;
     }
     if (previous != 0.0) {
@@ -221,7 +233,8 @@ class BrakingTerm final : public CostTerm {
     for (const ThreatCones::Entry& entry : cones_.entries()) {
       const ThreatCones::Group& group = cones_.groups()[static_cast<std::size_t>(entry.group)];
       const double on_course = std::min(1.0, falloff(group.best_clearance()).value);
-      const double room = std::max(0.0, entry.cone.depth_m - 0.5 * options_.agent_width_m);
+      const double ahead_m = entry.cone.depth_at(entry.cone.foe);
+      const double room = std::max(0.0, ahead_m - 0.5 * options_.agent_width_m);
       const double stopping_speed = std::sqrt(2.0 * options_.stop_decel_mps2 * room);
       const double excess = std::max(0.0, agent.speed_mps - stopping_speed);
       accumulate(sum, half_square(excess, FeatureRate{0.0, 1.0, 0.0}), on_course);
@@ -242,7 +255,8 @@ class HeadingTerm final : public CostTerm {
       return {};
     }
     const double bearing = std::remainder(*percept.goal_bearing_rad, 2.0 * std::numbers::pi);
-    const double distance = percept.goal_distance_m.value_or(std::numeric_limits<double>::infinity());
+    const double distance =
+        percept.goal_distance_m.value_or(std::numeric_limits<double>::infinity());
     return half_square(bearing, goal_bearing_rate(bearing, distance, agent.speed_mps));
   }
 };
@@ -256,7 +270,8 @@ class ApproachSpeedTerm final : public CostTerm {
     double target = preferred_;
     if (percept.goal_bearing_rad && percept.goal_distance_m &&
         std::isfinite(*percept.goal_bearing_rad)) {
-      const double bearing = std::abs(std::remainder(*percept.goal_bearing_rad, 2.0 * std::numbers::pi));
+      const double bearing =
+          std::abs(std::remainder(*percept.goal_bearing_rad, 2.0 * std::numbers::pi));
       const double sine = bearing >= 0.5 * std::numbers::pi ? 1.0 : std::sin(bearing);
       if (sine > 0.0) {
         target = std::min(target, turn_rate_ * *percept.goal_distance_m / (2.0 * sine));
@@ -293,8 +308,7 @@ class LeaderGapTerm final : public CostTerm {
     }
     const double depth = *leader->depth_m;
     const double error = vz + (depth - gap_m_) / gap_time_s_;
-    return half_square(error,
-                       gap_error_rate(vx, vz, leader->centre.x(), depth, gap_time_s_));
+    return half_square(error, gap_error_rate(vx, vz, leader->centre.x(), depth, gap_time_s_));
   }
 
  private:

@@ -488,10 +488,12 @@ struct FeatureExtractor::Accumulator {
     sum_y += y;
     const bool has_depth = std::isfinite(depth) && depth > 0.0F;
     const double column_depth = has_depth ? depth : std::numeric_limits<double>::infinity();
-    min_x_depth = x < min_x ? column_depth : x == min_x ? std::min(min_x_depth, column_depth)
-                                                        : min_x_depth;
-    max_x_depth = x > max_x ? column_depth : x == max_x ? std::min(max_x_depth, column_depth)
-                                                        : max_x_depth;
+    min_x_depth = x < min_x    ? column_depth
+                  : x == min_x ? std::min(min_x_depth, column_depth)
+                               : min_x_depth;
+    max_x_depth = x > max_x    ? column_depth
+                  : x == max_x ? std::min(max_x_depth, column_depth)
+                               : max_x_depth;
     min_x = std::min(min_x, x);
     max_x = std::max(max_x, x);
     if (has_depth) {

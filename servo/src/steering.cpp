@@ -1,7 +1,6 @@
 #include "flowsteer/servo/steering.hpp"
 
 #include <array>
-#include <cstdlib>
 #include <utility>
 
 namespace flowsteer::servo {
@@ -114,16 +113,17 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
   avoidance.agent_width_m = agent_width_m + c.clearance_margin_m;
   avoidance.use_depth = c.use_depth;
   const ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
-  NavigationWeights w = navigation_weights(c);
+  const NavigationWeights w = navigation_weights(c);
   if (c.law == NavigationLaw::flowsteer) {
-    if (const char* e = std::getenv("FS_PB")) avoidance.passing_band = std::atof(e);  // TEMP
-    if (const char* e = std::getenv("FS_CB")) avoidance.commit_band = std::atof(e);  // TEMP
-    if (const char* e = std::getenv("FS_BR")) w.braking = std::atof(e);  // TEMP
-    if (const char* e = std::getenv("FS_HZ")) avoidance.horizon_s = std::atof(e);  // TEMP
-    if (const char* e = std::getenv("FS_IS")) { avoidance.importance_slope = -std::atof(e); avoidance.importance_intercept = std::atof(e) * avoidance.horizon_s; }  // TEMP
-    const FlowsteerWeights weights{w.alpha,          w.beta,          w.gamma,
-                                   w.delta,          w.braking,       preferred_speed_mps,
-                                   c.max_turn_rate,  c.follow_gap_m,  1.0};
+    FlowsteerWeights weights;
+    weights.alpha = w.alpha;
+    weights.beta = w.beta;
+    weights.gamma = w.gamma;
+    weights.delta = w.delta;
+    weights.braking = w.braking;
+    weights.preferred_speed_mps = preferred_speed_mps;
+    weights.max_turn_rate = c.max_turn_rate;
+    weights.follow_gap_m = c.follow_gap_m;
     return Controller(c.kind == NavigationKind::following
                           ? flowsteer_following(weights, avoidance)
                           : flowsteer_goal_reaching(weights, avoidance),

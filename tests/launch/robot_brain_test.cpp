@@ -63,8 +63,8 @@ TEST(RobotLaunchSections, BadSectionsNameTheLineAndField) {
   EXPECT_EQ(error_of(camera + "perception: {flow: lucas}\n").substr(0, 38),
             "bad.yaml:4:20: perception.flow: expect");
   EXPECT_EQ(error_of(camera + "controller: {kind: following}\n"),
-            "bad.yaml:4:14: controller.kind: unknown key (expected one of: alpha, beta, gamma, "
-            "delta, lambda, max_accel_mps2, max_turn_rate, clearance_margin_m, "
+            "bad.yaml:4:14: controller.kind: unknown key (expected one of: law, alpha, beta, "
+            "gamma, delta, braking, lambda, max_accel_mps2, max_turn_rate, clearance_margin_m, "
             "preferred_speed_mps, robot_width_m)");
   // The shared reader's checks hold here too.
   EXPECT_EQ(error_of(camera + "controller: {gamma: 0.5, delta: 1}\n"),

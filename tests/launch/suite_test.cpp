@@ -219,18 +219,18 @@ TEST_F(SuiteRunTest, EveryCaseRunsUnderEveryConfigurationAndAFailureStopsNoOther
   const std::filesystem::path out = dir_ / "all";
   const std::string csv = file_text(out / "suite.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
-  EXPECT_NE(csv.find("5,follow,own,own,motion_energy,24,failed,"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("0,near,own,own,geometric,24,clean,1,1,1,0,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("5,follow,own,own,motion_energy,own,24,failed,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("0,near,own,own,geometric,own,24,clean,1,1,1,0,"), std::string::npos) << csv;
   EXPECT_TRUE(std::filesystem::exists(out / "contact_sheet.png"));
   EXPECT_TRUE(std::filesystem::exists(out / "suite.json"));
   EXPECT_NE(file_text(out / "suite.txt").find("clean 2 of 3 cases"), std::string::npos);
   // Top views of every run that got one; folders only for the runs that are not clean.
-  EXPECT_TRUE(std::filesystem::exists(out / "topviews" / "near.own.own.geometric.24.png"));
-  EXPECT_FALSE(std::filesystem::exists(out / "runs" / "near.own.own.geometric.24"));
+  EXPECT_TRUE(std::filesystem::exists(out / "topviews" / "near.own.own.geometric.own.24.png"));
+  EXPECT_FALSE(std::filesystem::exists(out / "runs" / "near.own.own.geometric.own.24"));
   EXPECT_TRUE(
-      std::filesystem::exists(out / "runs" / "far.own.own.geometric.24" / "trajectories.csv"));
+      std::filesystem::exists(out / "runs" / "far.own.own.geometric.own.24" / "trajectories.csv"));
   EXPECT_TRUE(
-      std::filesystem::exists(out / "runs" / "follow.own.own.motion_energy.24" / "error.txt"));
+      std::filesystem::exists(out / "runs" / "follow.own.own.motion_energy.own.24" / "error.txt"));
   for (const auto& entry : std::filesystem::directory_iterator(out)) {
     EXPECT_EQ(entry.path().filename().string().rfind(".staging", 0), std::string::npos);
   }
@@ -253,7 +253,7 @@ TEST_F(SuiteRunTest, ThreeShardsMergedAreTheUnshardedSuite) {
     EXPECT_EQ(file_text(dir_ / "merged" / file), file_text(dir_ / "whole" / file)) << file;
   }
   EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "contact_sheet.png"));
-  EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "runs" / "far.own.own.geometric.24"));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "runs" / "far.own.own.geometric.own.24"));
 
   // A shard missing, one given twice, or a shard of another suite are refused by name.
   EXPECT_NE(error_of([&] {

@@ -90,9 +90,9 @@ void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
                   "where a SteerSuite test case's random agents, obstacles, targets and "
                   "directions go")
       ->capture_default_str();
-  command.add_option("--law", choice.law,
-                     "every agent's navigation law (default: the scenario's): " +
-                         servo::navigation_law_names());
+  command.add_option(
+      "--law", choice.law,
+      "every agent's navigation law (default: the scenario's): " + servo::navigation_law_names());
 }
 
 }  // namespace flowsteer::cli

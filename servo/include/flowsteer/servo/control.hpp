@@ -107,7 +107,8 @@ std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double
 // it cost everything. See clearance_terms.cpp.
 std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options = {});
 // L_b = Σ_i ψ_i ½ max(0, v_c − v_i)², v_i = √(2 a_b (Z_i − w/2)) the speed from which the agent
-// stops at a_b (stop_decel_mps2) half its width w short of object i, ψ_i = min(1, φ(c_i/σ_i)) on
+// stops at a_b (stop_decel_mps2) half its width w short of object i, Z_i the object's depth where
+// the FOE points (a vertical plane through its ends), ψ_i = min(1, φ(c_i/σ_i)) on
 // the better side: brakes for an object whose widened extent holds the FOE, which no turning
 // term does for a static obstacle met head-on (its FOE is straight ahead, f = 0, and CGF Eq. 10's
 // f a_c term vanishes).

@@ -1,0 +1,243 @@
+// The flowsteer law's terms (clearance_terms.cpp): each gradient against finite differences of
+// its cost along the two-body simulation, and the behaviour each term is there for.
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "flowsteer/servo/control.hpp"
+#include "two_body.hpp"
+
+namespace flowsteer::servo {
+namespace {
+
+constexpr double kLn10 = 2.302585092994046;
+
+// The features of a point object of the two-body simulation: extent one point, depth exact.
+ObjectFeatures point_object(const test::TwoBody& s, std::int32_t id = 1) {
+  ObjectFeatures o;
+  o.source_id = id;
+  o.pixel_count = 100;
+  o.centre = {s.image_x(), 0.0};
+  o.min_x = o.max_x = s.image_x();
+  o.width = 0.0;
+  o.depth_m = o.min_x_depth_m = o.max_x_depth_m = s.depth();
+  o.status = MotionStatus::approaching;
+  o.foe = {s.foe_x(), 0.0};
+  o.ttc_s = s.ttc();
+  return o;
+}
+
+AvoidanceOptions options_without_convention(double agent_width_m) {
+  AvoidanceOptions options;
+  options.agent_width_m = agent_width_m;
+  options.passing_side = PassingSide::none;
+  return options;
+}
+
+// ∂L̇/∂ω and ∂L̇/∂a_c of `cost` along the simulation, by finite differences.
+template <typename Cost>
+TermGradient simulated(const test::TwoBody& s, Cost cost) {
+  const double base = test::rate_of(s, 0.0, 0.0, cost);
+  return {cost(s), (test::rate_of(s, 0.8, 0.0, cost) - base) / 0.8,
+          (test::rate_of(s, 0.0, 0.5, cost) - base) / 0.5};
+}
+
+void expect_gradient(const TermGradient& g, const TermGradient& expected) {
+  EXPECT_NEAR(g.cost, expected.cost, 1e-9 * (1.0 + std::abs(expected.cost)));
+  EXPECT_NEAR(g.per_accel, expected.per_accel, 1e-4 * (1.0 + std::abs(expected.per_accel)));
+  EXPECT_NEAR(g.per_turn, expected.per_turn, 1e-4 * (1.0 + std::abs(expected.per_turn)));
+}
+
+// L_c = I(τ) φ(c/σ), c the FOE's clearance from the object's end widened by half the agent's
+// width (a point of the object that far to the side, moving with it), I and σ held constant.
+void check_clearance(const test::TwoBody& s, double agent_width_m, int end) {
+  const double half = 0.5 * agent_width_m * (end == 0 ? -1.0 : 1.0);
+  const Eigen::Vector2d offset = half * s.right();  // fixed in the world: a point of the object
+  const double sigma = agent_width_m / s.depth() / kLn10;
+  const double importance = -2.0 * s.ttc() + 10.0;
+  auto cost = [&](const test::TwoBody& b) {
+    test::TwoBody edge = b;
+    edge.point += offset;
+    const double gap = end == 0 ? edge.image_x() - b.foe_x() : b.foe_x() - edge.image_x();
+    const double u = gap / sigma;
+    return importance * (u >= 0.0 ? std::exp(-u) : 1.0 - u);
+  };
+  const std::vector<ObjectFeatures> objects = {point_object(s)};
+  const TermGradient g = clearance_term(options_without_convention(agent_width_m))
+                             ->evaluate({objects, {}, {}, {}}, {s.agent_speed});
+  expect_gradient(g, simulated(s, cost));
+  EXPECT_NE(g.per_turn, 0.0);
+}
+
+TEST(ClearanceGradient, OutsideTheWidenedExtentMatchesSimulation) {
+  test::TwoBody s;  // a point 6 m ahead, 2 m to the right, crossing to the left
+  s.point = {6.0, -2.0};
+  s.point_velocity = {-0.3, 0.35};
+  s.agent_speed = 1.2;
+  check_clearance(s, 0.8, 0);  // the FOE is left of it: passed by its left end
+}
+
+TEST(ClearanceGradient, InsideTheWidenedExtentMatchesSimulation) {
+  test::TwoBody s;  // nearly on course, just left: passed by its right end
+  s.point = {5.0, 0.15};
+  s.point_velocity = {-0.5, 0.0};
+  s.agent_speed = 1.0;
+  check_clearance(s, 1.0, 1);
+}
+
+TEST(ClearanceBehaviour, AStaticObstacleJustRightOfTheHeadingTurnsLeft) {
+  test::TwoBody s;
+  s.point = {4.0, -0.3};
+  const std::vector<ObjectFeatures> objects = {point_object(s)};
+  Controller c(flowsteer_goal_reaching({}, options_without_convention(1.0)), 1.0, {10.0, 10.0});
+  EXPECT_LT(c.step({objects, 0.0, 10.0, {}}, {1.0}).command.turn_rate, 0.0);
+}
+
+TEST(ClearanceBehaviour, KeepingRightTurnsRightForAPersonMetHeadOn) {
+  test::TwoBody s;  // exactly on course, coming straight at the agent
+  s.point = {6.0, 0.0};
+  s.point_velocity = {-1.0, 0.0};
+  const std::vector<ObjectFeatures> objects = {point_object(s)};
+  AvoidanceOptions keep_right;
+  keep_right.agent_width_m = 1.0;
+  Controller right(flowsteer_goal_reaching({}, keep_right), 1.0, {10.0, 10.0});
+  EXPECT_GT(right.step({objects, 0.0, 20.0, {}}, {1.0}).command.turn_rate, 0.0);
+  AvoidanceOptions keep_left = keep_right;
+  keep_left.passing_side = PassingSide::keep_left;
+  Controller left(flowsteer_goal_reaching({}, keep_left), 1.0, {10.0, 10.0});
+  EXPECT_LT(left.step({objects, 0.0, 20.0, {}}, {1.0}).command.turn_rate, 0.0);
+}
+
+// Two static posts 0.6 m apart 4 m ahead: their widened extents overlap, so the agent goes
+// round both, not through the gap between them, which the FOE (straight ahead) is in.
+TEST(ClearanceBehaviour, TwoObjectsTooCloseToPassBetweenArePassedOnTheOutside) {
+  test::TwoBody left_post;
+  left_post.point = {4.0, 0.3};
+  test::TwoBody right_post;
+  right_post.point = {4.0, -0.3};
+  std::vector<ObjectFeatures> objects = {point_object(left_post, 1), point_object(right_post, 2)};
+  objects[0].min_x -= 0.02;  // the left post a little wider: the right way round is shorter
+  TermGradient g =
+      clearance_term(options_without_convention(1.0))->evaluate({objects, {}, {}, {}}, {1.0});
+  // Each post alone would push the FOE away from itself, to opposite sides, and the pushes
+  // would cancel; together, both push it right.
+  EXPECT_LT(g.per_turn, 0.0);  // ω = −∂L̇/∂ω > 0: turn right
+}
+
+TEST(BrakingGradient, MatchesSimulation) {
+  test::TwoBody s;  // a static obstacle 2 m ahead on course, the agent at 1.3 m/s
+  s.point = {2.0, 0.0};
+  s.agent_speed = 1.3;
+  AvoidanceOptions options = options_without_convention(1.0);
+  const double stopping_speed = std::sqrt(2.0 * options.stop_decel_mps2 * (2.0 - 0.5));
+  auto cost = [&](const test::TwoBody& b) {
+    const double excess = std::max(0.0, b.agent_speed - stopping_speed);
+    return 0.5 * excess * excess;  // ψ = 1: the FOE is on it
+  };
+  const std::vector<ObjectFeatures> objects = {point_object(s)};
+  const TermGradient g = braking_term(options)->evaluate({objects, {}, {}, {}}, {s.agent_speed});
+  expect_gradient(g, simulated(s, cost));
+  EXPECT_GT(g.per_accel, 0.0);  // a_c < 0: brakes
+}
+
+TEST(BrakingBehaviour, AWallMetHeadOnStopsTheAgentShortOfIt) {
+  ObjectFeatures wall;
+  wall.source_id = 3;
+  wall.pixel_count = 1000;
+  wall.centre = {0.0, 0.0};
+  wall.min_x = -1.0;
+  wall.max_x = 1.0;
+  wall.width = 2.0;
+  wall.cut_left = wall.cut_right = true;  // fills the view
+  wall.depth_m = wall.min_x_depth_m = wall.max_x_depth_m = 1.5;
+  wall.status = MotionStatus::approaching;
+  wall.foe = {0.0, 0.0};
+  wall.ttc_s = 1.5 / 1.3;
+  const std::vector<ObjectFeatures> objects = {wall};
+  FlowsteerWeights at_preferred_speed;
+  at_preferred_speed.preferred_speed_mps = 1.3;
+  Controller c(flowsteer_goal_reaching(at_preferred_speed, options_without_convention(1.0)), 1.0,
+               {1.0, 1.0});
+  // From 1.3 m/s it stops 1 m on at 0.5 m/s² only from 1 m/s: brake by ε (1.3 − 1.0).
+  const ControlOutput out = c.step({objects, 0.0, 10.0, {}}, {1.3});
+  EXPECT_NEAR(out.unclamped.accel_mps2, -2.0 * 0.3, 1e-9);
+}
+
+TEST(HeadingGradient, MatchesSimulation) {
+  test::TwoBody s;
+  s.point = {3.0, -2.5};  // a goal well to the right
+  s.agent_speed = 0.8;
+  const double distance = s.point.norm();
+  auto cost = [](const test::TwoBody& b) { return 0.5 * std::pow(std::atan(b.image_x()), 2); };
+  const TermGradient g =
+      heading_term()->evaluate({{}, std::atan(s.image_x()), distance, {}}, {s.agent_speed});
+  expect_gradient(g, simulated(s, cost));
+}
+
+TEST(HeadingBehaviour, TheTurnStaysBoundedForAGoalBesideOrBehind) {
+  for (const double bearing : {1.5, 2.5, 3.1}) {
+    const TermGradient g = heading_term()->evaluate({{}, bearing, 1.0, {}}, {1.0});
+    EXPECT_NEAR(-g.per_turn, bearing, 1e-12);  // ω = λ α θ
+  }
+}
+
+TEST(ApproachSpeedBehaviour, SlowsForAGoalInsideItsTurningCircle) {
+  const auto term = approach_speed_term(1.3, 1.0);
+  // 1 m away, 60° to the side: at a turn rate of 0.5 rad/s it reaches it at 0.29 m/s.
+  const TermGradient near = term->evaluate({{}, std::numbers::pi / 3.0, 1.0, {}}, {1.3});
+  const double target = 0.5 * 1.0 / (2.0 * std::sin(std::numbers::pi / 3.0));
+  EXPECT_NEAR(near.per_accel, 1.3 - target, 1e-12);  // a_c = −β (v − v_t)
+  // Straight ahead: the preferred speed.
+  EXPECT_NEAR(term->evaluate({{}, 0.0, 1.0, {}}, {1.0}).per_accel, 1.0 - 1.3, 1e-12);
+}
+
+TEST(LeaderGapGradient, MatchesSimulation) {
+  test::TwoBody s;
+  s.point = {5.0, 0.7};
+  s.point_velocity = {0.4, 0.3};
+  s.agent_speed = 1.0;
+  constexpr double kGap = 2.0;
+  constexpr double kTime = 1.0;
+  auto cost = [&](const test::TwoBody& b) {
+    const double e = b.relative_vz() + (b.depth() - kGap) / kTime;
+    return 0.5 * e * e;
+  };
+  const std::vector<ObjectFeatures> objects = {point_object(s, 9)};
+  const TermGradient g =
+      leader_gap_term(kGap, kTime)->evaluate({objects, {}, {}, 9}, {s.agent_speed});
+  expect_gradient(g, simulated(s, cost));
+}
+
+TEST(LeaderGapBehaviour, ClosesAGapLargerThanTheSettingAndOpensASmallerOne) {
+  test::TwoBody s;  // a leader ahead at the agent's own speed
+  s.point_velocity = {1.0, 0.0};
+  s.agent_speed = 1.0;
+  Controller c(flowsteer_following({}), 1.0, {10.0, 10.0});
+  for (const double ahead : {4.0, 1.2}) {
+    s.point = {ahead, 0.0};
+    ObjectFeatures leader = point_object(s, 9);
+    leader.status = MotionStatus::lateral;  // no expansion: same speed
+    leader.foe.setConstant(std::numeric_limits<double>::quiet_NaN());
+    leader.ttc_s = std::numeric_limits<double>::infinity();
+    const std::vector<ObjectFeatures> objects = {leader};
+    const double accel = c.step({objects, {}, {}, 9}, {1.0}).command.accel_mps2;
+    EXPECT_EQ(accel > 0.0, ahead > 2.0) << "leader " << ahead << " m ahead";
+  }
+}
+
+TEST(FlowsteerLaw, RefusesBadWeights) {
+  FlowsteerWeights w;
+  w.braking = -1.0;
+  EXPECT_THROW(flowsteer_goal_reaching(w), std::invalid_argument);
+  w.braking = 1.0;
+  w.delta = 2.0;
+  EXPECT_THROW(flowsteer_goal_reaching(w), std::invalid_argument);
+  EXPECT_THROW(leader_gap_term(-1.0, 1.0), std::invalid_argument);
+  EXPECT_THROW(approach_speed_term(1.0, 0.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace flowsteer::servo
