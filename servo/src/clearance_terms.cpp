@@ -83,7 +83,7 @@ Cone cone_of(const ObjectFeatures& object, const AgentState& agent,
   const double left = object.cut_left ? std::min(object.min_x, c.foe) : object.min_x;
   const double right = object.cut_right ? std::max(object.max_x, c.foe) : object.max_x;
   for (int end = 0; end < 2; ++end) {
-    const double width = options.agent_width_m / std::max(c.depth[end], 1e-3);
+    const double width = detail::kept_width(agent, options) / std::max(c.depth[end], 1e-3);
     c.sigma[end] = width / detail::kLn10;
     c.edge[end] = (end == 0 ? left - 0.5 * width : right + 0.5 * width);
   }
@@ -115,7 +115,10 @@ class ThreatCones {
     groups_.clear();
     for (const ObjectFeatures& object : percept.objects) {
       if (detail::is_threat(object, options)) {
-        entries_.push_back({&object, cone_of(object, agent, options), -1});
+        const Cone cone = cone_of(object, agent, options);
+        if (!beyond_goal(cone, percept, agent, options)) {
+          entries_.push_back({&object, cone, -1});
+        }
       }
     }
     order_.resize(entries_.size());
@@ -147,6 +150,15 @@ class ThreatCones {
 
  private:
   static double relative_edge(const Entry& e, int end) { return e.cone.edge[end] - e.cone.foe; }
+
+  // An object further than the goal by half the kept width does not stand in the way: the
+  // agent stops at the goal short of it (a wall behind the goal, people waiting past it).
+  static bool beyond_goal(const Cone& cone, const Percept& percept, const AgentState& agent,
+                          const AvoidanceOptions& options) {
+    return percept.goal_distance_m &&
+           std::min(cone.depth[0], cone.depth[1]) >
+               *percept.goal_distance_m + 0.5 * detail::kept_width(agent, options);
+  }
 
   std::vector<Entry> entries_;
   std::vector<Group> groups_;
@@ -234,7 +246,7 @@ class BrakingTerm final : public CostTerm {
       const ThreatCones::Group& group = cones_.groups()[static_cast<std::size_t>(entry.group)];
       const double on_course = std::min(1.0, falloff(group.best_clearance()).value);
       const double ahead_m = entry.cone.depth_at(entry.cone.foe);
-      const double room = std::max(0.0, ahead_m - 0.5 * options_.agent_width_m);
+      const double room = std::max(0.0, ahead_m - 0.5 * detail::kept_width(agent, options_));
       const double stopping_speed = std::sqrt(2.0 * options_.stop_decel_mps2 * room);
       const double excess = std::max(0.0, agent.speed_mps - stopping_speed);
       accumulate(sum, half_square(excess, FeatureRate{0.0, 1.0, 0.0}), on_course);
@@ -263,8 +275,10 @@ class HeadingTerm final : public CostTerm {
 
 class ApproachSpeedTerm final : public CostTerm {
  public:
-  ApproachSpeedTerm(double preferred_speed_mps, double max_turn_rate)
-      : preferred_(preferred_speed_mps), turn_rate_(0.5 * max_turn_rate) {}
+  ApproachSpeedTerm(double preferred_speed_mps, double max_turn_rate, double arrival_decel_mps2)
+      : preferred_(preferred_speed_mps),
+        turn_rate_(0.5 * max_turn_rate),
+        arrival_decel_(arrival_decel_mps2) {}
   std::string_view name() const override { return "approach_speed"; }
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     double target = preferred_;
@@ -276,6 +290,7 @@ class ApproachSpeedTerm final : public CostTerm {
       if (sine > 0.0) {
         target = std::min(target, turn_rate_ * *percept.goal_distance_m / (2.0 * sine));
       }
+      target = std::min(target, std::sqrt(2.0 * arrival_decel_ * *percept.goal_distance_m));
     }
     // v̇_c = a_c.
     return half_square(agent.speed_mps - target, FeatureRate{0.0, 1.0, 0.0});
@@ -284,6 +299,7 @@ class ApproachSpeedTerm final : public CostTerm {
  private:
   double preferred_;
   double turn_rate_;
+  double arrival_decel_;
 };
 
 class LeaderGapTerm final : public CostTerm {
@@ -330,12 +346,15 @@ std::unique_ptr<CostTerm> heading_term() {
   return std::make_unique<HeadingTerm>();
 }
 
-std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate) {
+std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate,
+                                              double arrival_decel_mps2) {
   if (!std::isfinite(preferred_speed_mps)) {
     throw std::invalid_argument("preferred speed must be finite");
   }
   require_positive(max_turn_rate, "approach speed: max_turn_rate");
-  return std::make_unique<ApproachSpeedTerm>(preferred_speed_mps, max_turn_rate);
+  require_positive(arrival_decel_mps2, "approach speed: arrival_decel_mps2");
+  return std::make_unique<ApproachSpeedTerm>(preferred_speed_mps, max_turn_rate,
+                                             arrival_decel_mps2);
 }
 
 std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options) {
@@ -371,7 +390,8 @@ NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& w,
   }
   NavigationFunction f;
   f.add(w.alpha, heading_term())
-      .add(w.beta, approach_speed_term(w.preferred_speed_mps, w.max_turn_rate))
+      .add(w.beta,
+           approach_speed_term(w.preferred_speed_mps, w.max_turn_rate, w.arrival_decel_mps2))
       .add(w.gamma, clearance_term(avoidance))
       .add(w.braking, braking_term(avoidance));
   if (w.delta > 0.0) {

@@ -225,6 +225,10 @@ void validate(const AvoidanceOptions& o) {
           "depth_free_ratio must be positive, got " + std::to_string(o.depth_free_ratio));
   require(std::isfinite(o.min_speed_mps) && o.min_speed_mps > 0.0,
           "min_speed_mps must be positive, got " + std::to_string(o.min_speed_mps));
+  require(std::isfinite(o.margin_m) && o.margin_m >= 0.0,
+          "margin_m must be >= 0, got " + std::to_string(o.margin_m));
+  require(std::isfinite(o.margin_full_speed_mps) && o.margin_full_speed_mps > 0.0,
+          "margin_full_speed_mps must be positive, got " + std::to_string(o.margin_full_speed_mps));
   require(std::isfinite(o.importance_slope) && std::isfinite(o.importance_intercept),
           "importance slope and intercept must be finite");
   require(std::isfinite(o.commit_band) && o.commit_band >= 0.0,

@@ -41,6 +41,13 @@ inline double floored_speed(const AgentState& agent, const AvoidanceOptions& opt
   return std::max(std::abs(agent.speed_mps), options.min_speed_mps);
 }
 
+// The width the flowsteer law's terms keep clear: the agent's own and its speed's share of the
+// margin.
+inline double kept_width(const AgentState& agent, const AvoidanceOptions& options) {
+  const double share = std::min(1.0, std::abs(agent.speed_mps) / options.margin_full_speed_mps);
+  return options.agent_width_m + options.margin_m * share;
+}
+
 // τ/Z of an approaching object and its depth: from the object's depth where the options use it
 // and it has one, else from the depth-free guess τ v_c / Z = depth_free_ratio (MIG §7.1).
 struct DepthScale {

@@ -1,5 +1,6 @@
 #include "flowsteer/servo/steering.hpp"
 
+#include <algorithm>
 #include <array>
 #include <utility>
 
@@ -115,6 +116,10 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
   const ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
   const NavigationWeights w = navigation_weights(c);
   if (c.law == NavigationLaw::flowsteer) {
+    // The flowsteer law keeps the margin in proportion to the agent's speed.
+    avoidance.agent_width_m = agent_width_m;
+    avoidance.margin_m = c.clearance_margin_m;
+    avoidance.margin_full_speed_mps = std::max(preferred_speed_mps, avoidance.min_speed_mps);
     FlowsteerWeights weights;
     weights.alpha = w.alpha;
     weights.beta = w.beta;

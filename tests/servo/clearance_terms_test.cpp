@@ -127,6 +127,35 @@ TEST(ClearanceBehaviour, TwoObjectsTooCloseToPassBetweenArePassedOnTheOutside) {
   EXPECT_LT(g.per_turn, 0.0);  // ω = −∂L̇/∂ω > 0: turn right
 }
 
+// A post 4 m ahead on course, the goal 2 m ahead: the agent stops at the goal short of the post,
+// which is left out; with the goal past the post, the post is in the way.
+TEST(ClearanceBehaviour, AnObjectBeyondTheGoalIsLeftOut) {
+  test::TwoBody s;
+  s.point = {4.0, 0.05};
+  const std::vector<ObjectFeatures> objects = {point_object(s)};
+  const auto term = clearance_term(options_without_convention(1.0));
+  const TermGradient before_goal = term->evaluate({objects, 0.0, 2.0, {}}, {1.0});
+  EXPECT_EQ(before_goal.cost, 0.0);
+  EXPECT_EQ(before_goal.per_turn, 0.0);
+  EXPECT_GT(term->evaluate({objects, 0.0, 6.0, {}}, {1.0}).cost, 1.0);
+}
+
+// The margin is kept in proportion to the speed: stepping slowly, the agent needs only its own
+// width, and the same post beside its course costs less.
+TEST(ClearanceBehaviour, ASlowAgentKeepsLessRoom) {
+  test::TwoBody s;
+  s.point = {3.0, -0.7};
+  const std::vector<ObjectFeatures> objects = {point_object(s)};
+  AvoidanceOptions options = options_without_convention(0.6);
+  options.margin_m = 0.5;
+  options.margin_full_speed_mps = 1.0;
+  const auto term = clearance_term(options);
+  const double walking = term->evaluate({objects, {}, {}, {}}, {1.0}).cost;
+  const double stepping = term->evaluate({objects, {}, {}, {}}, {0.2}).cost;
+  EXPECT_LT(stepping, 0.5 * walking);
+  EXPECT_EQ(term->evaluate({objects, {}, {}, {}}, {2.0}).cost, walking);  // full from 1 m/s
+}
+
 TEST(BrakingGradient, MatchesSimulation) {
   test::TwoBody s;  // a static obstacle 2 m ahead on course, the agent at 1.3 m/s
   s.point = {2.0, 0.0};
@@ -190,8 +219,14 @@ TEST(ApproachSpeedBehaviour, SlowsForAGoalInsideItsTurningCircle) {
   const TermGradient near = term->evaluate({{}, std::numbers::pi / 3.0, 1.0, {}}, {1.3});
   const double target = 0.5 * 1.0 / (2.0 * std::sin(std::numbers::pi / 3.0));
   EXPECT_NEAR(near.per_accel, 1.3 - target, 1e-12);  // a_c = −β (v − v_t)
-  // Straight ahead: the preferred speed.
-  EXPECT_NEAR(term->evaluate({{}, 0.0, 1.0, {}}, {1.0}).per_accel, 1.0 - 1.3, 1e-12);
+  // Straight ahead and far: the preferred speed.
+  EXPECT_NEAR(term->evaluate({{}, 0.0, 4.0, {}}, {1.0}).per_accel, 1.0 - 1.3, 1e-12);
+}
+
+TEST(ApproachSpeedBehaviour, SlowsToStopAtTheGoal) {
+  const auto term = approach_speed_term(1.3, 1.0, 0.5);
+  // Straight ahead, 0.25 m away: the speed it stops from at 0.5 m/s² in 0.25 m, 0.5 m/s.
+  EXPECT_NEAR(term->evaluate({{}, 0.0, 0.25, {}}, {1.3}).per_accel, 1.3 - 0.5, 1e-12);
 }
 
 TEST(LeaderGapGradient, MatchesSimulation) {
@@ -237,6 +272,10 @@ TEST(FlowsteerLaw, RefusesBadWeights) {
   EXPECT_THROW(flowsteer_goal_reaching(w), std::invalid_argument);
   EXPECT_THROW(leader_gap_term(-1.0, 1.0), std::invalid_argument);
   EXPECT_THROW(approach_speed_term(1.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(approach_speed_term(1.0, 1.0, 0.0), std::invalid_argument);
+  AvoidanceOptions no_full_speed;
+  no_full_speed.margin_full_speed_mps = 0.0;
+  EXPECT_THROW(clearance_term(no_full_speed), std::invalid_argument);
 }
 
 }  // namespace

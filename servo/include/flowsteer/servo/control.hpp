@@ -55,6 +55,11 @@ enum class PassingSide { none, keep_right, keep_left };
 // How the avoidance terms size objects and guess what depth does not tell them.
 struct AvoidanceOptions {
   double agent_width_m = 0.5;  // added to each object's image width (CGF §6.2)
+  // The flowsteer law's terms only: personal space added to agent_width_m in proportion to the
+  // agent's speed, in full from margin_full_speed_mps on. A person keeps more room walking than
+  // stepping slowly up to a goal beside someone.
+  double margin_m = 0.0;
+  double margin_full_speed_mps = 1.0;
   // I(τ) = slope·τ + intercept for 0 ≤ τ ≤ horizon, zero outside (CGF Eq. 9: −2, 10, 5 s).
   double importance_slope = -2.0;
   double importance_intercept = 10.0;
@@ -96,15 +101,19 @@ std::unique_ptr<CostTerm> leader_speed_term(const AvoidanceOptions& options = {}
 // L_θ = ½ θ², θ = atan t_x the goal's bearing: ω = λ α θ stays bounded for a goal beside or behind
 // the agent, where L_t's t_x (1 + t_x²) grows without bound and outweighs any avoidance.
 std::unique_ptr<CostTerm> heading_term();
-// L_v = ½ (v_c − v_t)² with v_t = min(v*, ω_t d / (2 sin|θ|)): no faster than lets the agent turn
-// onto a goal d away at bearing θ at turn rate ω_t (half the controller's limit), so that it does
-// not circle a goal inside its turning circle (sin|θ| taken as 1 beyond 90°).
-std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate);
+// L_v = ½ (v_c − v_t)² with v_t = min(v*, ω_t d / (2 sin|θ|), √(2 a_g d)): no faster than lets
+// the agent turn onto a goal d away at bearing θ at turn rate ω_t (half the controller's limit),
+// so that it does not circle a goal inside its turning circle (sin|θ| taken as 1 beyond 90°), and
+// no faster than it stops from at the goal at a_g (arrival_decel_mps2), as a walker slows to step
+// up to a goal beside others.
+std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate,
+                                              double arrival_decel_mps2 = 0.5);
 // L_c = Σ_i I(τ_i) φ(c_i / σ_i) over approaching visible objects: c_i is the FOE's clearance from
-// the object's extent [min_x, max_x] widened at each end by half the agent's width at that end's
-// depth, on the side the agent passes it on; φ(u) = exp(−u) outside (u ≥ 0), 1 − u inside.
-// Its extent, unlike CGF Eq. 9's centre, makes a wall along the path cost nothing and one across
-// it cost everything. See clearance_terms.cpp.
+// the object's extent [min_x, max_x] widened at each end by half the kept width (agent_width_m and
+// the speed's share of margin_m) at that end's depth, on the side the agent passes it on; φ(u) =
+// exp(−u) outside (u ≥ 0), 1 − u inside. Its extent, unlike CGF Eq. 9's centre, makes a wall along
+// the path cost nothing and one across it cost everything. An object further than the goal by half
+// the kept width is left out: the agent stops at the goal short of it. See clearance_terms.cpp.
 std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options = {});
 // L_b = Σ_i ψ_i ½ max(0, v_c − v_i)², v_i = √(2 a_b (Z_i − w/2)) the speed from which the agent
 // stops at a_b (stop_decel_mps2) half its width w short of object i, Z_i the object's depth where
@@ -156,7 +165,8 @@ struct FlowsteerWeights {
   double braking = 2.0;  // braking
   double preferred_speed_mps = 1.0;
   double max_turn_rate = 1.0;  // the controller's limit, for the approach speed
-  double follow_gap_m = 2.0;   // following: the gap kept behind the leader
+  double arrival_decel_mps2 = 0.5;
+  double follow_gap_m = 2.0;  // following: the gap kept behind the leader
   double gap_time_s = 1.0;
 };
 
