@@ -77,6 +77,29 @@ void FeaturesAndControl(benchmark::State& state) {
 }
 BENCHMARK(FeaturesAndControl)->ArgName("with_depth")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// The controller alone, on the five objects' features at 256² (with depth): one step of each law.
+// Arg 0: cgf2019 (the papers'), 1: flowsteer.
+void ControlStep(benchmark::State& state) {
+  const Prepared p = prepare(256);
+  servo::FlowField field(p.render.flow.intrinsics(), true);
+  std::copy(p.render.flow.flow().begin(), p.render.flow.flow().end(), field.flow().begin());
+  std::copy(p.render.flow.depth().begin(), p.render.flow.depth().end(), field.depth().begin());
+  Segmentation segmentation;
+  segment_by_ids(p.render.ids, field.width(), field.height(), p.ground, segmentation);
+  FeatureExtractor extractor;
+  const auto objects = extractor.extract(field, segmentation);
+  Controller controller = state.range(0) == 0
+                              ? Controller(goal_reaching({}), 1.0, {1.0, 1.0})
+                              : Controller(flowsteer_goal_reaching({}), 1.0, {1.0, 1.0});
+  ControlOutput out;
+  for (auto _ : state) {
+    controller.step({objects, 0.1, 10.0, {}}, {1.0}, out);
+    benchmark::DoNotOptimize(out.command);
+  }
+  state.counters["objects"] = static_cast<double>(objects.size());
+}
+BENCHMARK(ControlStep)->ArgName("flowsteer_law")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
 // The stage before it: semantic segmentation from the object ids, ground excluded.
 void SegmentByIds(benchmark::State& state) {
   const Prepared p = prepare(static_cast<int>(state.range(0)));
