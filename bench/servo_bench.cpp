@@ -47,16 +47,22 @@ Prepared prepare(int resolution) {
   return p;
 }
 
+// The rendered flow as a FlowField, with the simulator's depth or without it (as from a camera).
+servo::FlowField field_of(const Prepared& p, bool with_depth) {
+  servo::FlowField field(p.render.flow.intrinsics(), with_depth);
+  std::copy(p.render.flow.flow().begin(), p.render.flow.flow().end(), field.flow().begin());
+  if (with_depth) {
+    std::copy(p.render.flow.depth().begin(), p.render.flow.depth().end(), field.depth().begin());
+  }
+  return field;
+}
+
 // Features (centre, width, robust FOE/TTC fit) and the control law, on a segmentation made once.
 // Arg 1: the field keeps the simulator's depth (the fit is exact); 0: flow alone, as from a real
 // camera, where curved surfaces leave residuals and the robust rounds run.
 void FeaturesAndControl(benchmark::State& state) {
   const Prepared p = prepare(256);
-  servo::FlowField field(p.render.flow.intrinsics(), state.range(0) == 1);
-  std::copy(p.render.flow.flow().begin(), p.render.flow.flow().end(), field.flow().begin());
-  if (field.has_depth()) {
-    std::copy(p.render.flow.depth().begin(), p.render.flow.depth().end(), field.depth().begin());
-  }
+  const servo::FlowField field = field_of(p, state.range(0) == 1);
   Segmentation segmentation;
   segment_by_ids(p.render.ids, field.width(), field.height(), p.ground, segmentation);
   FeatureExtractor extractor;
@@ -81,9 +87,7 @@ BENCHMARK(FeaturesAndControl)->ArgName("with_depth")->Arg(0)->Arg(1)->Unit(bench
 // Arg 0: cgf2019 (the papers'), 1: flowsteer.
 void ControlStep(benchmark::State& state) {
   const Prepared p = prepare(256);
-  servo::FlowField field(p.render.flow.intrinsics(), true);
-  std::copy(p.render.flow.flow().begin(), p.render.flow.flow().end(), field.flow().begin());
-  std::copy(p.render.flow.depth().begin(), p.render.flow.depth().end(), field.depth().begin());
+  const servo::FlowField field = field_of(p, true);
   Segmentation segmentation;
   segment_by_ids(p.render.ids, field.width(), field.height(), p.ground, segmentation);
   FeatureExtractor extractor;

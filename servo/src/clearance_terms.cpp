@@ -36,9 +36,9 @@ Falloff falloff(double u) {
   return {1.0 - u, -1.0};
 }
 
-// An approaching object's extent widened by half the agent's width at each end, and the FOE's
-// clearance from it on either side, in units of σ at that end (σ = the agent's width there / ln 10,
-// so the cost falls to a tenth one agent width clear of the widened edge).
+// An approaching object's extent widened by half the kept width at each end, and the FOE's
+// clearance from it on either side, in units of σ at that end (σ = the kept width there / ln 10,
+// so the cost falls to a tenth one kept width clear of the widened edge).
 struct Cone {
   double tau_over_depth = 0.0;
   double foe = 0.0;
@@ -66,8 +66,8 @@ struct Cone {
   }
 };
 
-Cone cone_of(const ObjectFeatures& object, const AgentState& agent,
-             const AvoidanceOptions& options) {
+Cone cone_of(const ObjectFeatures& object, const AgentState& agent, const AvoidanceOptions& options,
+             double kept_width_m) {
   const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, options);
   Cone c;
   c.tau_over_depth = tau_over_depth;
@@ -83,7 +83,7 @@ Cone cone_of(const ObjectFeatures& object, const AgentState& agent,
   const double left = object.cut_left ? std::min(object.min_x, c.foe) : object.min_x;
   const double right = object.cut_right ? std::max(object.max_x, c.foe) : object.max_x;
   for (int end = 0; end < 2; ++end) {
-    const double width = detail::kept_width(agent, options) / std::max(c.depth[end], 1e-3);
+    const double width = kept_width_m / std::max(c.depth[end], 1e-3);
     c.sigma[end] = width / detail::kLn10;
     c.edge[end] = (end == 0 ? left - 0.5 * width : right + 0.5 * width);
   }
@@ -113,10 +113,11 @@ class ThreatCones {
   void build(const Percept& percept, const AgentState& agent, const AvoidanceOptions& options) {
     entries_.clear();
     groups_.clear();
+    const double kept_width_m = detail::kept_width(agent, options);
     for (const ObjectFeatures& object : percept.objects) {
       if (detail::is_threat(object, options)) {
-        const Cone cone = cone_of(object, agent, options);
-        if (!beyond_goal(cone, percept, agent, options)) {
+        const Cone cone = cone_of(object, agent, options, kept_width_m);
+        if (!beyond_goal(cone, percept, kept_width_m)) {
           entries_.push_back({&object, cone, -1});
         }
       }
@@ -153,11 +154,9 @@ class ThreatCones {
 
   // An object further than the goal by half the kept width does not stand in the way: the
   // agent stops at the goal short of it (a wall behind the goal, people waiting past it).
-  static bool beyond_goal(const Cone& cone, const Percept& percept, const AgentState& agent,
-                          const AvoidanceOptions& options) {
+  static bool beyond_goal(const Cone& cone, const Percept& percept, double kept_width_m) {
     return percept.goal_distance_m &&
-           std::min(cone.depth[0], cone.depth[1]) >
-               *percept.goal_distance_m + 0.5 * detail::kept_width(agent, options);
+           std::min(cone.depth[0], cone.depth[1]) > *percept.goal_distance_m + 0.5 * kept_width_m;
   }
 
   std::vector<Entry> entries_;
