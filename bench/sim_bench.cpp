@@ -24,6 +24,7 @@
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/eval/simulated_agent.hpp"
 #include "flowsteer/launch/robot_brain.hpp"
+#include "flowsteer/sim_camera/sim_camera.hpp"
 
 namespace {
 
@@ -74,14 +75,14 @@ void run_steps(benchmark::State& state, int resolution, const servo::PerceptionC
       state.PauseTiming();
       pipeline.reset();
       world.emplace(spec);
-      pipeline.emplace(*world, *renderer, kAgent);
-      pipeline->step(times);
+      pipeline.emplace(*world, kAgent);
+      pipeline->step(*renderer, times);
       step = 0;
       state.ResumeTiming();
     }
     // A new world state each step, as in a run: the sun's shadow map is drawn again.
     coast(*world);
-    benchmark::DoNotOptimize(pipeline->step(times).command);
+    benchmark::DoNotOptimize(pipeline->step(*renderer, times).command);
     sum += times;
     ++step;
   }

@@ -121,10 +121,10 @@ std::vector<MethodRun> start_runs(std::span<const servo::FlowMethod> methods,
 
 // Each agent steps on its own controller; `commands` gets what each commands.
 void step_agents(std::vector<std::unique_ptr<SimulatedAgent>>& agents,
-                 std::vector<std::pair<double, double>>& commands) {
+                 sim_camera::Renderer& renderer, std::vector<std::pair<double, double>>& commands) {
   for (std::size_t i = 0; i < agents.size(); ++i) {
     pipeline::StageTimes times;
-    const servo::ControlOutput& out = agents[i]->step(times);
+    const servo::ControlOutput& out = agents[i]->step(renderer, times);
     commands[i] = {out.command.accel_mps2, out.command.turn_rate};
   }
 }
@@ -235,7 +235,9 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
   sim_camera::World world(spec);
   std::vector<std::unique_ptr<SimulatedAgent>> agents;
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-    agents.push_back(std::make_unique<SimulatedAgent>(world, renderer, i));
+    // Agent 0's images are what the estimators are measured on.
+    agents.push_back(std::make_unique<SimulatedAgent>(
+        world, i, i == 0 ? sim_camera::RenderChannels::all : sim_camera::RenderChannels::geometry));
   }
   pipeline::PerceptionOptions truth_options = brain_config(spec.agents[0]).perception;
   truth_options.dark_regions = false;
@@ -253,7 +255,7 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
       << options.frames << " frames\n";
   std::vector<std::pair<double, double>> commands(spec.agents.size());
   for (int frame = 0; frame < options.frames && !world.finished(); ++frame) {
-    step_agents(agents, commands);
+    step_agents(agents, renderer, commands);
     const camera_io::Frame& view = agents[0]->frame();
     const sim_camera::AgentState& state = world.agents()[0];
     pipeline::StageTimes times;

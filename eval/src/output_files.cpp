@@ -176,7 +176,8 @@ void write_summary_json(const std::filesystem::path& path, const SimResult& resu
       << ", \"flow\": " << json_number(t.flow) << ", \"segment\": " << json_number(t.segment)
       << ", \"features\": " << json_number(t.features)
       << ", \"control\": " << json_number(t.control) << ", \"total\": " << json_number(t.total)
-      << "}\n}\n";
+      << "},\n  \"threads\": " << result.threads
+      << ",\n  \"world_steps_per_s\": " << json_number(result.world_steps_per_s) << "\n}\n";
   write_text(path, out.str());
 }
 

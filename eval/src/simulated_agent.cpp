@@ -6,6 +6,7 @@
 
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/servo/geometric_features.hpp"
+#include "flowsteer/sim_camera/sim_camera.hpp"
 #include "flowsteer/sim_camera/world_geometry.hpp"
 
 namespace flowsteer::eval {
@@ -61,18 +62,23 @@ pipeline::BrainConfig brain_config(const sim_camera::AgentSpec& agent) {
   return config;
 }
 
-SimulatedAgent::SimulatedAgent(const sim_camera::World& world, sim_camera::Renderer& renderer,
-                               std::size_t agent)
+SimulatedAgent::SimulatedAgent(const sim_camera::World& world, std::size_t agent,
+                               sim_camera::RenderChannels caller_reads)
     : world_(world),
       agent_(agent),
-      camera_(world, renderer, agent),
-      brain_(make_brain(world, agent, camera_.intrinsics())) {}
+      intrinsics_(sim_camera::View::of_agent(world, agent).intrinsics()),
+      brain_(make_brain(world, agent, intrinsics_)),
+      channels_(caller_reads == sim_camera::RenderChannels::all || brain_.reads_image()
+                    ? sim_camera::RenderChannels::all
+                    : sim_camera::RenderChannels::geometry) {}
 
-const servo::ControlOutput& SimulatedAgent::step(pipeline::StageTimes& times) {
+const servo::ControlOutput& SimulatedAgent::step(sim_camera::Renderer& renderer,
+                                                 pipeline::StageTimes& times) {
   const sim_camera::AgentSpec& agent = world_.spec().agents[agent_];
   const sim_camera::AgentState& state = world_.agents()[agent_];
   const base::Stopwatch render;
-  camera_.read(frame_, 0.0);
+  sim_camera::render_frame(renderer, world_, agent_, channels_, view_, frame_);
+  frame_.sequence = sequence_++;
   const double render_ms = render.elapsed_ms();
 
   pipeline::BrainInput input{frame_, state.speed_mps, state.turn_rate, {}, {}, {}};

@@ -8,10 +8,16 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "flowsteer/base/clock.hpp"
 #include "flowsteer/eval/output_files.hpp"
 #include "flowsteer/eval/overlay.hpp"
 #include "flowsteer/eval/simulated_agent.hpp"
@@ -26,6 +32,9 @@ struct AgentLoop {
   AgentResult result;
   Eigen::Vector2d last_position;
   std::unique_ptr<cv::VideoWriter> video;
+  // This step's: whether it steered, and what its stages took.
+  bool steered = false;
+  pipeline::StageTimes times;
 };
 
 class Progress {
@@ -167,21 +176,25 @@ class SimulationRun {
       : spec_(spec),
         options_(options),
         world_(spec_),
-        renderer_(sim_camera::Renderer::create()),
+        arena_(threads(options)),
+        renderers_([] { return sim_camera::Renderer::create(); }),
         total_steps_(total_steps(spec_, options)),
         paths_(spec_.agents.size()),
         commands_(spec_.agents.size()),
         costs_(spec_.agents.size(), static_cast<std::size_t>(total_steps_)) {
-    // After the world and the renderer: a run that cannot start leaves the folder as it was.
+    // The calling thread's renderer now, the workers' at their first step: a machine without
+    // OpenGL fails here, before the output folder is touched.
+    renderers_.local();
     if (options.write_outputs) {
       out_.emplace(options.out_dir);
     }
     const auto steps = static_cast<std::size_t>(total_steps_);
     for (std::size_t i = 0; i < spec_.agents.size(); ++i) {
-      AgentLoop loop{std::make_unique<SimulatedAgent>(world_, *renderer_, i),
-                     {},
-                     spec_.agents[i].start_m,
-                     nullptr};
+      const auto reads =
+          options.video ? sim_camera::RenderChannels::all : sim_camera::RenderChannels::geometry;
+      AgentLoop loop;
+      loop.agent = std::make_unique<SimulatedAgent>(world_, i, reads);
+      loop.last_position = spec_.agents[i].start_m;
       loop.result.name = spec_.agents[i].name;
       loop.result.min_clearance_m = world_.clearance(i);
       loop.result.turn_rates.reserve(steps);
@@ -194,12 +207,23 @@ class SimulationRun {
   int total_steps() const { return total_steps_; }
   const sim_camera::World& world() const { return world_; }
 
-  // One control step: every agent that still steers renders, thinks and commands; the world moves.
+  // One control step: every agent that still steers renders, thinks and commands, in parallel
+  // (each sees the same world state and keeps its own brain, so the threads change nothing of
+  // the result); then, in agent order, what the step records; then the world moves.
   void step() {
+    arena_.execute([this] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, loops_.size()),
+                        [this](const tbb::blocked_range<std::size_t>& agents) {
+                          sim_camera::Renderer& renderer = *renderers_.local();
+                          for (std::size_t i = agents.begin(); i != agents.end(); ++i) {
+                            think(i, renderer);
+                          }
+                        });
+    });
     for (std::size_t i = 0; i < loops_.size(); ++i) {
       commands_[i] = {0.0, 0.0};
-      if (!world_.agents()[i].reached_goal || spec_.agents[i].leader) {
-        steer(i);
+      if (loops_[i].steered) {
+        record(i);
       }
     }
     for (std::size_t i = 0; i < loops_.size(); ++i) {
@@ -223,6 +247,7 @@ class SimulationRun {
       result.agents.push_back(agent_result(i));
     }
     result.collisions = collisions_;
+    result.threads = arena_.max_concurrency();
     if (agent_steps_ > 0) {
       const double n = static_cast<double>(agent_steps_);
       result.per_agent_step_ms = {sum_.render / n,   sum_.flow / n,    sum_.segment / n,
@@ -256,13 +281,29 @@ class SimulationRun {
     return std::max(0, options.steps ? std::min(*options.steps, max_steps) : max_steps);
   }
 
-  void steer(std::size_t i) {
+  static int threads(const SimOptions& options) {
+    if (options.threads < 0) {
+      throw std::invalid_argument("simulation: threads must be >= 0 (0: every core), got " +
+                                  std::to_string(options.threads));
+    }
+    return options.threads == 0 ? tbb::task_arena::automatic : options.threads;
+  }
+
+  // Agent i's perception and control, when it still steers; touches nothing but its own loop.
+  void think(std::size_t i, sim_camera::Renderer& renderer) {
     AgentLoop& loop = loops_[i];
-    pipeline::StageTimes times;
-    const servo::ControlOutput& output = loop.agent->step(times);
+    loop.steered = !world_.agents()[i].reached_goal || spec_.agents[i].leader;
+    if (loop.steered) {
+      loop.agent->step(renderer, loop.times);
+    }
+  }
+
+  void record(std::size_t i) {
+    AgentLoop& loop = loops_[i];
+    const servo::ControlOutput& output = loop.agent->brain().output();
     commands_[i] = {output.command.accel_mps2, output.command.turn_rate};
     loop.result.turn_rates.push_back(output.command.turn_rate);
-    sum_ += times;
+    sum_ += loop.times;
     ++agent_steps_;
     costs_.add(world_.time_s(), i, output);
     if (options_.video && out_) {
@@ -318,7 +359,8 @@ class SimulationRun {
   sim_camera::WorldSpec spec_;
   const SimOptions& options_;
   sim_camera::World world_;
-  std::unique_ptr<sim_camera::Renderer> renderer_;
+  tbb::task_arena arena_;
+  tbb::enumerable_thread_specific<std::unique_ptr<sim_camera::Renderer>> renderers_;
   std::optional<OutputDir> out_;  // none: no files
   int total_steps_;
   std::vector<AgentLoop> loops_;
@@ -350,13 +392,16 @@ SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& o
                          std::ostream& log) {
   SimulationRun run(with_overrides(world, options), options);
   Progress progress(log, options.progress_bar, run.total_steps());
+  const base::Stopwatch wall;
   int step = 0;
   for (; step < run.total_steps() && !run.world().finished(); ++step) {
     run.step();
     progress.update(step + 1, run.world().time_s());
   }
+  const double wall_s = 1e-3 * wall.elapsed_ms();
   progress.finish();
   SimResult result = run.result(step);
+  result.world_steps_per_s = wall_s > 0.0 ? step / wall_s : 0.0;
   run.write(result);
   return result;
 }

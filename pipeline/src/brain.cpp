@@ -48,6 +48,10 @@ Brain::~Brain() = default;
 Brain::Brain(Brain&&) noexcept = default;
 Brain& Brain::operator=(Brain&&) noexcept = default;
 
+bool Brain::reads_image() const {
+  return motion_energy_ != nullptr || (!oracle_ && perception_.reads_image());
+}
+
 bool Brain::uses_flow() const {
   switch (model()) {
     case servo::SteeringModel::vision:

@@ -68,6 +68,10 @@ Perception::Perception(const base::CameraIntrinsics& intrinsics, const Perceptio
   }
 }
 
+bool Perception::reads_image() const {
+  return optical_flow_.has_value() || options_.dark_regions;
+}
+
 servo::FlowStatus Perception::process(const camera_io::Frame& frame, double speed_mps,
                                       double turn_rate_cy, StageTimes& times) {
   objects_ = {};
@@ -85,8 +89,6 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   const MotionHistory::Motion measured{speed_mps, turn_rate_cy};
   motions_->remember(frame.timestamp_s, measured);
   const cv::Mat& image = frame.image;
-  const bool frame_fits =
-      !image.empty() && image.cols == field_.width() && image.rows == field_.height();
   // Grey for the dark regions only: OpticalFlow converts the frame into the grey image it keeps,
   // and a grey image handed to it is copied (which costs less than converting twice).
   if (!image.empty() && options_.dark_regions) {
@@ -106,8 +108,9 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     status_ = image.empty() ? servo::FlowStatus::empty_frame
                             : optical_flow_->update(options_.dark_regions ? grey_ : image,
                                                     frame.timestamp_s, field_, rotation);
-  } else if (!frame_fits) {
-    status_ = image.empty() ? servo::FlowStatus::empty_frame : servo::FlowStatus::size_changed;
+  } else if (const cv::Mat& flow = frame.sim->flow;
+             flow.empty() || flow.cols != field_.width() || flow.rows != field_.height()) {
+    status_ = flow.empty() ? servo::FlowStatus::empty_frame : servo::FlowStatus::size_changed;
   } else {
     copy_sim_channels(*frame.sim, field_);
     status_ = servo::FlowStatus::ok;

@@ -9,7 +9,11 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
+#include <iterator>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -31,6 +35,11 @@ constexpr int kNoiseSize = 256;
 constexpr float kNear = 0.05F;
 constexpr float kFar = 500.0F;
 
+// EGL gives every renderer of the process the same display, and one eglTerminate ends it for
+// all: renderers count their uses of a display, and the last one to go terminates it.
+std::mutex display_mutex;
+std::map<EGLDisplay, int> display_users;
+
 std::string egl_error(const char* what) {
   char code[16];
   std::snprintf(code, sizeof code, "0x%04x", eglGetError());
@@ -46,9 +55,9 @@ void check_gl(const char* what) {
   }
 }
 
-GLuint compile(GLenum type, const char* source, const char* name) {
+GLuint compile(GLenum type, std::initializer_list<const char*> sources, const char* name) {
   const GLuint shader = glCreateShader(type);
-  glShaderSource(shader, 1, &source, nullptr);
+  glShaderSource(shader, static_cast<GLsizei>(sources.size()), std::data(sources), nullptr);
   glCompileShader(shader);
   GLint ok = 0;
   glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
@@ -62,8 +71,8 @@ GLuint compile(GLenum type, const char* source, const char* name) {
   return shader;
 }
 
-GLuint link(const char* vertex, const char* fragment, const char* name) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, vertex, name);
+GLuint link(const char* vertex, std::initializer_list<const char*> fragment, const char* name) {
+  const GLuint vs = compile(GL_VERTEX_SHADER, {vertex}, name);
   const GLuint fs = compile(GL_FRAGMENT_SHADER, fragment, name);
   const GLuint program = glCreateProgram();
   glAttachShader(program, vs);
@@ -314,6 +323,46 @@ struct ShadowUniforms {
   GLint light_view_projection;
 };
 
+struct GeometryUniforms {
+  GLint world_to_camera;
+  GLint projection;
+  GLint camera_omega;
+};
+
+// One body of the geometry program's instanced draws, as its vertex attributes read it.
+struct Instance {
+  std::array<float, 16> model;  // column-major
+  std::array<float, 3> relative_velocity;
+  std::int32_t id;
+};
+
+// Consecutive instances of one mesh, drawn by one call.
+struct InstanceRun {
+  const Mesh* mesh;
+  std::size_t first;
+  std::size_t count;
+};
+
+// Points a mesh's vertex array at instances from `first` on in the bound GL_ARRAY_BUFFER.
+void point_at_instances(std::size_t first) {
+  const auto at = [first](std::size_t member) {
+    return reinterpret_cast<const void*>(first * sizeof(Instance) + member);
+  };
+  for (GLuint column = 0; column < 4; ++column) {
+    glEnableVertexAttribArray(2 + column);
+    glVertexAttribPointer(2 + column, 4, GL_FLOAT, GL_FALSE, sizeof(Instance),
+                          at(offsetof(Instance, model) + 4 * column * sizeof(float)));
+    glVertexAttribDivisor(2 + column, 1);
+  }
+  glEnableVertexAttribArray(6);
+  glVertexAttribPointer(6, 3, GL_FLOAT, GL_FALSE, sizeof(Instance),
+                        at(offsetof(Instance, relative_velocity)));
+  glVertexAttribDivisor(6, 1);
+  glEnableVertexAttribArray(7);
+  glVertexAttribIPointer(7, 1, GL_INT, sizeof(Instance), at(offsetof(Instance, id)));
+  glVertexAttribDivisor(7, 1);
+}
+
 // The point lights as the scene program's uniforms hold them: fixed lights, then carried ones.
 // Elements past `count` stay zero, so equal values mean an equal upload.
 struct PointUniforms {
@@ -350,8 +399,10 @@ struct Renderer::Impl {
   std::string description;
   GLuint scene_program = 0;
   GLuint shadow_program = 0;
+  GLuint geometry_program = 0;
   SceneUniforms scene{};
   ShadowUniforms shadow{};
+  GeometryUniforms geometry{};
   std::optional<PointUniforms> uploaded_points;  // none before the first frame
   Mesh box;
   Mesh cylinder;
@@ -367,6 +418,9 @@ struct Renderer::Impl {
   double shadow_time_s = -1.0;
   Eigen::Matrix4f light_view_projection = Eigen::Matrix4f::Identity();
   std::vector<DrawItem> items;
+  GLuint instance_buffer = 0;
+  std::vector<Instance> instances;
+  std::vector<InstanceRun> runs;
 
   ~Impl() {
     if (context != EGL_NO_CONTEXT) {
@@ -381,15 +435,27 @@ struct Renderer::Impl {
       glDeleteFramebuffers(1, &shadow_fbo);
       glDeleteProgram(scene_program);
       glDeleteProgram(shadow_program);
+      glDeleteProgram(geometry_program);
+      glDeleteBuffers(1, &instance_buffer);
       eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
       eglDestroyContext(display, context);
     }
     if (display != EGL_NO_DISPLAY) {
-      eglTerminate(display);
+      const std::lock_guard lock(display_mutex);
+      if (--display_users[display] == 0) {
+        display_users.erase(display);
+        eglTerminate(display);
+      }
     }
   }
 
   void open_display() {
+    const std::lock_guard lock(display_mutex);
+    find_display();
+    ++display_users[display];
+  }
+
+  void find_display() {
     const auto get_platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
         eglGetProcAddress("eglGetPlatformDisplayEXT"));
     if (get_platform_display == nullptr) {
@@ -412,7 +478,9 @@ struct Renderer::Impl {
             if (vendor != nullptr && std::string(vendor).find("Mesa") == std::string::npos) {
               display = d;
             } else {
-              eglTerminate(d);
+              if (!display_users.contains(d)) {
+                eglTerminate(d);
+              }
             }
           }
         }
@@ -454,12 +522,23 @@ struct Renderer::Impl {
   }
 
   void create_resources() {
-    scene_program = link(shaders::kSceneVertex, shaders::kSceneFragment, "scene");
-    shadow_program = link(shaders::kShadowVertex, shaders::kShadowFragment, "shadow");
+    scene_program = link(
+        shaders::kSceneVertex,
+        {shaders::kFragmentHeader, shaders::kGeometryOutputs, shaders::kSceneFragment}, "scene");
+    shadow_program = link(shaders::kShadowVertex, {shaders::kShadowFragment}, "shadow");
+    geometry_program =
+        link(shaders::kGeometryVertex,
+             {shaders::kFragmentHeader, shaders::kGeometryOutputs, shaders::kGeometryFragment},
+             "geometry");
     scene = scene_uniforms(scene_program);
     shadow = {
         .model = glGetUniformLocation(shadow_program, "u_model"),
         .light_view_projection = glGetUniformLocation(shadow_program, "u_light_view_projection")};
+    auto at = [this](const char* name) { return glGetUniformLocation(geometry_program, name); };
+    geometry = {.world_to_camera = at("u_world_to_camera"),
+                .projection = at("u_projection"),
+                .camera_omega = at("u_camera_omega")};
+    glGenBuffers(1, &instance_buffer);
     // The samplers' texture units never change.
     glUseProgram(scene_program);
     glUniform1i(glGetUniformLocation(scene_program, "u_shadow_map"), 0);
@@ -672,14 +751,18 @@ struct Renderer::Impl {
     uploaded_points = points;
   }
 
-  void render(const World& world, const View& view, RenderedView& out) {
-    eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context);
-    const base::CameraIntrinsics k = view.intrinsics();
-    const WorldSpec& spec = world.spec();
-    render_shadow_map(world);
-    resize(k.width_px, k.height_px);
+  // The optical frame's pose and projection for a view, and how the camera moves.
+  struct CameraPose {
+    Eigen::Matrix3d rotation;  // world to the optical frame (x right, y down, z forward)
+    Eigen::Matrix4f world_to_camera;
+    Eigen::Matrix4f projection;
+    Eigen::Vector3d velocity_mps;  // world frame
+    Eigen::Vector3d omega;         // optical frame
+  };
 
-    // World to the optical frame (x right, y down, z forward), camera pitched down.
+  static CameraPose camera_pose(const View& view, const base::CameraIntrinsics& k) {
+    CameraPose pose;
+    // Camera pitched down.
     const double c = std::cos(view.yaw_rad);
     const double s = std::sin(view.yaw_rad);
     const double cp = std::cos(view.camera.pitch_rad);
@@ -687,14 +770,14 @@ struct Renderer::Impl {
     const Eigen::Vector3d forward(c * cp, s * cp, -sp);
     const Eigen::Vector3d right(s, -c, 0.0);
     const Eigen::Vector3d down = forward.cross(right);
-    Eigen::Matrix3d rotation;
-    rotation << right.transpose(), down.transpose(), forward.transpose();
+    pose.rotation << right.transpose(), down.transpose(), forward.transpose();
     const Eigen::Vector3d eye(view.position_m.x(), view.position_m.y(), view.camera.height_m);
-    Eigen::Matrix4f world_to_camera = Eigen::Matrix4f::Identity();
-    world_to_camera.block<3, 3>(0, 0) = rotation.cast<float>();
-    world_to_camera.block<3, 1>(0, 3) = (-rotation * eye).cast<float>();
+    pose.world_to_camera = Eigen::Matrix4f::Identity();
+    pose.world_to_camera.block<3, 3>(0, 0) = pose.rotation.cast<float>();
+    pose.world_to_camera.block<3, 1>(0, 3) = (-pose.rotation * eye).cast<float>();
     // Pixel centres at integer coordinates; row 0 lands on the first row glReadPixels returns.
-    Eigen::Matrix4f projection = Eigen::Matrix4f::Zero();
+    Eigen::Matrix4f& projection = pose.projection;
+    projection = Eigen::Matrix4f::Zero();
     projection(0, 0) = static_cast<float>(2.0 * k.fx_px / k.width_px);
     projection(0, 2) = static_cast<float>(2.0 * (k.cx_px + 0.5) / k.width_px - 1.0);
     projection(1, 1) = static_cast<float>(2.0 * k.fy_px / k.height_px);
@@ -702,37 +785,73 @@ struct Renderer::Impl {
     projection(2, 2) = (kFar + kNear) / (kFar - kNear);
     projection(2, 3) = -2.0F * kFar * kNear / (kFar - kNear);
     projection(3, 2) = 1.0F;
-    const Eigen::Vector3d agent_velocity(view.speed_mps * c, view.speed_mps * s, 0.0);
-    const Eigen::Vector3d omega =
-        servo::camera_angular_velocity(view.turn_rate, view.camera.pitch_rad);
+    pose.velocity_mps = Eigen::Vector3d(view.speed_mps * c, view.speed_mps * s, 0.0);
+    pose.omega = servo::camera_angular_velocity(view.turn_rate, view.camera.pitch_rad);
+    return pose;
+  }
+
+  void render(const World& world, const View& view, RenderChannels channels, RenderedView& out) {
+    if (!eglBindAPI(EGL_OPENGL_API) ||
+        !eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
+      throw std::runtime_error(
+          egl_error("eglMakeCurrent (a renderer is used by two threads at once)"));
+    }
+    const base::CameraIntrinsics k = view.intrinsics();
+    const bool lit = channels == RenderChannels::all;
+    if (lit) {
+      render_shadow_map(world);
+    }
+    resize(k.width_px, k.height_px);
+    const CameraPose pose = camera_pose(view, k);
 
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
     glViewport(0, 0, k.width_px, k.height_px);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDisable(GL_CULL_FACE);
+    const GLenum draw_buffers[] = {lit ? GLenum{GL_COLOR_ATTACHMENT0} : GLenum{GL_NONE},
+                                   GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
+                                   GL_COLOR_ATTACHMENT3};
+    glDrawBuffers(4, draw_buffers);
+    const std::array<GLint, 4> no_id = {servo::kSkyId, 0, 0, 0};
+    const std::array<float, 4> zero = {0, 0, 0, 0};
+    const std::array<float, 4> infinite = {std::numeric_limits<float>::infinity(), 0, 0, 0};
+    const float far_depth = 1.0F;
+    glClearBufferiv(GL_COLOR, 1, no_id.data());
+    glClearBufferfv(GL_COLOR, 2, zero.data());
+    glClearBufferfv(GL_COLOR, 3, infinite.data());
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    if (lit) {
+      draw_lit(world, view, pose);
+    } else {
+      draw_geometry(world, view, pose);
+    }
+    check_gl("rendering the view");
+    read_back(k, pose.omega, lit, out);
+    // The context and EGL's state of this thread are released after each render: a renderer
+    // may be used, or destroyed, on another thread, and a worker thread that ends after the
+    // last renderer (a thread pool's, at exit) must not have EGL free its state then.
+    eglReleaseThread();
+  }
+
+  // The lit scene: colour, shaded by the sun (with its shadow map) and the point lights, beside
+  // the geometry channels.
+  void draw_lit(const World& world, const View& view, const CameraPose& pose) {
+    const WorldSpec& spec = world.spec();
     const Lighting& lighting = spec.lighting;
     const float sky_light =
         lighting.ambient + (lighting.sun ? 0.6F * lighting.sun->intensity : 0.0F);
     const std::array<float, 4> sky = {std::min(1.0F, 0.55F * sky_light),
                                       std::min(1.0F, 0.7F * sky_light),
                                       std::min(1.0F, 0.9F * sky_light), 1.0F};
-    const std::array<GLint, 4> no_id = {servo::kSkyId, 0, 0, 0};
-    const std::array<float, 4> zero = {0, 0, 0, 0};
-    const std::array<float, 4> infinite = {std::numeric_limits<float>::infinity(), 0, 0, 0};
-    const float far_depth = 1.0F;
     glClearBufferfv(GL_COLOR, 0, sky.data());
-    glClearBufferiv(GL_COLOR, 1, no_id.data());
-    glClearBufferfv(GL_COLOR, 2, zero.data());
-    glClearBufferfv(GL_COLOR, 3, infinite.data());
-    glClearBufferfv(GL_DEPTH, 0, &far_depth);
 
     glUseProgram(scene_program);
-    glUniformMatrix4fv(scene.world_to_camera, 1, GL_FALSE, world_to_camera.data());
-    glUniformMatrix4fv(scene.projection, 1, GL_FALSE, projection.data());
+    glUniformMatrix4fv(scene.world_to_camera, 1, GL_FALSE, pose.world_to_camera.data());
+    glUniformMatrix4fv(scene.projection, 1, GL_FALSE, pose.projection.data());
     glUniformMatrix4fv(scene.light_view_projection, 1, GL_FALSE, light_view_projection.data());
-    glUniform3f(scene.camera_omega, static_cast<float>(omega.x()), static_cast<float>(omega.y()),
-                static_cast<float>(omega.z()));
+    glUniform3f(scene.camera_omega, static_cast<float>(pose.omega.x()),
+                static_cast<float>(pose.omega.y()), static_cast<float>(pose.omega.z()));
     glUniform1f(scene.ambient, lighting.ambient);
     if (lighting.sun) {
       const SunLight& sun = *lighting.sun;
@@ -755,7 +874,8 @@ struct Renderer::Impl {
     auto draw = [&](const Mesh& mesh, const Eigen::Matrix4f& model, const Material& material,
                     std::int32_t id, const Eigen::Vector3d& velocity) {
       const Eigen::Matrix3f normal = model.block<3, 3>(0, 0).inverse().transpose();
-      const Eigen::Vector3f relative = (rotation * (velocity - agent_velocity)).cast<float>();
+      const Eigen::Vector3f relative =
+          (pose.rotation * (velocity - pose.velocity_mps)).cast<float>();
       glUniformMatrix4fv(scene.model, 1, GL_FALSE, model.data());
       glUniformMatrix3fv(scene.normal_matrix, 1, GL_FALSE, normal.data());
       glUniform1i(scene.id, id);
@@ -770,20 +890,71 @@ struct Renderer::Impl {
       }
     }
     // The ground last: the depth test then skips shading it behind everything else.
-    draw(ground, model_matrix(view.position_m, 0.0, {spec.ground_size_m, spec.ground_size_m, 1.0}),
-         spec.ground, servo::kGroundId, Eigen::Vector3d::Zero());
-    check_gl("rendering the view");
-    read_back(k, omega, out);
+    draw(ground, ground_model(world, view), spec.ground, servo::kGroundId, Eigen::Vector3d::Zero());
   }
 
-  void read_back(const base::CameraIntrinsics& k, const Eigen::Vector3d& omega, RenderedView& out) {
-    out.image.create(k.height_px, k.width_px, CV_8UC3);
+  // Ids, flow and depth only, for synthetic perception: no lights, no shadow map, no texture.
+  // Bodies are drawn in the lit scene's order, each run of one mesh by one instanced call: a
+  // crowd's view costs a few draw calls rather than one per person.
+  void draw_geometry(const World& world, const View& view, const CameraPose& pose) {
+    glUseProgram(geometry_program);
+    glUniformMatrix4fv(geometry.world_to_camera, 1, GL_FALSE, pose.world_to_camera.data());
+    glUniformMatrix4fv(geometry.projection, 1, GL_FALSE, pose.projection.data());
+    glUniform3f(geometry.camera_omega, static_cast<float>(pose.omega.x()),
+                static_cast<float>(pose.omega.y()), static_cast<float>(pose.omega.z()));
+    instances.clear();
+    runs.clear();
+    auto add = [&](const Mesh* mesh, const Eigen::Matrix4f& model, std::int32_t id,
+                   const Eigen::Vector3d& velocity) {
+      const Eigen::Vector3f relative =
+          (pose.rotation * (velocity - pose.velocity_mps)).cast<float>();
+      Instance instance{};
+      std::copy(model.data(), model.data() + 16, instance.model.begin());
+      instance.relative_velocity = {relative.x(), relative.y(), relative.z()};
+      instance.id = id;
+      if (runs.empty() || runs.back().mesh != mesh) {
+        runs.push_back({mesh, instances.size(), 0});
+      }
+      ++runs.back().count;
+      instances.push_back(instance);
+    };
+    collect_items(world, view.self);
+    for (const DrawItem& item : items) {
+      if (item.mesh != nullptr) {
+        add(item.mesh, item.model, item.id, item.velocity_mps);
+      }
+    }
+    add(&ground, ground_model(world, view), servo::kGroundId, Eigen::Vector3d::Zero());
+    glBindBuffer(GL_ARRAY_BUFFER, instance_buffer);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(instances.size() * sizeof(Instance)),
+                 instances.data(), GL_STREAM_DRAW);
+    for (const InstanceRun& run : runs) {
+      glBindVertexArray(run.mesh->vao);
+      point_at_instances(run.first);
+      glDrawElementsInstanced(GL_TRIANGLES, run.mesh->index_count, GL_UNSIGNED_INT, nullptr,
+                              static_cast<GLsizei>(run.count));
+    }
+    glBindVertexArray(0);
+  }
+
+  static Eigen::Matrix4f ground_model(const World& world, const View& view) {
+    const double size = world.spec().ground_size_m;
+    return model_matrix(view.position_m, 0.0, {size, size, 1.0});
+  }
+
+  void read_back(const base::CameraIntrinsics& k, const Eigen::Vector3d& omega, bool lit,
+                 RenderedView& out) {
     out.object_ids.create(k.height_px, k.width_px, CV_32SC1);
     out.flow.create(k.height_px, k.width_px, CV_32FC2);
     out.depth_m.create(k.height_px, k.width_px, CV_32FC1);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, k.width_px, k.height_px, GL_BGR, GL_UNSIGNED_BYTE, out.image.data);
+    if (lit) {
+      out.image.create(k.height_px, k.width_px, CV_8UC3);
+      glReadBuffer(GL_COLOR_ATTACHMENT0);
+      glReadPixels(0, 0, k.width_px, k.height_px, GL_BGR, GL_UNSIGNED_BYTE, out.image.data);
+    } else {
+      out.image.release();
+    }
     glReadBuffer(GL_COLOR_ATTACHMENT1);
     glReadPixels(0, 0, k.width_px, k.height_px, GL_RED_INTEGER, GL_INT, out.object_ids.data);
     glReadBuffer(GL_COLOR_ATTACHMENT2);
@@ -828,14 +999,16 @@ std::unique_ptr<Renderer> Renderer::create() {
   impl->open_display();
   impl->create_context();
   impl->create_resources();
+  eglReleaseThread();
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Renderer::~Renderer() = default;
 
-void Renderer::render(const World& world, const View& view, RenderedView& out) {
-  impl_->render(world, view, out);
+void Renderer::render(const World& world, const View& view, RenderedView& out,
+                      RenderChannels channels) {
+  impl_->render(world, view, channels, out);
 }
 
 const std::string& Renderer::description() const {

@@ -1,7 +1,35 @@
 #pragma once
 
-// GLSL 3.30 core sources of the renderer's two programs.
+// GLSL 3.30 core sources of the renderer's programs. A fragment shader is compiled from
+// kFragmentHeader, then kGeometryOutputs, then its own source: the lit scene writes its colour
+// beside the geometry channels, the geometry program the channels alone.
 namespace flowsteer::sim_camera::shaders {
+
+inline constexpr const char* kFragmentHeader = "#version 330 core\n";
+
+// The channels synthetic perception reads: the object's id, the flow and the depth.
+// relative_velocity: the object's minus the camera's, optical frame, m/s.
+inline constexpr const char* kGeometryOutputs = R"(
+in vec3 v_camera;
+uniform vec3 u_camera_omega;  // angular velocity of the camera, optical frame, rad/s
+layout(location = 1) out int o_id;
+layout(location = 2) out vec2 o_flow;
+layout(location = 3) out float o_depth;
+
+void write_geometry(int id, vec3 relative_velocity) {
+  o_id = id;
+  // CGF Eq. 1 at the point seen through this pixel: translation over depth, plus rotation.
+  float z = v_camera.z;
+  vec2 p = v_camera.xy / z;
+  vec3 v = relative_velocity;
+  vec3 w = u_camera_omega;
+  vec2 translation = vec2(v.x - p.x * v.z, v.y - p.y * v.z) / z;
+  vec2 rotation = vec2(p.x * p.y * w.x - (1.0 + p.x * p.x) * w.y + p.y * w.z,
+                       (1.0 + p.y * p.y) * w.x - p.x * p.y * w.y - p.x * w.z);
+  o_flow = translation + rotation;
+  o_depth = z;
+}
+)";
 
 inline constexpr const char* kSceneVertex = R"(#version 330 core
 layout(location = 0) in vec3 a_position;
@@ -25,10 +53,9 @@ void main() {
 }
 )";
 
-inline constexpr const char* kSceneFragment = R"(#version 330 core
+inline constexpr const char* kSceneFragment = R"(
 in vec3 v_world;
 in vec3 v_normal;
-in vec3 v_camera;
 in vec4 v_light_clip;
 uniform vec3 u_albedo;
 uniform int u_pattern;  // 0 plain, 1 checker, 2 noise, 3 stripes
@@ -36,7 +63,6 @@ uniform float u_pattern_scale;
 uniform float u_pattern_contrast;
 uniform int u_id;
 uniform vec3 u_relative_velocity;  // object minus camera, optical frame, m/s
-uniform vec3 u_camera_omega;       // angular velocity of the camera, optical frame, rad/s
 uniform float u_ambient;
 uniform vec3 u_sun_direction;  // towards the sun, world frame
 uniform float u_sun_intensity;
@@ -47,9 +73,6 @@ uniform vec3 u_point_position[8];  // kMaxPointLights
 uniform float u_point_intensity[8];
 uniform float u_point_range[8];
 layout(location = 0) out vec4 o_color;
-layout(location = 1) out int o_id;
-layout(location = 2) out vec2 o_flow;
-layout(location = 3) out float o_depth;
 
 uniform sampler2D u_noise;  // tileable value noise, mipmapped
 
@@ -100,18 +123,36 @@ void main() {
   float texture_factor = 1.0 - u_pattern_contrast + u_pattern_contrast * pattern_value(v_world, n);
   vec3 linear = u_albedo * texture_factor * light;
   o_color = vec4(pow(clamp(linear, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
-  o_id = u_id;
-  // CGF Eq. 1 at the point seen through this pixel: translation over depth, plus rotation.
-  float z = v_camera.z;
-  vec2 p = v_camera.xy / z;
-  vec3 v = u_relative_velocity;
-  vec3 w = u_camera_omega;
-  vec2 translation = vec2(v.x - p.x * v.z, v.y - p.y * v.z) / z;
-  vec2 rotation = vec2(p.x * p.y * w.x - (1.0 + p.x * p.x) * w.y + p.y * w.z,
-                       (1.0 + p.y * p.y) * w.x - p.x * p.y * w.y - p.x * w.z);
-  o_flow = translation + rotation;
-  o_depth = z;
+  write_geometry(u_id, u_relative_velocity);
 }
+)";
+
+// Geometry only: no lights, no texture, no colour written. Instanced: each instance is one
+// body, with its model matrix, id and velocity relative to the camera.
+inline constexpr const char* kGeometryVertex = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+layout(location = 2) in mat4 a_model;  // locations 2 to 5
+layout(location = 6) in vec3 a_relative_velocity;
+layout(location = 7) in int a_id;
+uniform mat4 u_world_to_camera;
+uniform mat4 u_projection;
+out vec3 v_camera;
+flat out int v_id;
+flat out vec3 v_relative_velocity;
+void main() {
+  // As the scene program computes it, so that both give the same channels to the last bit.
+  vec4 world = a_model * vec4(a_position, 1.0);
+  v_camera = (u_world_to_camera * world).xyz;
+  v_id = a_id;
+  v_relative_velocity = a_relative_velocity;
+  gl_Position = u_projection * vec4(v_camera, 1.0);
+}
+)";
+
+inline constexpr const char* kGeometryFragment = R"(
+flat in int v_id;
+flat in vec3 v_relative_velocity;
+void main() { write_geometry(v_id, v_relative_velocity); }
 )";
 
 inline constexpr const char* kShadowVertex = R"(#version 330 core

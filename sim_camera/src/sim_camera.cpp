@@ -2,6 +2,14 @@
 
 namespace flowsteer::sim_camera {
 
+void render_frame(Renderer& renderer, const World& world, std::size_t agent,
+                  RenderChannels channels, RenderedView& view, camera_io::Frame& frame) {
+  renderer.render(world, View::of_agent(world, agent), view, channels);
+  frame.image = view.image;
+  frame.timestamp_s = world.time_s();
+  frame.sim = camera_io::SimChannels{view.depth_m, view.object_ids, view.flow};
+}
+
 SimCamera::SimCamera(const World& world, Renderer& renderer, std::size_t agent)
     : world_(world),
       renderer_(renderer),
@@ -9,11 +17,8 @@ SimCamera::SimCamera(const World& world, Renderer& renderer, std::size_t agent)
       intrinsics_(View::of_agent(world, agent).intrinsics()) {}
 
 camera_io::ReadStatus SimCamera::read(camera_io::Frame& frame, double) {
-  renderer_.render(world_, View::of_agent(world_, agent_), view_);
-  frame.image = view_.image;
-  frame.timestamp_s = world_.time_s();
+  render_frame(renderer_, world_, agent_, RenderChannels::all, view_, frame);
   frame.sequence = sequence_++;
-  frame.sim = camera_io::SimChannels{view_.depth_m, view_.object_ids, view_.flow};
   return camera_io::ReadStatus::ok;
 }
 

@@ -74,13 +74,13 @@ TEST(GeometricReference, ComputesNoFlow) {
   spec.agents.at(0).controller.model = servo::SteeringModel::geometric;
   sim_camera::World world(spec);
   const auto renderer = sim_camera::Renderer::create();
-  SimulatedAgent geometric(world, *renderer, 0);
-  SimulatedAgent vision(world, *renderer, 1);
+  SimulatedAgent geometric(world, 0);
+  SimulatedAgent vision(world, 1);
   for (int step = 0; step < 2; ++step) {
     pipeline::StageTimes geometric_times;
     pipeline::StageTimes vision_times;
-    geometric.step(geometric_times);
-    vision.step(vision_times);
+    geometric.step(*renderer, geometric_times);
+    vision.step(*renderer, vision_times);
     EXPECT_EQ(geometric_times.flow, 0.0);
     EXPECT_GT(vision_times.flow, 0.0);
     world.step(std::vector<std::pair<double, double>>(spec.agents.size(), {0.0, 0.0}));

@@ -196,12 +196,12 @@ Trace walk(const sim_camera::WorldSpec& spec) {
   const std::int32_t obstacle_id = sim_camera::obstacle_render_id(0);
   sim_camera::World world(spec);
   const auto renderer = sim_camera::Renderer::create();
-  SimulatedAgent pipeline(world, *renderer, 0);
+  SimulatedAgent pipeline(world, 0);
   Trace trace;
   const int steps = static_cast<int>(std::ceil(spec.duration_s / spec.step_s - 1e-9));
   for (int k = 0; k < steps && !world.finished(); ++k) {
     pipeline::StageTimes times;
-    const servo::ControlOutput& out = pipeline.step(times);
+    const servo::ControlOutput& out = pipeline.step(*renderer, times);
     const Eigen::Vector2d& position = world.agents()[0].position_m;
     trace.gaps_m.push_back((position - obstacle.centre_m).norm() - obstacle.radius_m -
                            agent.radius_m);

@@ -169,7 +169,8 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
   spec.agents[0].perception = {};
   sim_camera::World world(spec);
   const auto renderer = sim_camera::Renderer::create();
-  eval::SimulatedAgent agent(world, *renderer, 0);
+  // The recorded frames are replayed: the lit image is what a camera would give.
+  eval::SimulatedAgent agent(world, 0, sim_camera::RenderChannels::all);
 
   pipeline::PerceptionOptions options;
   options.flow = servo::FlowMethod::dis_medium;
@@ -191,7 +192,7 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
     std::vector<std::pair<double, double>> commands(1);
     for (int f = 0; f < kFrames; ++f) {
       pipeline::StageTimes times;
-      const servo::ControlOutput& out = agent.step(times);
+      const servo::ControlOutput& out = agent.step(*renderer, times);
       commands[0] = {out.command.accel_mps2, out.command.turn_rate};
       const sim_camera::AgentState& state = world.agents()[0];
       camera_io::Frame frame = agent.frame();
@@ -270,13 +271,14 @@ struct Recorded {
 std::vector<Recorded> record_simulated_agent(sim_camera::WorldSpec spec, int frames) {
   sim_camera::World world(spec);
   const auto renderer = sim_camera::Renderer::create();
-  eval::SimulatedAgent agent(world, *renderer, 0);
+  // The recorded frames are replayed: the lit image is what a camera would give.
+  eval::SimulatedAgent agent(world, 0, sim_camera::RenderChannels::all);
   std::vector<Recorded> recorded;
   std::vector<std::pair<double, double>> commands(spec.agents.size(), {0.0, 0.0});
   for (int f = 0; f < frames; ++f) {
     const sim_camera::AgentState state = world.agents()[0];
     pipeline::StageTimes times;
-    const servo::ControlOutput& out = agent.step(times);
+    const servo::ControlOutput& out = agent.step(*renderer, times);
     Recorded r{agent.frame(),
                state.speed_mps,
                state.turn_rate,

@@ -150,6 +150,41 @@ TEST(Scenarios, EveryBuiltinOneLoadsAndRuns) {
   }
 }
 
+// Agents are stepped in parallel, each on its own brain and the calling thread's renderer: the
+// number of threads must change nothing, to the last bit.
+void expect_same_runs(const sim_camera::WorldSpec& world, SimOptions options) {
+  options.write_outputs = false;
+  std::ostringstream log;
+  options.threads = 1;
+  const SimResult one = run_simulation(world, options, log);
+  options.threads = 3;
+  const SimResult three = run_simulation(world, options, log);
+  EXPECT_EQ(three.threads, 3);
+  ASSERT_EQ(one.agents.size(), three.agents.size());
+  EXPECT_EQ(one.collisions.size(), three.collisions.size());
+  for (std::size_t i = 0; i < one.agents.size(); ++i) {
+    EXPECT_EQ(one.agents[i].turn_rates, three.agents[i].turn_rates) << world.name << " agent " << i;
+    EXPECT_EQ(one.agents[i].positions_m, three.agents[i].positions_m)
+        << world.name << " agent " << i;
+  }
+}
+
+TEST(SimThreads, ACrowdMovesTheSameOnOneAndThreeThreads) {
+  SimOptions options;
+  options.resolution = 48;
+  options.steps = 80;
+  expect_same_runs(load_steersuite(FLOWSTEER_SUITE_DIR "/circle_8.xml").world, options);
+}
+
+TEST(SimThreads, NumericalFlowGivesTheSameRunOnOneAndThreeThreads) {
+  SimOptions options;
+  options.resolution = 64;
+  options.steps = 20;
+  options.flow = servo::FlowMethod::dis_fast;
+  options.segmentation = servo::SegmentationMethod::flow_graph_fast;
+  expect_same_runs(builtin_scenario("room"), options);
+}
+
 TEST(Scenarios, UnknownNameListsTheKnownOnes) {
   try {
     builtin_scenario("hallway");

@@ -18,6 +18,7 @@ struct SimCommand {
   std::optional<int> resolution;
   std::optional<int> steps;
   bool video = false;
+  int threads = 0;
   std::string flow;
   std::string segmentation;
 };
@@ -51,7 +52,8 @@ void print_summary(const eval::SimResult& result, std::ostream& out) {
   out << "per agent step: " << measure(t.total, "ms") << " (render " << measure(t.render, "ms")
       << ", flow " << measure(t.flow, "ms") << ", segment " << measure(t.segment, "ms")
       << ", features " << measure(t.features, "ms") << ", control " << measure(t.control, "ms")
-      << ")\n";
+      << "); " << measure(result.world_steps_per_s, "world steps/s") << " on " << result.threads
+      << (result.threads == 1 ? " thread\n" : " threads\n");
 }
 
 int run_sim(const SimCommand& command) {
@@ -67,6 +69,7 @@ int run_sim(const SimCommand& command) {
     options.segmentation = segmentation_method_option("--segmentation", command.segmentation);
   }
   options.video = command.video;
+  options.threads = command.threads;
   options.progress_bar = isatty(STDERR_FILENO) != 0;
   std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size() << " agents) -> "
             << command.out_dir << "\n";
@@ -87,6 +90,11 @@ Subcommand add_sim(CLI::App& app) {
   sim->add_option("--steps", command->steps, "stop after N control steps")
       ->check(CLI::PositiveNumber);
   sim->add_flag("--video", command->video, "an MP4 per agent: its view, the flow and the features");
+  sim->add_option(
+         "--threads", command->threads,
+         "threads the agents are stepped on, 0: one per core (results do not depend on it)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   sim->add_option("--flow", command->flow, "every agent's flow: " + servo::flow_method_names());
   sim->add_option("--segmentation", command->segmentation,
                   "every agent's segmentation: " + servo::segmentation_method_names());

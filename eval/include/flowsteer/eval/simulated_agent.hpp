@@ -1,12 +1,12 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <span>
 
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/pipeline/brain.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
-#include "flowsteer/sim_camera/sim_camera.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::eval {
@@ -17,24 +17,30 @@ namespace flowsteer::eval {
 // the world's exact geometry.
 class SimulatedAgent {
  public:
-  // The world and the renderer must outlive the agent. Throws std::invalid_argument naming the
-  // agent when its controller cannot run (motion energy following a leader).
-  SimulatedAgent(const sim_camera::World& world, sim_camera::Renderer& renderer, std::size_t agent);
+  // The world must outlive the agent. The camera draws the lit image only where the brain reads
+  // it or `caller_reads` asks for it (a video of the agent's view). Throws std::invalid_argument
+  // naming the agent when its controller cannot run (motion energy following a leader).
+  SimulatedAgent(const sim_camera::World& world, std::size_t agent,
+                 sim_camera::RenderChannels caller_reads = sim_camera::RenderChannels::geometry);
 
-  // Renders the agent's view at the world's current state and runs the brain on it; `times`
-  // receives what each stage took, the rendering included.
-  const servo::ControlOutput& step(pipeline::StageTimes& times);
+  // Renders the agent's view at the world's current state with `renderer` (the calling thread's:
+  // an OpenGL context is current on one thread) and runs the brain on it; `times` receives what
+  // each stage took, the rendering included.
+  const servo::ControlOutput& step(sim_camera::Renderer& renderer, pipeline::StageTimes& times);
 
   const camera_io::Frame& frame() const { return frame_; }
   const pipeline::Brain& brain() const { return brain_; }
-  const base::CameraIntrinsics& intrinsics() const { return camera_.intrinsics(); }
+  const base::CameraIntrinsics& intrinsics() const { return intrinsics_; }
 
  private:
   const sim_camera::World& world_;
   std::size_t agent_;
-  sim_camera::SimCamera camera_;
+  base::CameraIntrinsics intrinsics_;
   pipeline::Brain brain_;
+  sim_camera::RenderChannels channels_;
+  sim_camera::RenderedView view_;
   camera_io::Frame frame_;
+  std::uint64_t sequence_ = 0;
 };
 
 // The brain a scenario's agent asks for, with its camera's intrinsics.

@@ -25,6 +25,8 @@ struct SimOptions {
   bool video = false;         // an MP4 per agent of its view with the features drawn on it
   bool progress_bar = false;  // a bar that redraws itself, for terminals
   bool write_outputs = true;  // false: only the returned result (tests, benchmarks)
+  // Threads the agents are stepped on; 0: one per core. The result is the same for any number.
+  int threads = 1;
 };
 
 struct AgentResult {
@@ -54,6 +56,8 @@ struct SimResult {
   std::vector<AgentResult> agents;
   std::vector<sim_camera::Collision> collisions;
   pipeline::StageTimes per_agent_step_ms;  // mean over agents and steps
+  int threads = 1;                         // the agents were stepped on
+  double world_steps_per_s = 0.0;          // wall-clock rate of the step loop
   cv::Mat topview;                         // the run from above, as topview.png (draw_topview)
 };
 

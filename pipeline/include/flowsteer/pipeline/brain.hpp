@@ -79,6 +79,10 @@ class Brain {
   const servo::ControlOutput& step(const BrainInput& input);
 
   servo::SteeringModel model() const { return config_.controller.model; }
+  // Whether a step reads the frame's image (numerical flow, dark regions, motion energy); with
+  // synthetic flow and no image term it reads only the simulator's channels, and a simulator
+  // can leave the image out.
+  bool reads_image() const;
   const Perception& perception() const { return perception_; }
   // The last step's perception status: FlowStatus::ok when the model had features to steer by.
   servo::FlowStatus status() const { return status_; }

@@ -69,6 +69,9 @@ class Perception {
                             StageTimes& times);
 
   const PerceptionOptions& options() const { return options_; }
+  // Whether process reads the frame's image (numerical flow, dark regions) rather than only the
+  // simulator's channels.
+  bool reads_image() const;
   const base::CameraIntrinsics& intrinsics() const { return field_.intrinsics(); }
   servo::FlowStatus status() const { return status_; }
   const servo::FlowField& flow() const { return field_; }

@@ -25,9 +25,14 @@ struct View {
   base::CameraIntrinsics intrinsics() const;
 };
 
-// One render: all channels for the same instant, row-major from the top-left pixel.
+// What a render draws. Synthetic perception reads only the geometry channels (ids, depth,
+// flow); the lit image, which needs the lights and the sun's shadow map, is for numerical flow,
+// dark regions, motion energy and video.
+enum class RenderChannels { all, geometry };
+
+// One render: its channels for the same instant, row-major from the top-left pixel.
 struct RenderedView {
-  cv::Mat image;       // CV_8UC3 BGR, lit, gamma-encoded
+  cv::Mat image;       // CV_8UC3 BGR, lit, gamma-encoded; empty for RenderChannels::geometry
   cv::Mat depth_m;     // CV_32F, depth along the optical axis, +inf for the sky
   cv::Mat object_ids;  // CV_32S, agent_render_id()..., servo::kGroundId, servo::kSkyId
   cv::Mat flow;        // CV_32FC2, CGF Eq. 1 (rotation included), normalised units per second
@@ -36,7 +41,8 @@ struct RenderedView {
 // A headless OpenGL 3.3 renderer through EGL: Mesa's surfaceless platform (llvmpipe on a
 // machine without a GPU) or, where there is one, the GPU through the device platform. It draws
 // lit, shadowed, procedurally textured worlds and, per pixel, the synthetic flow of CGF Eq. 1
-// from the depth, the object and the known relative velocities. One renderer per thread.
+// from the depth, the object and the known relative velocities. A renderer draws on one thread
+// at a time; renderers on several threads draw at once.
 class Renderer {
  public:
   // Throws std::runtime_error saying what failed when no EGL display or OpenGL 3.3 context can
@@ -47,7 +53,9 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   // Renders the world as it is now from `view`. Reuses out's buffers when the size is the same.
-  void render(const World& world, const View& view, RenderedView& out);
+  // The geometry channels are the same to the last bit whichever `channels` draws them.
+  void render(const World& world, const View& view, RenderedView& out,
+              RenderChannels channels = RenderChannels::all);
 
   // What EGL and OpenGL report, e.g. "OpenGL 4.5 (Core Profile) Mesa 22.3.6, llvmpipe".
   const std::string& description() const;
