@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim_camera/renderer.hpp"
 
 namespace {
 
@@ -60,6 +61,9 @@ struct Row {
 [[noreturn]] void measure(int agents, int resolution, int threads, int steps, int fd) {
   int status = 0;
   try {
+    if (threads != 1 && agents > 1) {
+      sim_camera::rasterize_on_calling_threads();  // as flowsteer sim does
+    }
     eval::SimOptions options;
     options.steps = steps;
     options.threads = threads;

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <initializer_list>
 #include <iterator>
 #include <limits>
@@ -175,6 +176,41 @@ Mesh box_mesh() {
   return m;
 }
 
+// A mesh's vertex positions and triangles on the CPU side, for the geometry batch.
+struct Shape {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<GLuint> indices;
+};
+
+// The box's triangles with each corner one vertex, for the geometry program (no normals): the
+// same triangles, from an eighth of the vertices to transform.
+Shape box_shape() {
+  Shape shape;
+  std::vector<Eigen::Vector3f>& v = shape.positions;
+  for (int k = 0; k < 8; ++k) {
+    v.emplace_back((k & 1) != 0 ? 0.5F : -0.5F, (k & 2) != 0 ? 0.5F : -0.5F,
+                   (k & 4) != 0 ? 1.0F : 0.0F);
+  }
+  // box_mesh's faces in its order: corner (u, v) of a face on `axis` at `side`.
+  std::vector<GLuint>& idx = shape.indices;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const int side : {0, 1}) {
+      const int a = (axis + 1) % 3;
+      const int b = (axis + 2) % 3;
+      const int du[4] = {0, 1, 1, 0};
+      const int dv[4] = {0, 0, 1, 1};
+      GLuint corner[4];
+      for (int k = 0; k < 4; ++k) {
+        corner[k] = static_cast<GLuint>((side << axis) | (du[k] << a) | (dv[k] << b));
+      }
+      for (const int k : {0, 1, 2, 0, 2, 3}) {
+        idx.push_back(corner[k]);
+      }
+    }
+  }
+  return shape;
+}
+
 // A unit cylinder: radius 1, from z = 0 to 1, with its top cap.
 Mesh cylinder_mesh() {
   constexpr int kSegments = 48;
@@ -208,6 +244,41 @@ Mesh cylinder_mesh() {
   Mesh m;
   m.upload(v, idx);
   return m;
+}
+
+// cylinder_mesh's triangles with the rings' points shared, for the geometry program (no
+// normals): a third of the vertices. The ring's last point is computed at 2π as cylinder_mesh
+// computes it, not taken as its first, so that every vertex is the same to the last bit.
+Shape cylinder_shape() {
+  constexpr int kSegments = 48;
+  Shape shape;
+  std::vector<Eigen::Vector3f>& v = shape.positions;
+  for (int k = 0; k <= kSegments; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / kSegments;
+    const auto x = static_cast<float>(std::cos(a));
+    const auto y = static_cast<float>(std::sin(a));
+    v.emplace_back(x, y, 0.0F);  // 2k: bottom
+    v.emplace_back(x, y, 1.0F);  // 2k + 1: top
+  }
+  const auto centre = static_cast<GLuint>(v.size());
+  v.emplace_back(0.0F, 0.0F, 1.0F);
+  std::vector<GLuint>& idx = shape.indices;
+  for (GLuint k = 0; k < kSegments; ++k) {
+    const GLuint b0 = 2 * k;
+    const GLuint t0 = b0 + 1;
+    const GLuint b1 = b0 + 2;
+    const GLuint t1 = b0 + 3;
+    for (const GLuint i : {b0, b1, t1, b0, t1, t0, centre, t0, t1}) {
+      idx.push_back(i);
+    }
+  }
+  return shape;
+}
+
+// ground_mesh's quad.
+Shape ground_shape() {
+  return {{{-0.5F, -0.5F, 0}, {0.5F, -0.5F, 0}, {0.5F, 0.5F, 0}, {-0.5F, 0.5F, 0}},
+          {0, 1, 2, 0, 2, 3}};
 }
 
 // The ground: [-0.5, 0.5]² at z = 0.
@@ -329,39 +400,153 @@ struct GeometryUniforms {
   GLint camera_omega;
 };
 
-// One body of the geometry program's instanced draws, as its vertex attributes read it.
-struct Instance {
-  std::array<float, 16> model;  // column-major
-  std::array<float, 3> relative_velocity;
-  std::int32_t id;
-};
-
-// Consecutive instances of one mesh, drawn by one call.
-struct InstanceRun {
-  const Mesh* mesh;
-  std::size_t first;
-  std::size_t count;
-};
-
-// Points a mesh's vertex array at instances from `first` on in the bound GL_ARRAY_BUFFER.
-void point_at_instances(std::size_t first) {
-  const auto at = [first](std::size_t member) {
-    return reinterpret_cast<const void*>(first * sizeof(Instance) + member);
-  };
-  for (GLuint column = 0; column < 4; ++column) {
-    glEnableVertexAttribArray(2 + column);
-    glVertexAttribPointer(2 + column, 4, GL_FLOAT, GL_FALSE, sizeof(Instance),
-                          at(offsetof(Instance, model) + 4 * column * sizeof(float)));
-    glVertexAttribDivisor(2 + column, 1);
+// The view's frustum as planes in the world frame, for leaving out bodies it cannot see: a
+// crowd's view transforms the people in front, not the whole crowd. The test is conservative (a
+// box around the body against each plane), so what it leaves out would have drawn no pixel.
+class Frustum {
+ public:
+  Frustum(const Eigen::Matrix4f& projection, const Eigen::Matrix4f& world_to_camera) {
+    const Eigen::Matrix4d clip = projection.cast<double>() * world_to_camera.cast<double>();
+    // -w ≤ x, y ≤ w and -w ≤ z (the near plane); the far plane is past any world.
+    const int rows[5][2] = {{0, 1}, {0, -1}, {1, 1}, {1, -1}, {2, 1}};
+    for (int k = 0; k < 5; ++k) {
+      planes_[k] = clip.row(3).transpose() + rows[k][1] * clip.row(rows[k][0]).transpose();
+    }
   }
-  glEnableVertexAttribArray(6);
-  glVertexAttribPointer(6, 3, GL_FLOAT, GL_FALSE, sizeof(Instance),
-                        at(offsetof(Instance, relative_velocity)));
-  glVertexAttribDivisor(6, 1);
-  glEnableVertexAttribArray(7);
-  glVertexAttribIPointer(7, 1, GL_INT, sizeof(Instance), at(offsetof(Instance, id)));
-  glVertexAttribDivisor(7, 1);
-}
+
+  // Whether any point of the mesh box centre ± half (mesh units) under `model` may be in view.
+  bool may_see(const Eigen::Matrix4f& model, const Eigen::Vector3d& centre,
+               const Eigen::Vector3d& half) const {
+    const Eigen::Matrix4d m = model.cast<double>();
+    const Eigen::Vector4d c = m * centre.homogeneous();
+    for (const Eigen::Vector4d& plane : planes_) {
+      // The box's reach along the plane's normal: Σ |n · column| · half.
+      const double reach = std::abs(plane.head<3>().dot(m.col(0).head<3>())) * half.x() +
+                           std::abs(plane.head<3>().dot(m.col(1).head<3>())) * half.y() +
+                           std::abs(plane.head<3>().dot(m.col(2).head<3>())) * half.z();
+      if (plane.dot(c) + reach < 0.0) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+ private:
+  std::array<Eigen::Vector4d, 5> planes_;
+};
+
+// The id that marks a body not to draw in this view (its own camera's, or out of view).
+constexpr std::int32_t kHiddenId = std::numeric_limits<std::int32_t>::min();
+constexpr GLint kPoseTextureUnit = 2;
+constexpr GLint kIdTextureUnit = 3;
+
+// Every body of a world and the ground in one vertex and index buffer, drawn by one call: each
+// vertex names its body, whose model matrix, velocity relative to the camera and id the vertex
+// shader reads from buffer textures filled for each view. llvmpipe's cost per draw call (and
+// per instance of an instanced one) far outweighs its cost per vertex: a crowd's view is one
+// draw rather than one per person.
+struct GeometryBatch {
+  struct BatchVertex {
+    float position[3];
+    std::int32_t body;
+  };
+
+  GLuint vao = 0;
+  GLuint vbo = 0;
+  GLuint ebo = 0;
+  GLuint pose_buffer = 0;
+  GLuint pose_texture = 0;
+  GLuint id_buffer = 0;
+  GLuint id_texture = 0;
+  GLsizei index_count = 0;
+  std::uint64_t world_serial = 0;  // the world whose bodies the buffers hold; 0: none yet
+  // This view's bodies: the model matrix's columns and the relative velocity (RGBA texels).
+  std::vector<std::array<float, 20>> poses;
+  std::vector<std::int32_t> ids;
+  std::vector<BatchVertex> vertices;
+  std::vector<GLuint> indices;
+
+  void create() {
+    glGenVertexArrays(1, &vao);
+    glGenBuffers(1, &vbo);
+    glGenBuffers(1, &ebo);
+    glGenBuffers(1, &pose_buffer);
+    glGenBuffers(1, &id_buffer);
+    glGenTextures(1, &pose_texture);
+    glGenTextures(1, &id_texture);
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(BatchVertex), nullptr);
+    glEnableVertexAttribArray(1);
+    glVertexAttribIPointer(1, 1, GL_INT, sizeof(BatchVertex),
+                           reinterpret_cast<const void*>(offsetof(BatchVertex, body)));
+    glBindVertexArray(0);
+  }
+
+  void release() {
+    glDeleteTextures(1, &id_texture);
+    glDeleteTextures(1, &pose_texture);
+    glDeleteBuffers(1, &id_buffer);
+    glDeleteBuffers(1, &pose_buffer);
+    glDeleteBuffers(1, &ebo);
+    glDeleteBuffers(1, &vbo);
+    glDeleteVertexArrays(1, &vao);
+  }
+
+  // The bodies' shapes in drawing order, once per world: bodies are added and removed only
+  // with a new world.
+  void build(std::uint64_t serial, const std::vector<const Shape*>& shapes) {
+    vertices.clear();
+    indices.clear();
+    for (std::size_t body = 0; body < shapes.size(); ++body) {
+      const auto first = static_cast<GLuint>(vertices.size());
+      for (const Eigen::Vector3f& p : shapes[body]->positions) {
+        vertices.push_back({{p.x(), p.y(), p.z()}, static_cast<std::int32_t>(body)});
+      }
+      for (const GLuint index : shapes[body]->indices) {
+        indices.push_back(first + index);
+      }
+    }
+    glBindVertexArray(vao);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(BatchVertex)),
+                 vertices.data(), GL_STATIC_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLuint)),
+                 indices.data(), GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    index_count = static_cast<GLsizei>(indices.size());
+    world_serial = serial;
+  }
+
+  void add(const Eigen::Matrix4f& model, const Eigen::Vector3f& relative_velocity,
+           std::int32_t id) {
+    std::array<float, 20> pose{};
+    std::copy(model.data(), model.data() + 16, pose.begin());
+    std::copy(relative_velocity.data(), relative_velocity.data() + 3, pose.begin() + 16);
+    poses.push_back(pose);
+    ids.push_back(id);
+  }
+
+  void draw() const {
+    upload(pose_buffer, pose_texture, GL_RGBA32F, kPoseTextureUnit, poses);
+    upload(id_buffer, id_texture, GL_R32I, kIdTextureUnit, ids);
+    glBindVertexArray(vao);
+    glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
+    glBindVertexArray(0);
+  }
+
+  template <typename Row>
+  static void upload(GLuint buffer, GLuint texture, GLenum format, GLint unit,
+                     const std::vector<Row>& rows) {
+    glBindBuffer(GL_TEXTURE_BUFFER, buffer);
+    glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(rows.size() * sizeof(Row)), rows.data(),
+                 GL_STREAM_DRAW);
+    glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
+    glBindTexture(GL_TEXTURE_BUFFER, texture);
+    glTexBuffer(GL_TEXTURE_BUFFER, format, buffer);
+  }
+};
 
 // The point lights as the scene program's uniforms hold them: fixed lights, then carried ones.
 // Elements past `count` stay zero, so equal values mean an equal upload.
@@ -385,6 +570,7 @@ struct PointUniforms {
 // What one draw needs: the shape, its pose and size, how it looks, who it is and how it moves.
 struct DrawItem {
   const Mesh* mesh;
+  bool hidden;  // from this view: its own camera's body (it still casts a shadow)
   Eigen::Matrix4f model;
   Material material;  // a copy: moving obstacles' poses are temporaries
   std::int32_t id;
@@ -407,6 +593,11 @@ struct Renderer::Impl {
   Mesh box;
   Mesh cylinder;
   Mesh ground;
+  Shape box_positions = box_shape();
+  Shape cylinder_positions = cylinder_shape();
+  Shape ground_positions = ground_shape();
+  GeometryBatch batch;
+  std::vector<const Shape*> batch_shapes;
   GLuint fbo = 0;
   std::array<GLuint, 5> renderbuffers{};  // color, id, flow, depth, depth-stencil
   int fbo_width = 0;
@@ -418,9 +609,6 @@ struct Renderer::Impl {
   double shadow_time_s = -1.0;
   Eigen::Matrix4f light_view_projection = Eigen::Matrix4f::Identity();
   std::vector<DrawItem> items;
-  GLuint instance_buffer = 0;
-  std::vector<Instance> instances;
-  std::vector<InstanceRun> runs;
 
   ~Impl() {
     if (context != EGL_NO_CONTEXT) {
@@ -428,6 +616,7 @@ struct Renderer::Impl {
       box.release();
       cylinder.release();
       ground.release();
+      batch.release();
       glDeleteRenderbuffers(static_cast<GLsizei>(renderbuffers.size()), renderbuffers.data());
       glDeleteFramebuffers(1, &fbo);
       glDeleteTextures(1, &shadow_texture);
@@ -436,7 +625,6 @@ struct Renderer::Impl {
       glDeleteProgram(scene_program);
       glDeleteProgram(shadow_program);
       glDeleteProgram(geometry_program);
-      glDeleteBuffers(1, &instance_buffer);
       eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
       eglDestroyContext(display, context);
     }
@@ -538,7 +726,10 @@ struct Renderer::Impl {
     geometry = {.world_to_camera = at("u_world_to_camera"),
                 .projection = at("u_projection"),
                 .camera_omega = at("u_camera_omega")};
-    glGenBuffers(1, &instance_buffer);
+    glUseProgram(geometry_program);
+    glUniform1i(at("u_poses"), kPoseTextureUnit);
+    glUniform1i(at("u_ids"), kIdTextureUnit);
+    glUniform1i(at("u_hidden_id"), kHiddenId);
     // The samplers' texture units never change.
     glUseProgram(scene_program);
     glUniform1i(glGetUniformLocation(scene_program, "u_shadow_map"), 0);
@@ -546,6 +737,7 @@ struct Renderer::Impl {
     box = box_mesh();
     cylinder = cylinder_mesh();
     ground = ground_mesh();
+    batch.create();
     glGenTextures(1, &shadow_texture);
     glBindTexture(GL_TEXTURE_2D, shadow_texture);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, kShadowMapSize, kShadowMapSize, 0,
@@ -616,13 +808,11 @@ struct Renderer::Impl {
       const AgentState& s = world.agents()[i];
       const Eigen::Vector2d v = s.velocity_mps();
       items.push_back({&cylinder,
+                       self && *self == i,
                        model_matrix(s.position_m, 0.0, {a.radius_m, a.radius_m, a.height_m}),
                        a.material,
                        agent_render_id(i),
                        {v.x(), v.y(), 0.0}});
-      if (self && *self == i) {
-        items.back().mesh = nullptr;  // casts a shadow, but its own camera does not see it
-      }
     }
     auto add_solid = [&](const Solid& s, std::int32_t id, const Eigen::Vector2d& velocity) {
       const bool box_shape = s.shape == Solid::Shape::box;
@@ -630,6 +820,7 @@ struct Renderer::Impl {
                                         ? Eigen::Vector3d(s.size_m.x(), s.size_m.y(), s.height_m)
                                         : Eigen::Vector3d(s.radius_m, s.radius_m, s.height_m);
       items.push_back({box_shape ? &box : &cylinder,
+                       false,
                        model_matrix(s.centre_m, s.yaw_rad, scale),
                        s.material,
                        id,
@@ -885,7 +1076,7 @@ struct Renderer::Impl {
     };
     collect_items(world, view.self);
     for (const DrawItem& item : items) {
-      if (item.mesh != nullptr) {
+      if (!item.hidden) {
         draw(*item.mesh, item.model, item.material, item.id, item.velocity_mps);
       }
     }
@@ -894,47 +1085,36 @@ struct Renderer::Impl {
   }
 
   // Ids, flow and depth only, for synthetic perception: no lights, no shadow map, no texture.
-  // Bodies are drawn in the lit scene's order, each run of one mesh by one instanced call: a
-  // crowd's view costs a few draw calls rather than one per person.
+  // The bodies in the lit scene's order, then the ground, as one batch.
   void draw_geometry(const World& world, const View& view, const CameraPose& pose) {
     glUseProgram(geometry_program);
     glUniformMatrix4fv(geometry.world_to_camera, 1, GL_FALSE, pose.world_to_camera.data());
     glUniformMatrix4fv(geometry.projection, 1, GL_FALSE, pose.projection.data());
     glUniform3f(geometry.camera_omega, static_cast<float>(pose.omega.x()),
                 static_cast<float>(pose.omega.y()), static_cast<float>(pose.omega.z()));
-    instances.clear();
-    runs.clear();
-    auto add = [&](const Mesh* mesh, const Eigen::Matrix4f& model, std::int32_t id,
-                   const Eigen::Vector3d& velocity) {
-      const Eigen::Vector3f relative =
-          (pose.rotation * (velocity - pose.velocity_mps)).cast<float>();
-      Instance instance{};
-      std::copy(model.data(), model.data() + 16, instance.model.begin());
-      instance.relative_velocity = {relative.x(), relative.y(), relative.z()};
-      instance.id = id;
-      if (runs.empty() || runs.back().mesh != mesh) {
-        runs.push_back({mesh, instances.size(), 0});
-      }
-      ++runs.back().count;
-      instances.push_back(instance);
-    };
     collect_items(world, view.self);
-    for (const DrawItem& item : items) {
-      if (item.mesh != nullptr) {
-        add(item.mesh, item.model, item.id, item.velocity_mps);
+    if (batch.world_serial != world.serial()) {
+      batch_shapes.clear();
+      for (const DrawItem& item : items) {
+        batch_shapes.push_back(item.mesh == &box ? &box_positions : &cylinder_positions);
       }
+      batch_shapes.push_back(&ground_positions);
+      batch.build(world.serial(), batch_shapes);
     }
-    add(&ground, ground_model(world, view), servo::kGroundId, Eigen::Vector3d::Zero());
-    glBindBuffer(GL_ARRAY_BUFFER, instance_buffer);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(instances.size() * sizeof(Instance)),
-                 instances.data(), GL_STREAM_DRAW);
-    for (const InstanceRun& run : runs) {
-      glBindVertexArray(run.mesh->vao);
-      point_at_instances(run.first);
-      glDrawElementsInstanced(GL_TRIANGLES, run.mesh->index_count, GL_UNSIGNED_INT, nullptr,
-                              static_cast<GLsizei>(run.count));
+    const Frustum frustum(pose.projection, pose.world_to_camera);
+    batch.poses.clear();
+    batch.ids.clear();
+    auto add = [&](const Eigen::Matrix4f& model, std::int32_t id, const Eigen::Vector3d& velocity) {
+      batch.add(model, (pose.rotation * (velocity - pose.velocity_mps)).cast<float>(), id);
+    };
+    for (const DrawItem& item : items) {
+      // Both unit meshes lie within [-1, 1]² × [0, 1].
+      const bool seen =
+          !item.hidden && frustum.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5});
+      add(item.model, seen ? item.id : kHiddenId, item.velocity_mps);
     }
-    glBindVertexArray(0);
+    add(ground_model(world, view), servo::kGroundId, Eigen::Vector3d::Zero());
+    batch.draw();
   }
 
   static Eigen::Matrix4f ground_model(const World& world, const View& view) {
@@ -976,6 +1156,10 @@ struct Renderer::Impl {
     }
   }
 };
+
+void rasterize_on_calling_threads() {
+  setenv("LP_NUM_THREADS", "0", 0);
+}
 
 View View::of_agent(const World& world, std::size_t agent) {
   const AgentState& s = world.agents().at(agent);

@@ -127,24 +127,35 @@ void main() {
 }
 )";
 
-// Geometry only: no lights, no texture, no colour written. Instanced: each instance is one
-// body, with its model matrix, id and velocity relative to the camera.
+// Geometry only: no lights, no texture, no colour written. Every body is in one batch; each
+// vertex names its body, whose model matrix and velocity relative to the camera (five RGBA
+// texels) and id this view's buffer textures hold. A body whose id is u_hidden_id is not seen:
+// its vertices go behind the near plane.
 inline constexpr const char* kGeometryVertex = R"(#version 330 core
 layout(location = 0) in vec3 a_position;
-layout(location = 2) in mat4 a_model;  // locations 2 to 5
-layout(location = 6) in vec3 a_relative_velocity;
-layout(location = 7) in int a_id;
+layout(location = 1) in int a_body;
+uniform samplerBuffer u_poses;
+uniform isamplerBuffer u_ids;
+uniform int u_hidden_id;
 uniform mat4 u_world_to_camera;
 uniform mat4 u_projection;
 out vec3 v_camera;
 flat out int v_id;
 flat out vec3 v_relative_velocity;
 void main() {
+  v_id = texelFetch(u_ids, a_body).r;
+  int texel = 5 * a_body;
+  v_relative_velocity = texelFetch(u_poses, texel + 4).xyz;
+  if (v_id == u_hidden_id) {
+    v_camera = vec3(0.0);
+    gl_Position = vec4(0.0, 0.0, -2.0, 1.0);
+    return;
+  }
+  mat4 model = mat4(texelFetch(u_poses, texel), texelFetch(u_poses, texel + 1),
+                    texelFetch(u_poses, texel + 2), texelFetch(u_poses, texel + 3));
   // As the scene program computes it, so that both give the same channels to the last bit.
-  vec4 world = a_model * vec4(a_position, 1.0);
+  vec4 world = model * vec4(a_position, 1.0);
   v_camera = (u_world_to_camera * world).xyz;
-  v_id = a_id;
-  v_relative_velocity = a_relative_velocity;
   gl_Position = u_projection * vec4(v_camera, 1.0);
 }
 )";

@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim_camera/renderer.hpp"
 
 namespace flowsteer::cli {
 
@@ -70,6 +71,9 @@ int run_sim(const SimCommand& command) {
   }
   options.video = command.video;
   options.threads = command.threads;
+  if (command.threads != 1 && world.agents.size() > 1) {
+    sim_camera::rasterize_on_calling_threads();
+  }
   options.progress_bar = isatty(STDERR_FILENO) != 0;
   std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size() << " agents) -> "
             << command.out_dir << "\n";

@@ -38,6 +38,12 @@ struct RenderedView {
   cv::Mat flow;        // CV_32FC2, CGF Eq. 1 (rotation included), normalised units per second
 };
 
+// For a process that renders on several threads of its own (agents stepped in parallel): has
+// Mesa's software rasteriser (llvmpipe, where there is no GPU) draw each view on the calling
+// thread rather than hand it to threads of its own, which would only contend with the caller's.
+// Takes effect before the process's first renderer only; an LP_NUM_THREADS the user set is kept.
+void rasterize_on_calling_threads();
+
 // A headless OpenGL 3.3 renderer through EGL: Mesa's surfaceless platform (llvmpipe on a
 // machine without a GPU) or, where there is one, the GPU through the device platform. It draws
 // lit, shadowed, procedurally textured worlds and, per pixel, the synthetic flow of CGF Eq. 1
