@@ -236,32 +236,57 @@ std::vector<std::filesystem::path> expand_glob(const std::string& pattern) {
   return paths;
 }
 
+namespace {
+
+std::string size_text(cv::Size size) {
+  return std::to_string(size.width) + "x" + std::to_string(size.height);
+}
+
+// The size most views with the board share (the first such view's on a tie): one odd image in
+// a folder, such as a sample without the board that sorts first, does not set the camera's size.
+cv::Size most_common_size(const std::vector<cv::Size>& sizes) {
+  cv::Size best;
+  long best_count = 0;
+  for (const cv::Size& size : sizes) {
+    const long count = std::count(sizes.begin(), sizes.end(), size);
+    if (count > best_count) {
+      best = size;
+      best_count = count;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 IntrinsicsResult calibrate_from_images(const std::vector<std::filesystem::path>& images,
                                        const BoardDetector& detector,
                                        const IntrinsicsOptions& options) {
-  std::vector<CalibrationView> views;
+  std::vector<CalibrationView> found;
+  std::vector<cv::Size> sizes;  // of the views in `found`
   std::vector<RejectedView> rejected;
-  cv::Size size;
   for (const std::filesystem::path& path : images) {
     const cv::Mat image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
     if (image.empty()) {
       rejected.push_back({path.string(), "cannot be read as an image"});
       continue;
     }
-    if (size.empty()) {
-      size = image.size();
-    } else if (image.size() != size) {
-      rejected.push_back({path.string(), "is " + std::to_string(image.cols) + "x" +
-                                             std::to_string(image.rows) + ", the first image " +
-                                             std::to_string(size.width) + "x" +
-                                             std::to_string(size.height)});
-      continue;
-    }
     std::string why;
     if (auto board = detector.detect(image, why)) {
-      views.push_back({path.string(), std::move(*board)});
+      found.push_back({path.string(), std::move(*board)});
+      sizes.push_back(image.size());
     } else {
       rejected.push_back({path.string(), why});
+    }
+  }
+  const cv::Size size = most_common_size(sizes);
+  std::vector<CalibrationView> views;
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    if (sizes[i] == size) {
+      views.push_back(std::move(found[i]));
+    } else {
+      rejected.push_back({found[i].name, "is " + size_text(sizes[i]) + ", most views with the " +
+                                             "board are " + size_text(size)});
     }
   }
   return calibrate_board_views(views, std::move(rejected), size, detector.spec(),

@@ -25,7 +25,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints what was wrong (or the help); a bad command line is status 2 whatever CLI11's
+    // own code for it.
+    return app.exit(e) == 0 ? EXIT_SUCCESS : 2;
   }
   try {
     for (const cli::Subcommand& c : commands) {

@@ -1,6 +1,7 @@
 // Renders the calibration targets the command tests run `flowsteer calibrate` on, and checks
 // what the command wrote against the truth the targets were rendered with.
-//   calibration_views render DIR                 DIR/board/view_NN.png, DIR/floor/floor.png and
+//   calibration_views render DIR                 DIR/board/view_NN.png and left.png (no board,
+//                                                another size), DIR/floor/floor.png and
 //                                                true_camera.yaml, DIR/blank/blank_N.png; an
 //                                                empty DIR/out for the commands' outputs
 //   calibration_views check-intrinsics CAMERA_INFO REPORT
@@ -52,6 +53,9 @@ int render(const fs::path& dir) {
     std::snprintf(name, sizeof name, "view_%02d.png", index++);
     write_png(dir / "board" / name, distorted.render(standing, pose));
   }
+  // As in OpenCV's sample folder, where left.jpg (612x459, no board) sorts before the views: the
+  // camera's size is the views' with the board, not the first image's.
+  write_png(dir / "board" / "left.png", cv::Mat(459, 612, CV_8UC1, cv::Scalar(128)));
   // Looking away from the board: no board in these.
   for (int k = 0; k < 3; ++k) {
     write_png(dir / "blank" / ("blank_" + std::to_string(k) + ".png"),
@@ -87,6 +91,10 @@ int check_intrinsics(const fs::path& file, const fs::path& report) {
     return 1;
   }
   ok = within("RMS px", std::stod(match[1]), 0.0, 0.3) && ok;
+  if (text.find("left.png: ") == std::string::npos) {
+    std::cout << report.string() << " does not report left.png as rejected\n";
+    ok = false;
+  }
   return ok ? 0 : 1;
 }
 
