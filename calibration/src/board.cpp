@@ -21,6 +21,9 @@ constexpr const char* kFormats =
 
 // A ChArUco view needs this many corners to constrain a pose (and a calibration) reliably.
 constexpr int kMinCharucoCorners = 8;
+// More corners (or squares) a side than any camera resolves on a printed board; the bound keeps
+// the board's corner count and the detector's model of it small.
+constexpr int kMaxBoardSide = 100;
 
 struct Dictionary {
   const char* name;
@@ -78,7 +81,8 @@ const Dictionary* find_dictionary(const std::string& name) {
   throw std::invalid_argument("board '" + text + "': " + why + " (expected " + kFormats + ")");
 }
 
-int whole(const std::string& text, const std::string& part, const char* what, int minimum) {
+int whole(const std::string& text, const std::string& part, const char* what, int minimum,
+          int maximum) {
   int value = 0;
   const auto [end, error] = std::from_chars(part.data(), part.data() + part.size(), value);
   if (error != std::errc() || end != part.data() + part.size()) {
@@ -86,6 +90,9 @@ int whole(const std::string& text, const std::string& part, const char* what, in
   }
   if (value < minimum) {
     bad(text, std::string(what) + " must be at least " + std::to_string(minimum) + ", got " + part);
+  }
+  if (value > maximum) {
+    bad(text, std::string(what) + " must be at most " + std::to_string(maximum) + ", got " + part);
   }
   return value;
 }
@@ -122,8 +129,8 @@ BoardSpec BoardSpec::parse(const std::string& text) {
   }
   // A chessboard needs 2 inner corners each way to tell rows from columns; a ChArUco board
   // needs 2 squares each way to have an inner corner at all.
-  spec.cols = whole(text, size[0], "COLS", 2);
-  spec.rows = whole(text, size[1], "ROWS", 2);
+  spec.cols = whole(text, size[0], "COLS", 2, kMaxBoardSide);
+  spec.rows = whole(text, size[1], "ROWS", 2, kMaxBoardSide);
   spec.square_m = length(text, parts[2], "SQUARE_M");
   if (spec.kind == Kind::charuco) {
     spec.marker_m = length(text, parts[3], "MARKER_M");
@@ -182,15 +189,19 @@ BoardDetector::BoardDetector(BoardSpec spec) : spec_(std::move(spec)) {
   if (dictionary == nullptr) {
     throw std::invalid_argument("board " + spec_.text() + ": unknown dictionary");
   }
-  charuco_ = cv::aruco::CharucoBoard::create(
-      spec_.cols, spec_.rows, static_cast<float>(spec_.square_m),
-      static_cast<float>(spec_.marker_m), cv::aruco::getPredefinedDictionary(dictionary->id));
-  const auto markers = static_cast<std::size_t>(spec_.cols * spec_.rows / 2);
-  if (charuco_->dictionary->bytesList.rows < static_cast<int>(markers)) {
+  // Checked before the board is made: OpenCV makes one marker per white square whether or not
+  // the dictionary has that many.
+  const cv::Ptr<cv::aruco::Dictionary> markers_dictionary =
+      cv::aruco::getPredefinedDictionary(dictionary->id);
+  const int markers = spec_.cols * spec_.rows / 2;
+  if (markers_dictionary->bytesList.rows < markers) {
     throw std::invalid_argument("board " + spec_.text() + ": needs " + std::to_string(markers) +
                                 " markers, " + spec_.dictionary + " has only " +
-                                std::to_string(charuco_->dictionary->bytesList.rows));
+                                std::to_string(markers_dictionary->bytesList.rows));
   }
+  charuco_ =
+      cv::aruco::CharucoBoard::create(spec_.cols, spec_.rows, static_cast<float>(spec_.square_m),
+                                      static_cast<float>(spec_.marker_m), markers_dictionary);
 }
 
 BoardDetector::~BoardDetector() = default;

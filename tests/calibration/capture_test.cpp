@@ -182,6 +182,23 @@ TEST(BoardSpec, ParsesAndExplainsBadSpecs) {
             std::string::npos);
 }
 
+// Found by fuzz/board_spec (tests/fuzz/regressions/board_spec/huge_charuco.txt): a board of
+// 599999 columns was accepted and its detector took minutes to build before it was refused.
+TEST(BoardSpec, ABoardOfMoreThanAHundredCornersASideIsRefused) {
+  try {
+    BoardSpec::parse("charuco:599999x7:0.04:0.02:DICT_APRILTAG_36h11");
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("COLS must be at most 100, got 599999"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(BoardSpec::parse("chessboard:100x100:0.01").corner_count(), 10000);
+  EXPECT_THROW(BoardSpec::parse("chessboard:9x101:0.01"), std::invalid_argument);
+  // The dictionary's size is checked before the board is made.
+  EXPECT_THROW(BoardDetector(BoardSpec::parse("charuco:100x100:0.04:0.02:DICT_4X4_50")),
+               std::invalid_argument);
+}
+
 // A ChArUco board as OpenCV draws it (cv::aruco::CharucoBoard::draw), seen whole and with a
 // third of it covered: every visible corner found, at the drawn positions.
 TEST(BoardDetector, FindsChArUcoCornersAlsoWhenPartlyHidden) {
