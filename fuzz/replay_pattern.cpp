@@ -1,8 +1,8 @@
 // The replay source's image-sequence pattern (`camera.replay.path`, `flowsteer replay`): a glob
 // or a printf pattern, resolved to the files it names or refused with std::runtime_error. The
 // patterns are taken inside a scratch folder holding two small sequences, one numbered from 0
-// and one from 1; absolute patterns and those that climb out of it ("..") are skipped, so the
-// fuzzer does not walk the machine's file system.
+// and one from 1; absolute patterns and those that could climb out of it (a component starting with
+// '.') are skipped, so the fuzzer does not walk the machine's file system.
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -22,7 +22,9 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string pattern = flowsteer::fuzz::as_text(data, size);
-  if (pattern.starts_with('/') || pattern.find("..") != std::string::npos) {
+  // A component that starts with '.' can match "..", as ".*" does in a shell.
+  if (pattern.starts_with('/') || pattern.starts_with('.') ||
+      pattern.find("/.") != std::string::npos) {
     return 0;
   }
   const std::string path = (flowsteer::fuzz::scratch_dir() / pattern).string();

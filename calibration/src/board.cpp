@@ -24,6 +24,9 @@ constexpr int kMinCharucoCorners = 8;
 // More corners (or squares) a side than any camera resolves on a printed board; the bound keeps
 // the board's corner count and the detector's model of it small.
 constexpr int kMaxBoardSide = 100;
+// Squares and markers smaller than a printer prints; OpenCV takes lengths as floats, in which
+// far smaller ones are 0.
+constexpr double kMinLength_m = 1e-4;
 
 struct Dictionary {
   const char* name;
@@ -105,6 +108,9 @@ double length(const std::string& text, const std::string& part, const char* what
   }
   if (!(value > 0.0)) {
     bad(text, std::string(what) + " must be positive, got " + part);
+  }
+  if (value < kMinLength_m) {
+    bad(text, std::string(what) + " must be at least 0.0001 m, got " + part);
   }
   return value;
 }

@@ -199,6 +199,19 @@ TEST(BoardSpec, ABoardOfMoreThanAHundredCornersASideIsRefused) {
                std::invalid_argument);
 }
 
+// Found by fuzz/board_spec (tests/fuzz/regressions/board_spec/tiny_marker.txt): a marker of
+// 2e-50 m is 0 as OpenCV's float, and its assertion escaped as a cv::Exception.
+TEST(BoardSpec, LengthsBelowATenthOfAMillimetreAreRefused) {
+  try {
+    BoardSpec::parse("charuco:9x6:0.04:2e-50:DICT_APRILTAG_16h5");
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("MARKER_M must be at least 0.0001 m, got 2e-50"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // A ChArUco board as OpenCV draws it (cv::aruco::CharucoBoard::draw), seen whole and with a
 // third of it covered: every visible corner found, at the drawn positions.
 TEST(BoardDetector, FindsChArUcoCornersAlsoWhenPartlyHidden) {
