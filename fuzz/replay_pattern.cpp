@@ -2,7 +2,7 @@
 // or a printf pattern, resolved to the files it names or refused with std::runtime_error. The
 // patterns are taken inside a scratch folder holding two small sequences, one numbered from 0
 // and one from 1; absolute patterns and those that could climb out of it (a component starting with
-// '.') are skipped, so the fuzzer does not walk the machine's file system.
+// '.', escaped or not) are skipped, so the fuzzer does not walk the machine's file system.
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -22,9 +22,12 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string pattern = flowsteer::fuzz::as_text(data, size);
-  // A component that starts with '.' can match "..", as ".*" does in a shell.
-  if (pattern.starts_with('/') || pattern.starts_with('.') ||
-      pattern.find("/.") != std::string::npos) {
+  // A component that starts with '.' can match "..", as ".*" does in a shell, and so can one
+  // that starts with an escaped '.' ("\.*"): the check reads the pattern without backslashes.
+  std::string unescaped = pattern;
+  std::erase(unescaped, '\\');
+  if (unescaped.starts_with('/') || unescaped.starts_with('.') ||
+      unescaped.find("/.") != std::string::npos) {
     return 0;
   }
   const std::string path = (flowsteer::fuzz::scratch_dir() / pattern).string();
