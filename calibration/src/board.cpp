@@ -21,6 +21,12 @@ constexpr const char* kFormats =
 
 // A ChArUco view needs this many corners to constrain a pose (and a calibration) reliably.
 constexpr int kMinCharucoCorners = 8;
+// More corners (or squares) a side than any camera resolves on a printed board; the bound keeps
+// the board's corner count and the detector's model of it small.
+constexpr int kMaxBoardSide = 100;
+// Squares and markers smaller than a printer prints; OpenCV takes lengths as floats, in which
+// far smaller ones are 0.
+constexpr double kMinLength_m = 1e-4;
 
 struct Dictionary {
   const char* name;
@@ -78,7 +84,8 @@ const Dictionary* find_dictionary(const std::string& name) {
   throw std::invalid_argument("board '" + text + "': " + why + " (expected " + kFormats + ")");
 }
 
-int whole(const std::string& text, const std::string& part, const char* what, int minimum) {
+int whole(const std::string& text, const std::string& part, const char* what, int minimum,
+          int maximum) {
   int value = 0;
   const auto [end, error] = std::from_chars(part.data(), part.data() + part.size(), value);
   if (error != std::errc() || end != part.data() + part.size()) {
@@ -86,6 +93,9 @@ int whole(const std::string& text, const std::string& part, const char* what, in
   }
   if (value < minimum) {
     bad(text, std::string(what) + " must be at least " + std::to_string(minimum) + ", got " + part);
+  }
+  if (value > maximum) {
+    bad(text, std::string(what) + " must be at most " + std::to_string(maximum) + ", got " + part);
   }
   return value;
 }
@@ -98,6 +108,9 @@ double length(const std::string& text, const std::string& part, const char* what
   }
   if (!(value > 0.0)) {
     bad(text, std::string(what) + " must be positive, got " + part);
+  }
+  if (value < kMinLength_m) {
+    bad(text, std::string(what) + " must be at least 0.0001 m, got " + part);
   }
   return value;
 }
@@ -122,8 +135,8 @@ BoardSpec BoardSpec::parse(const std::string& text) {
   }
   // A chessboard needs 2 inner corners each way to tell rows from columns; a ChArUco board
   // needs 2 squares each way to have an inner corner at all.
-  spec.cols = whole(text, size[0], "COLS", 2);
-  spec.rows = whole(text, size[1], "ROWS", 2);
+  spec.cols = whole(text, size[0], "COLS", 2, kMaxBoardSide);
+  spec.rows = whole(text, size[1], "ROWS", 2, kMaxBoardSide);
   spec.square_m = length(text, parts[2], "SQUARE_M");
   if (spec.kind == Kind::charuco) {
     spec.marker_m = length(text, parts[3], "MARKER_M");
@@ -182,15 +195,19 @@ BoardDetector::BoardDetector(BoardSpec spec) : spec_(std::move(spec)) {
   if (dictionary == nullptr) {
     throw std::invalid_argument("board " + spec_.text() + ": unknown dictionary");
   }
-  charuco_ = cv::aruco::CharucoBoard::create(
-      spec_.cols, spec_.rows, static_cast<float>(spec_.square_m),
-      static_cast<float>(spec_.marker_m), cv::aruco::getPredefinedDictionary(dictionary->id));
-  const auto markers = static_cast<std::size_t>(spec_.cols * spec_.rows / 2);
-  if (charuco_->dictionary->bytesList.rows < static_cast<int>(markers)) {
+  // Checked before the board is made: OpenCV makes one marker per white square whether or not
+  // the dictionary has that many.
+  const cv::Ptr<cv::aruco::Dictionary> markers_dictionary =
+      cv::aruco::getPredefinedDictionary(dictionary->id);
+  const int markers = spec_.cols * spec_.rows / 2;
+  if (markers_dictionary->bytesList.rows < markers) {
     throw std::invalid_argument("board " + spec_.text() + ": needs " + std::to_string(markers) +
                                 " markers, " + spec_.dictionary + " has only " +
-                                std::to_string(charuco_->dictionary->bytesList.rows));
+                                std::to_string(markers_dictionary->bytesList.rows));
   }
+  charuco_ =
+      cv::aruco::CharucoBoard::create(spec_.cols, spec_.rows, static_cast<float>(spec_.square_m),
+                                      static_cast<float>(spec_.marker_m), markers_dictionary);
 }
 
 BoardDetector::~BoardDetector() = default;

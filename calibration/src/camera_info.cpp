@@ -88,13 +88,18 @@ CameraInfo CameraInfo::monocular(std::string camera_name, camera_io::CameraModel
 
 CameraInfo read_camera_info(const std::filesystem::path& path, std::vector<std::string>& warnings) {
   const std::string source = path.string();
-  const YAML::Node root = base::load_yaml(base::read_text_file(source, "camera_info file"), source);
+  return parse_camera_info(base::read_text_file(source, "camera_info file"), source, warnings);
+}
+
+CameraInfo parse_camera_info(const std::string& yaml_text, const std::string& source,
+                             std::vector<std::string>& warnings) {
+  const YAML::Node root = base::load_yaml(yaml_text, source);
   const base::YamlReader reader(source);
   if (!root.IsMap()) {
     reader.fail(root, "", "expected a camera_info mapping (image_width, camera_matrix, ...)");
   }
   for (const auto& entry : root) {
-    const std::string key = entry.first.as<std::string>();
+    const std::string key = reader.key_text(entry.first, "");
     bool known = false;
     for (const char* k : kKeys) {
       known = known || key == k;

@@ -21,8 +21,11 @@ double degrees(double rad) {
 
 MountCalibration read_camera_mount(const std::filesystem::path& path) {
   const std::string source = path.string();
-  const YAML::Node root =
-      base::load_yaml(base::read_text_file(source, "camera mount file"), source);
+  return parse_camera_mount(base::read_text_file(source, "camera mount file"), source);
+}
+
+MountCalibration parse_camera_mount(const std::string& yaml_text, const std::string& source) {
+  const YAML::Node root = base::load_yaml(yaml_text, source);
   const base::YamlReader reader(source);
   if (!root.IsMap()) {
     reader.fail(root, "", "expected a camera mount mapping (height_m, pitch_rad, roll_rad)");

@@ -14,6 +14,9 @@
 namespace flowsteer::camera_io {
 namespace {
 
+// Wider than any frame number needs; see check_printf_pattern.
+constexpr int kMaxFieldWidth = 32;
+
 bool is_glob(const std::string& path) {
   return path.find_first_of("*?[") != std::string::npos;
 }
@@ -51,6 +54,17 @@ void check_printf_pattern(const std::string& pattern) {
       throw std::runtime_error("replay: image pattern '" + pattern +
                                "' must number frames with one %d (or %0Nd)");
     }
+    // Each name is formatted in full: a field width of millions would allocate gigabytes. The
+    // leading zeros are the zero-padding flag, not the width.
+    std::size_t k = i + 1;
+    while (k < j && pattern[k] == '0') {
+      ++k;
+    }
+    const std::string width = pattern.substr(k, j - k);
+    if (width.size() > 2 || (!width.empty() && std::stoi(width) > kMaxFieldWidth)) {
+      throw std::runtime_error("replay: image pattern '" + pattern + "': field width " + width +
+                               " is more than " + std::to_string(kMaxFieldWidth));
+    }
     ++conversions;
     i = j;
   }
@@ -60,7 +74,19 @@ void check_printf_pattern(const std::string& pattern) {
   }
 }
 
-std::vector<std::string> expand_pattern(const std::string& pattern) {
+}  // namespace
+
+bool is_image_sequence_pattern(const std::string& path) {
+  return is_glob(path) || is_printf_pattern(path);
+}
+
+std::vector<std::string> image_sequence_files(const std::string& pattern) {
+  // The C functions below would see the pattern only up to a NUL: a printf pattern cut there
+  // names the same file for every index, and the loop below would never end.
+  if (pattern.find('\0') != std::string::npos) {
+    throw std::runtime_error("replay: image pattern '" + pattern.substr(0, pattern.find('\0')) +
+                             "...' contains a NUL character");
+  }
   std::vector<std::string> files;
   if (is_glob(pattern)) {
     for (const std::filesystem::path& path : expand_glob(pattern)) {
@@ -80,15 +106,13 @@ std::vector<std::string> expand_pattern(const std::string& pattern) {
   return files;
 }
 
-}  // namespace
-
 ReplaySource::ReplaySource(const ReplayOptions& options)
     : path_(options.path), frame_rate_hz_(options.frame_rate_hz) {
   if (!(options.frame_rate_hz >= 0.0) || !std::isfinite(options.frame_rate_hz)) {
     throw std::invalid_argument("replay " + path_ + ": frame rate must be >= 0 Hz");
   }
-  if (is_glob(path_) || is_printf_pattern(path_)) {
-    images_ = expand_pattern(path_);
+  if (is_image_sequence_pattern(path_)) {
+    images_ = image_sequence_files(path_);
     if (images_.empty()) {
       throw std::runtime_error("replay: no image files match '" + path_ + "'");
     }

@@ -130,6 +130,9 @@ void require_serial_settings(const base::YamlReader& r, const YAML::Node& drive,
   if (!node) {
     r.fail(drive, field, "missing: the serial drive's settings (device, ticks_per_wheel_rev)");
   }
+  if (!node.IsMap()) {
+    r.fail(node, field, "expected a mapping (device, ticks_per_wheel_rev, ...)");
+  }
   if (!node["ticks_per_wheel_rev"]) {
     r.fail(node, field + ".ticks_per_wheel_rev", "missing: encoder ticks per wheel turn");
   }

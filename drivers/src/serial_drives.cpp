@@ -129,27 +129,35 @@ void ArduinoBridgeDrive::send_speeds(std::int64_t left, std::int64_t right) {
   }
 }
 
+std::optional<std::pair<std::int64_t, std::int64_t>> arduino_bridge::parse_encoder_reply(
+    std::string_view reply) {
+  if (reply.size() < 2 || !reply.ends_with("\r\n")) {
+    return std::nullopt;
+  }
+  std::int64_t values[2] = {0, 0};
+  const char* p = reply.data();
+  const char* const end = reply.data() + reply.size() - 2;
+  for (int i = 0; i < 2; ++i) {
+    const auto [next, ec] = std::from_chars(p, end, values[i]);
+    if (ec != std::errc() || (i == 0 ? !(next < end && *next == ' ') : next != end)) {
+      return std::nullopt;
+    }
+    p = next + 1;
+  }
+  return std::pair{values[0], values[1]};
+}
+
 std::pair<std::int64_t, std::int64_t> ArduinoBridgeDrive::read_encoders() {
   SerialPort& serial = port();
   serial.discard_input();
   serial.write_all(std::string("e\r"));
   const std::string reply = serial.read_line('\n', 64);
-  // Exactly "<int> <int>\r\n": anything else means the line is garbled or it is not the board.
-  std::int64_t values[2] = {0, 0};
-  const char* p = reply.data();
-  const char* end = reply.data() + reply.size();
-  bool ok = reply.size() >= 2 && reply.ends_with("\r\n");
-  end -= 2;
-  for (int i = 0; ok && i < 2; ++i) {
-    const auto [next, ec] = std::from_chars(p, end, values[i]);
-    ok = ec == std::errc() && (i == 0 ? next < end && *next == ' ' : next == end);
-    p = next + 1;
-  }
-  if (!ok) {
+  const auto values = arduino_bridge::parse_encoder_reply(reply);
+  if (!values) {
     throw DriveError(name_ + ": garbled reply to e: expected \"<left> <right>\\r\\n\", got \"" +
                      printable(reply) + "\"");
   }
-  return {values[0], values[1]};
+  return *values;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -217,27 +225,41 @@ void RoboClawDrive::send_acked(std::uint8_t command, std::span<const std::uint8_
   }
 }
 
+std::optional<roboclaw::EncoderCounts> roboclaw::parse_encoder_reply(
+    std::uint8_t address, std::span<const std::uint8_t> reply, std::string& why) {
+  if (reply.size() != 10) {
+    why = "encoder reply of " + std::to_string(reply.size()) + " bytes, expected 10";
+    return std::nullopt;
+  }
+  // The reply's CRC covers the request's address and command too.
+  std::vector<std::uint8_t> covered = {address, kReadEncoders};
+  covered.insert(covered.end(), reply.begin(), reply.begin() + 8);
+  const std::uint16_t computed = crc16(covered);
+  const auto received = static_cast<std::uint16_t>((reply[8] << 8) | reply[9]);
+  if (computed != received) {
+    char buf[80];
+    std::snprintf(buf, sizeof buf, "CRC mismatch in encoder reply: computed 0x%04x, got 0x%04x",
+                  computed, received);
+    why = buf;
+    return std::nullopt;
+  }
+  return EncoderCounts{static_cast<std::int32_t>(get_be32(reply.data())),
+                       static_cast<std::int32_t>(get_be32(reply.data() + 4))};
+}
+
 std::pair<std::int64_t, std::int64_t> RoboClawDrive::read_encoders() {
   const std::uint8_t request[2] = {config_.address, roboclaw::kReadEncoders};
   SerialPort& serial = port();
   serial.discard_input();
   serial.write_all(request);
   const std::vector<std::uint8_t> reply = serial.read_exact(10);
-  // The reply's CRC covers the request's address and command too.
-  std::vector<std::uint8_t> covered(request, request + 2);
-  covered.insert(covered.end(), reply.begin(), reply.begin() + 8);
-  const std::uint16_t computed = roboclaw::crc16(covered);
-  const std::uint16_t received = static_cast<std::uint16_t>((reply[8] << 8) | reply[9]);
-  if (computed != received) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, ": CRC mismatch in encoder reply: computed 0x%04x, got 0x%04x",
-                  computed, received);
-    throw DriveError(name_ + buf + " (" + hex_bytes(reply) + ")");
+  std::string why;
+  const auto counts = roboclaw::parse_encoder_reply(config_.address, reply, why);
+  if (!counts) {
+    throw DriveError(name_ + ": " + why + " (" + hex_bytes(reply) + ")");
   }
-  const auto m1 = static_cast<std::int32_t>(get_be32(reply.data()));
-  const auto m2 = static_cast<std::int32_t>(get_be32(reply.data() + 4));
-  return config_.left_is_m1 ? std::pair<std::int64_t, std::int64_t>{m1, m2}
-                            : std::pair<std::int64_t, std::int64_t>{m2, m1};
+  return config_.left_is_m1 ? std::pair<std::int64_t, std::int64_t>{counts->m1, counts->m2}
+                            : std::pair<std::int64_t, std::int64_t>{counts->m2, counts->m1};
 }
 
 void RoboClawDrive::configure() {

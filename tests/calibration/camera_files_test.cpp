@@ -5,6 +5,7 @@
 #include <fstream>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
@@ -168,6 +169,19 @@ TEST(CameraInfoFile, BadFilesNameTheFileAndField) {
   fs::remove_all(dir);
 }
 
+// Found by fuzz/camera_info_yaml (tests/fuzz/regressions/camera_info_yaml/complex_key.yaml): a
+// key that is a mapping ("? {...}") threw yaml-cpp's bad conversion, which named no field.
+TEST(CameraInfoFile, AKeyThatIsNotTextIsAnErrorAtTheKey) {
+  std::vector<std::string> warnings;
+  try {
+    flowsteer::calibration::parse_camera_info("image_width: 640\n? {camera_name: x}\n",
+                                              "fuzzed.yaml", warnings);
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "fuzzed.yaml:2:3: expected a text key, got a mapping");
+  }
+}
+
 TEST(CameraInfoFile, AFailedWriteLeavesTheOldFile) {
   const fs::path dir = scratch_dir();
   const fs::path file = dir / "camera.yaml";
@@ -196,6 +210,22 @@ TEST(CameraMountFile, WrittenThenReadBackIdentically) {
   EXPECT_EQ(back.mount.pitch_rad, m.mount.pitch_rad);
   EXPECT_EQ(back.roll_rad, m.roll_rad);
   fs::remove_all(dir);
+}
+
+// Found by fuzz/camera_mount_yaml (tests/fuzz/regressions/camera_mount_yaml/complex_key.yaml).
+TEST(CameraMountFile, AKeyThatIsNotTextIsAnErrorAtTheKey) {
+  auto error_for = [](const std::string& text) {
+    try {
+      flowsteer::calibration::parse_camera_mount(text, "fuzzed.yaml");
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error_for("? hgight_m:h_c rad: 2.0\n"),
+            "fuzzed.yaml:1:3: expected a text key, got a mapping");
+  EXPECT_EQ(error_for("height_m: 0.5\n? [pitch_rad]\n: 0.2\n"),
+            "fuzzed.yaml:2:3: expected a text key, got a sequence");
 }
 
 TEST(CameraMountFile, BadFilesNameTheField) {

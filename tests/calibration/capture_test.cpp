@@ -182,6 +182,51 @@ TEST(BoardSpec, ParsesAndExplainsBadSpecs) {
             std::string::npos);
 }
 
+// The message of the std::invalid_argument that parsing `text` (and, with `detector`, building
+// its detector) throws; "no error" when there is none.
+std::string board_error(const std::string& text, bool detector = false) {
+  try {
+    const BoardSpec spec = BoardSpec::parse(text);
+    if (detector) {
+      const BoardDetector built(spec);
+    }
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// Found by fuzz/board_spec (tests/fuzz/regressions/board_spec/huge_charuco.txt): a board of
+// 599999 columns was accepted and its detector took minutes to build before it was refused.
+TEST(BoardSpec, ABoardOfMoreThanAHundredCornersASideIsRefused) {
+  EXPECT_NE(board_error("charuco:599999x7:0.04:0.02:DICT_APRILTAG_36h11")
+                .find("COLS must be at most 100, got 599999"),
+            std::string::npos);
+  EXPECT_EQ(BoardSpec::parse("chessboard:100x100:0.01").corner_count(), 10000);
+  EXPECT_NE(board_error("chessboard:9x101:0.01").find("ROWS must be at most 100, got 101"),
+            std::string::npos);
+  // The dictionary's size is checked before the board is made.
+  EXPECT_NE(board_error("charuco:100x100:0.04:0.02:DICT_4X4_50", true)
+                .find("needs 5000 markers, DICT_4X4_50 has only 50"),
+            std::string::npos);
+}
+
+// Found by fuzz/board_spec (tests/fuzz/regressions/board_spec/tiny_marker.txt and
+// tiny_marker_fuzzed.txt): a marker of 2e-50 m is 0 as OpenCV's float, and its assertion escaped
+// as a cv::Exception.
+TEST(BoardSpec, LengthsBelowATenthOfAMillimetreAreRefused) {
+  EXPECT_NE(board_error("charuco:9x6:0.04:2e-50:DICT_APRILTAG_16h5")
+                .find("MARKER_M must be at least 0.0001 m, got 2e-50"),
+            std::string::npos);
+  const std::string tiny = "0." + std::string(86, '0') + "2";
+  EXPECT_NE(board_error("charuco:9x6:0.04:" + tiny + ":DICT_APRILTAG_16h5")
+                .find("MARKER_M must be at least 0.0001 m, got " + tiny),
+            std::string::npos);
+  EXPECT_NE(board_error("chessboard:9x6:0.00005").find("SQUARE_M must be at least 0.0001 m"),
+            std::string::npos);
+  EXPECT_EQ(board_error("charuco:9x6:0.0002:0.0001:DICT_4X4_50", true), "no error");
+}
+
 // A ChArUco board as OpenCV draws it (cv::aruco::CharucoBoard::draw), seen whole and with a
 // third of it covered: every visible corner found, at the drawn positions.
 TEST(BoardDetector, FindsChArUcoCornersAlsoWhenPartlyHidden) {

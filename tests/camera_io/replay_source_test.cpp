@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -207,6 +208,35 @@ TEST_F(Replay, PrintfPatternNeedsOneIntegerConversion) {
   options.path = (dir_ / "f%s.png").string();
   options.frame_rate_hz = 10.0;
   EXPECT_NE(error_of(options).find("must number frames with one %d"), std::string::npos);
+}
+
+// Found by fuzz/replay_pattern (tests/fuzz/regressions/replay_pattern/): a NUL in a printf
+// pattern cut it before its %d, so every index named the same existing folder and the search
+// for the sequence's end never ended; a field width of 2000000000 formatted 2 GB names.
+TEST_F(Replay, APatternWithANulCharacterIsRefused) {
+  fs::create_directories(dir_ / "100%");
+  const std::string pattern = (dir_ / "100%%").string() + std::string("\0\0/%d.png", 8);
+  try {
+    flowsteer::camera_io::image_sequence_files(pattern);
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("contains a NUL character"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST_F(Replay, AFieldWidthOverThirtyTwoIsRefused) {
+  write_images("frame_%05d.png", 0, 2);
+  EXPECT_EQ(flowsteer::camera_io::image_sequence_files((dir_ / "frame_%0005d.png").string()).size(),
+            2u);
+  try {
+    flowsteer::camera_io::image_sequence_files((dir_ / "frame_%2000000000d.png").string());
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("field width 2000000000 is more than 32"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 CameraModel distorted_model(int width, int height) {

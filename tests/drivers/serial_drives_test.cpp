@@ -235,6 +235,45 @@ TEST(RoboClawCrc, KnownAnswer) {
   EXPECT_EQ(board_crc(bytes), 0x31c3);
 }
 
+// The decoders the serial drives use and fuzz/ feeds: exactly "<left> <right>\r\n", nothing
+// looser.
+TEST(ArduinoBridgeReply, OnlyTwoDecimalCountsAndCrLfAreAnEncoderReply) {
+  using arduino_bridge::parse_encoder_reply;
+  const auto counts = parse_encoder_reply("12 -34\r\n");
+  ASSERT_TRUE(counts.has_value());
+  EXPECT_EQ(counts->first, 12);
+  EXPECT_EQ(counts->second, -34);
+  for (const char* garbled :
+       {"12 -34\n", "12 -34", "12  -34\r\n", "12\r\n", "\r\n", "", "12 34x\r\n", "+1 2\r\n",
+        " 1 2\r\n", "1 2 3\r\n", "99999999999999999999 1\r\n"}) {
+    EXPECT_FALSE(parse_encoder_reply(garbled).has_value()) << '"' << garbled << '"';
+  }
+}
+
+TEST(RoboClawReply, EncoderCountsNeedTenBytesAndTheRequestsCrc) {
+  // M1 = 1000, M2 = -2, with the CRC over the request's address and command too.
+  std::vector<std::uint8_t> covered = {
+      0x81, roboclaw::kReadEncoders, 0, 0, 3, 0xe8, 0xff, 0xff, 0xff, 0xfe};
+  const std::uint16_t crc = board_crc(covered);
+  std::vector<std::uint8_t> reply(covered.begin() + 2, covered.end());
+  reply.push_back(static_cast<std::uint8_t>(crc >> 8));
+  reply.push_back(static_cast<std::uint8_t>(crc & 0xff));
+  std::string why;
+  const auto counts = roboclaw::parse_encoder_reply(0x81, reply, why);
+  ASSERT_TRUE(counts.has_value()) << why;
+  EXPECT_EQ(counts->m1, 1000);
+  EXPECT_EQ(counts->m2, -2);
+
+  // The same bytes from another address: the CRC does not match.
+  EXPECT_FALSE(roboclaw::parse_encoder_reply(0x80, reply, why).has_value());
+  EXPECT_EQ(why.rfind("CRC mismatch in encoder reply: computed 0x", 0), 0U) << why;
+  EXPECT_NE(why.find(", got 0x"), std::string::npos) << why;
+
+  reply.pop_back();
+  EXPECT_FALSE(roboclaw::parse_encoder_reply(0x81, reply, why).has_value());
+  EXPECT_EQ(why, "encoder reply of 9 bytes, expected 10");
+}
+
 struct Packet {
   std::uint8_t command;
   std::vector<std::uint8_t> data;

@@ -80,6 +80,17 @@ TEST(DriveSection, SimBaseDrivesAndStops) {
   base->deactivate();
 }
 
+// Found by fuzz/robot_launch_yaml (tests/fuzz/regressions/robot_launch_yaml/scalar_serial.yaml):
+// a serial drive's settings given as a scalar threw yaml-cpp's BadSubscript, which names no file.
+TEST(DriveSection, SerialSettingsThatAreNoMappingAreAnError) {
+  EXPECT_NE(error_of("drive:\n  type: roboclaw\n  roboclaw:  0.4}\n")
+                .find("robot.yaml:3:14: drive.roboclaw: expected a mapping"),
+            std::string::npos);
+  EXPECT_NE(error_of("drive: {type: arduino_bridge, arduino_bridge: [1]}\n")
+                .find("drive.arduino_bridge: expected a mapping"),
+            std::string::npos);
+}
+
 TEST(DriveSection, ErrorsNameTheField) {
   EXPECT_NE(error_of("drive: {type: tank}\n").find("robot.yaml:1:15: drive.type: expected one of"),
             std::string::npos);

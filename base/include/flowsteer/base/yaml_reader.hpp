@@ -37,7 +37,7 @@ class YamlReader {
     }
     const std::set<std::string> names(allowed.begin(), allowed.end());
     for (const auto& entry : map) {
-      const auto key = entry.first.as<std::string>();
+      const std::string key = key_text(entry.first, field);
       if (!names.contains(key)) {
         std::string list;
         for (const char* name : allowed) {
@@ -46,6 +46,15 @@ class YamlReader {
         fail(entry.first, join(field, key), "unknown key (expected one of: " + list + ")");
       }
     }
+  }
+
+  // The text of a mapping's key. YAML also allows a sequence, a mapping or nothing as a key
+  // ("? [a, b]: 1"), which no file of the project has: an error at the key.
+  std::string key_text(const YAML::Node& key, const std::string& field) const {
+    if (!key.IsScalar()) {
+      fail(key, field, "expected a text key, got " + describe(key));
+    }
+    return key.Scalar();
   }
 
   double number(const YAML::Node& map, const std::string& field, const char* key,

@@ -16,6 +16,7 @@ namespace flowsteer::calibration {
 //   chessboard:COLSxROWS:SQUARE_M                 COLS x ROWS inner corners, squares SQUARE_M wide
 //   charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT      COLS x ROWS squares, markers of OpenCV's
 //                                                 predefined dictionary DICT (e.g. DICT_4X4_50)
+// COLS and ROWS are at most 100.
 // The board frame: origin at the first corner, x along a row, y along a column, z = x × y,
 // which points into the board when it is seen from its printed side.
 struct BoardSpec {

@@ -28,6 +28,9 @@ struct CameraInfo {
 // ("file:line:col: field: ...") when the file cannot be read, is not YAML, misses a field the
 // camera needs or holds a value out of range.
 CameraInfo read_camera_info(const std::filesystem::path& path, std::vector<std::string>& warnings);
+// The same for the file's text; source_name stands for the file in messages and warnings.
+CameraInfo parse_camera_info(const std::string& yaml_text, const std::string& source_name,
+                             std::vector<std::string>& warnings);
 
 // The file's text, in the layout camera_calibration_parsers writes. Numbers are written in
 // their shortest exact form, so that reading the text back gives the same doubles.

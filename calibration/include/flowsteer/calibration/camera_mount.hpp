@@ -24,6 +24,8 @@ struct MountCalibration {
 // Throws base::ConfigError ("file:line:col: field: ...") for a missing, unknown or out-of-range
 // field.
 MountCalibration read_camera_mount(const std::filesystem::path& path);
+// The same for the file's text; source_name stands for the file in messages.
+MountCalibration parse_camera_mount(const std::string& yaml_text, const std::string& source_name);
 
 // The file's text, with comments that say what each field means; exact round trip.
 std::string camera_mount_yaml(const MountCalibration& mount);

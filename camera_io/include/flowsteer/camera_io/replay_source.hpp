@@ -28,6 +28,12 @@ struct ReplayOptions {
   LensOptions lens;
 };
 
+// Whether ReplayOptions::path names an image sequence (a glob or a printf pattern), not a video.
+bool is_image_sequence_pattern(const std::string& path);
+// The image files of a sequence pattern, in frame order; empty when none matches. Throws
+// std::runtime_error naming the pattern when a printf pattern is not one integer conversion.
+std::vector<std::string> image_sequence_files(const std::string& pattern);
+
 // Frames of a recording, one per read(), as fast as they are asked for: the timestamps, not
 // the wall clock, carry the recording's timing. read() ends with ReadStatus::end_of_stream and
 // never times out. Errors throw std::runtime_error naming the file.

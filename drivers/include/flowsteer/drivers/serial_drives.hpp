@@ -45,6 +45,12 @@ struct ArduinoBridgeConfig {
   double boot_wait_s = 0.0;
 };
 
+namespace arduino_bridge {
+// The reply to `e`: exactly "<left ticks> <right ticks>\r\n" (decimal, optionally negative);
+// std::nullopt for anything else, which means a garbled line or another device.
+std::optional<std::pair<std::int64_t, std::int64_t>> parse_encoder_reply(std::string_view reply);
+}  // namespace arduino_bridge
+
 class ArduinoBridgeDrive final : public Drive {
  public:
   // Throws std::invalid_argument on a non-positive ticks_per_wheel_rev or pid_rate_hz.
@@ -88,6 +94,17 @@ inline constexpr std::uint8_t kReadEncoders = 78;
 inline constexpr std::uint8_t kAck = 0xff;
 // CRC-16/CCITT as RoboClaw uses it: polynomial 0x1021, initial value 0, no reflection.
 std::uint16_t crc16(std::span<const std::uint8_t> bytes);
+
+struct EncoderCounts {
+  std::int32_t m1 = 0;
+  std::int32_t m2 = 0;
+};
+// The reply to kReadEncoders from the board at `address`: M1 and M2 counts (big-endian) and a
+// CRC over the request's address and command and the counts. std::nullopt, with the reason in
+// `why`, for a reply that is not 10 bytes long or whose CRC does not match.
+std::optional<EncoderCounts> parse_encoder_reply(std::uint8_t address,
+                                                 std::span<const std::uint8_t> reply,
+                                                 std::string& why);
 }  // namespace roboclaw
 
 class RoboClawDrive final : public Drive {

@@ -1,0 +1,16 @@
+// Demo scenes (`flowsteer demo --scene FILE`): a scene or a base::ConfigError.
+#include <cstddef>
+#include <cstdint>
+
+#include "flowsteer/base/config_error.hpp"
+#include "flowsteer/config/demo_scene.hpp"
+#include "fuzz_support.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    flowsteer::config::parse_demo_scene(flowsteer::fuzz::as_text(data, size), "fuzz.yaml");
+  } catch (const flowsteer::base::ConfigError&) {
+    // The reader's documented refusal; anything else escapes and is a finding.
+  }
+  return 0;
+}
