@@ -1,6 +1,8 @@
 // The steering models side by side (issue 8): Blumberg's motion energy in the scenarios it was
 // made for, the vision controller against its geometric reference, and `flowsteer compare`'s
 // outputs.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -129,8 +131,8 @@ TEST_P(VisionAgainstReference, BothAvoidAndVisionStaysNearTheReference) {
 INSTANTIATE_TEST_SUITE_P(Papers, VisionAgainstReference, ::testing::Values("room", "crossing"));
 
 TEST(Compare, WritesTopViewsTableAndHistogramsForEveryController) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / "flowsteer_compare_test";
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("flowsteer_compare_test_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   CompareOptions options;
   options.controllers = parse_controllers({"vision", "geometric", "motion_energy"});

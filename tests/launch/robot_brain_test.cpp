@@ -2,6 +2,8 @@
 // checked like the rest of the file; a blind frame brakes and holds the goal heading; and a
 // recording of rendered frames gives the same features as the frames themselves.
 
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <optional>
@@ -179,7 +181,8 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
   options.mount = {spec.agents[0].camera.height_m, spec.agents[0].camera.pitch_rad};
   pipeline::Perception direct(agent.intrinsics(), options);
 
-  const fs::path video = fs::temp_directory_path() / "flowsteer_replay_of_render.avi";
+  const fs::path video = fs::temp_directory_path() /
+                         ("flowsteer_replay_of_render_" + std::to_string(::getpid()) + ".avi");
   constexpr int kFrames = 16;
   std::vector<Seen> direct_seen(kFrames);
   std::vector<double> speeds;

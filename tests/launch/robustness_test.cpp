@@ -1,5 +1,7 @@
 // `flowsteer eval robustness` (issue 4): a scenario over resolutions and perception methods, each
 // run summarised and counted clean or not.
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -71,8 +73,8 @@ TEST(Robustness, RunsEveryFlowAndResolutionAndCountsTheCleanOnes) {
     EXPECT_TRUE(r.summary.clean()) << r.resolution;
   }
   // A goal 20 m away is not reached in 4 s: no run is clean.
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / "flowsteer_robustness_test";
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("flowsteer_robustness_test_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   options.write_outputs = true;
   options.out_dir = dir;

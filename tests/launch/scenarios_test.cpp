@@ -1,5 +1,7 @@
 // The scenarios of the papers, run headless with synthetic flow at a small resolution, and the
 // files `flowsteer sim` reads and writes.
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -288,7 +290,8 @@ TEST(SteerSuite, MalformedFilesAreRejectedWithTheirLine) {
 }
 
 TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "flowsteer_sim_test";
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("flowsteer_sim_test_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   SimOptions options;
   options.out_dir = dir;

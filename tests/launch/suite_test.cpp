@@ -183,10 +183,11 @@ SuiteCase follower_case() {
 
 class SuiteRunTest : public ::testing::Test {
  protected:
-  // One folder per test: ctest runs them in parallel.
+  // One folder per test and process: ctest runs them in parallel, maybe two checkouts at once.
   std::filesystem::path dir_ = std::filesystem::temp_directory_path() /
                                (std::string("flowsteer_suite_test_") +
-                                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+                                ::testing::UnitTest::GetInstance()->current_test_info()->name() +
+                                "_" + std::to_string(::getpid()));
   std::vector<SuiteCase> cases_ = {walk_case("near", 1.5), walk_case("far", 30.0), follower_case()};
   void SetUp() override { std::filesystem::remove_all(dir_); }
   void TearDown() override { std::filesystem::remove_all(dir_); }
