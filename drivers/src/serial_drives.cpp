@@ -1,5 +1,7 @@
 #include "flowsteer/drivers/serial_drives.hpp"
 
+#include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -232,8 +234,8 @@ std::optional<roboclaw::EncoderCounts> roboclaw::parse_encoder_reply(
     return std::nullopt;
   }
   // The reply's CRC covers the request's address and command too.
-  std::vector<std::uint8_t> covered = {address, kReadEncoders};
-  covered.insert(covered.end(), reply.begin(), reply.begin() + 8);
+  std::array<std::uint8_t, 10> covered = {address, kReadEncoders};
+  std::copy(reply.begin(), reply.begin() + 8, covered.begin() + 2);
   const std::uint16_t computed = crc16(covered);
   const auto received = static_cast<std::uint16_t>((reply[8] << 8) | reply[9]);
   if (computed != received) {

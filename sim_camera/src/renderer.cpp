@@ -275,19 +275,16 @@ Shape cylinder_shape() {
   return shape;
 }
 
-// ground_mesh's quad.
+// The ground: [-0.5, 0.5]² at z = 0, as one quad.
 Shape ground_shape() {
   return {{{-0.5F, -0.5F, 0}, {0.5F, -0.5F, 0}, {0.5F, 0.5F, 0}, {-0.5F, 0.5F, 0}},
           {0, 1, 2, 0, 2, 3}};
 }
 
-// The ground: [-0.5, 0.5]² at z = 0.
 Mesh ground_mesh() {
   std::vector<Vertex> v;
   std::vector<GLuint> idx;
-  const Eigen::Vector3f corners[4] = {
-      {-0.5F, -0.5F, 0}, {0.5F, -0.5F, 0}, {0.5F, 0.5F, 0}, {-0.5F, 0.5F, 0}};
-  add_quad(v, idx, corners, Eigen::Vector3f(0, 0, 1));
+  add_quad(v, idx, ground_shape().positions.data(), Eigen::Vector3f(0, 0, 1));
   Mesh m;
   m.upload(v, idx);
   return m;
@@ -442,9 +439,8 @@ constexpr GLint kIdTextureUnit = 3;
 
 // Every body of a world and the ground in one vertex and index buffer, drawn by one call: each
 // vertex names its body, whose model matrix, velocity relative to the camera and id the vertex
-// shader reads from buffer textures filled for each view. llvmpipe's cost per draw call (and
-// per instance of an instanced one) far outweighs its cost per vertex: a crowd's view is one
-// draw rather than one per person.
+// shader reads from buffer textures filled for each view. A view is one draw and two small
+// uploads, however many bodies; a body out of view is marked hidden rather than drawn.
 struct GeometryBatch {
   struct BatchVertex {
     float position[3];
@@ -665,10 +661,8 @@ struct Renderer::Impl {
             // Mesa's software device is the surfaceless one below; prefer a real GPU here.
             if (vendor != nullptr && std::string(vendor).find("Mesa") == std::string::npos) {
               display = d;
-            } else {
-              if (!display_users.contains(d)) {
-                eglTerminate(d);
-              }
+            } else if (!display_users.contains(d)) {
+              eglTerminate(d);
             }
           }
         }

@@ -164,9 +164,9 @@ struct FlowsteerWeights {
   double delta = 0.0;    // dark regions (MIG Eq. 3), at most gamma
   double braking = 2.0;  // braking
   double preferred_speed_mps = 1.0;
-  double max_turn_rate = 1.0;  // the controller's limit, for the approach speed
-  double arrival_decel_mps2 = 0.5;
-  double follow_gap_m = 2.0;  // following: the gap kept behind the leader
+  double max_turn_rate = 1.0;       // the controller's limit, for the approach speed
+  double arrival_decel_mps2 = 0.5;  // the approach speed's braking to stop at the goal
+  double follow_gap_m = 2.0;        // following: the gap kept behind the leader
   double gap_time_s = 1.0;
 };
 
