@@ -1,5 +1,6 @@
 #include "flowsteer/pipeline/brain.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -82,13 +83,18 @@ const servo::ControlOutput& Brain::step(const BrainInput& input) {
   if (motion_energy_) {
     motion_energy_->step(input.frame, perception_.flow(), percept_, {input.speed_mps}, output_);
   } else {
-    controller_.step(percept_, {input.speed_mps}, output_);
+    // The command is held until the next frame; the last interval between frames is the best
+    // guess of how long that is.
+    const double period_s =
+        previous_frame_s_ ? std::max(0.0, input.frame.timestamp_s - *previous_frame_s_) : 0.0;
+    controller_.step(percept_, {input.speed_mps, period_s}, output_);
   }
   if (blind()) {
     // A blind frame has no objects, so only the goal term turns; the speed term's acceleration
     // gives way to braking, only while moving: the base never backs up, and a stopped one stays.
     output_.command.accel_mps2 = input.speed_mps > 0.0 ? -config_.controller.max_accel_mps2 : 0.0;
   }
+  previous_frame_s_ = input.frame.timestamp_s;
   times_.control = control.elapsed_ms();
   times_.total = total.elapsed_ms();
   return output_;

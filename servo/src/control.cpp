@@ -159,7 +159,8 @@ class AlignTerm final : public CostTerm {
     const double u = m.mean_u;
     const FeatureRate rate{0.0, mean_x_inv_depth,
                            -(agent.speed_mps * mean_inv_depth + 2.0 * m.mean_xu)};
-    return {u * u, 2.0 * u * rate.per_accel, 2.0 * u * rate.per_turn};
+    return {u * u, 2.0 * u * rate.per_accel, 2.0 * u * rate.per_turn,
+            2.0 * rate.per_accel * rate.per_accel, 2.0 * rate.per_turn * rate.per_turn};
   }
 
  private:
@@ -333,8 +334,12 @@ NavigationFunction following(const FollowingWeights& w, const AvoidanceOptions& 
   return f;
 }
 
-Controller::Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits)
-    : navigation_(std::move(navigation)), lambda_(lambda), limits_(limits) {
+Controller::Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits,
+                       GradientStep gradient_step)
+    : navigation_(std::move(navigation)),
+      lambda_(lambda),
+      limits_(limits),
+      gradient_step_(gradient_step) {
   if (!std::isfinite(lambda) || lambda <= 0.0) {
     throw std::invalid_argument("controller: lambda must be positive, got " +
                                 std::to_string(lambda));
@@ -353,9 +358,19 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
   if (!std::isfinite(agent.speed_mps)) {
     throw std::invalid_argument("controller: agent speed is not finite");
   }
+  if (!std::isfinite(agent.period_s) || agent.period_s < 0.0) {
+    throw std::invalid_argument("controller: the control period must be >= 0, got " +
+                                std::to_string(agent.period_s));
+  }
   const TermGradient total = navigation_.evaluate(percept, agent, out.terms);
   out.cost = total.cost;
-  out.unclamped = {-lambda_ * total.per_accel, -lambda_ * total.per_turn};
+  // u = −λ g / (1 + λ T c): minimises g u T + ½ c (u T)² + T u² / (2λ), the cost's change over
+  // the period to second order plus the papers' gain as a penalty on the command.
+  const double period_s = gradient_step_ == GradientStep::implicit_euler ? agent.period_s : 0.0;
+  const double accel_damping = 1.0 + lambda_ * period_s * std::max(0.0, total.curvature_accel);
+  const double turn_damping = 1.0 + lambda_ * period_s * std::max(0.0, total.curvature_turn);
+  out.unclamped = {-lambda_ * total.per_accel / accel_damping,
+                   -lambda_ * total.per_turn / turn_damping};
   if (!std::isfinite(out.unclamped.accel_mps2) || !std::isfinite(out.unclamped.turn_rate)) {
     for (const TermEvaluation& t : out.terms) {
       if (!std::isfinite(t.gradient.per_accel) || !std::isfinite(t.gradient.per_turn)) {

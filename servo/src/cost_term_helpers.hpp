@@ -23,18 +23,23 @@ inline TermGradient exp_falloff(double weight, double s, double side, double sig
                                 const FeatureRate& rate) {
   const double value = weight * std::exp(-std::abs(s) / sigma);
   const double d = -value * side / sigma;
-  return {value, d * rate.per_accel, d * rate.per_turn};
+  const double c = value / (sigma * sigma);
+  return {value, d * rate.per_accel, d * rate.per_turn, c * rate.per_accel * rate.per_accel,
+          c * rate.per_turn * rate.per_turn};
 }
 
 // The gradient of L = ½ s² through the rate of s: L̇ = s ṡ.
 inline TermGradient half_square(double s, const FeatureRate& rate) {
-  return {0.5 * s * s, s * rate.per_accel, s * rate.per_turn};
+  return {0.5 * s * s, s * rate.per_accel, s * rate.per_turn, rate.per_accel * rate.per_accel,
+          rate.per_turn * rate.per_turn};
 }
 
 inline void accumulate(TermGradient& sum, const TermGradient& g, double weight = 1.0) {
   sum.cost += weight * g.cost;
   sum.per_accel += weight * g.per_accel;
   sum.per_turn += weight * g.per_turn;
+  sum.curvature_accel += weight * g.curvature_accel;
+  sum.curvature_turn += weight * g.curvature_turn;
 }
 
 inline double floored_speed(const AgentState& agent, const AvoidanceOptions& options) {

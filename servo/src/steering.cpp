@@ -132,7 +132,7 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
     return Controller(c.kind == NavigationKind::following
                           ? flowsteer_following(weights, avoidance)
                           : flowsteer_goal_reaching(weights, avoidance),
-                      c.lambda, limits);
+                      c.lambda, limits, GradientStep::implicit_euler);
   }
   if (c.kind == NavigationKind::following) {
     return Controller(following({w.alpha, w.beta, w.gamma}, avoidance), c.lambda, limits);

@@ -53,16 +53,20 @@ void expect_gradient(const TermGradient& g, const TermGradient& expected) {
 
 // L_c = I(τ) φ(c/σ), c the FOE's clearance from the object's end widened by half the agent's
 // width (a point of the object that far to the side, moving with it), I and σ held constant.
+// I is that of the time to contact, τ (1 − w / 2Z). The curvatures are Gauss–Newton's, I φ''
+// (ġap per control / σ)², with the gap's rates by finite differences.
 void check_clearance(const test::TwoBody& s, double agent_width_m, int end) {
   const double half = 0.5 * agent_width_m * (end == 0 ? -1.0 : 1.0);
   const Eigen::Vector2d offset = half * s.right();  // fixed in the world: a point of the object
   const double sigma = agent_width_m / s.depth() / kLn10;
-  const double importance = -2.0 * s.ttc() + 10.0;
-  auto cost = [&](const test::TwoBody& b) {
+  const double importance = -2.0 * s.ttc() * (1.0 - 0.5 * agent_width_m / s.depth()) + 10.0;
+  auto gap = [&](const test::TwoBody& b) {
     test::TwoBody edge = b;
     edge.point += offset;
-    const double gap = end == 0 ? edge.image_x() - b.foe_x() : b.foe_x() - edge.image_x();
-    const double u = gap / sigma;
+    return end == 0 ? edge.image_x() - b.foe_x() : b.foe_x() - edge.image_x();
+  };
+  auto cost = [&](const test::TwoBody& b) {
+    const double u = gap(b) / sigma;
     return importance * (u >= 0.0 ? std::exp(-u) : 1.0 - u);
   };
   const std::vector<ObjectFeatures> objects = {point_object(s)};
@@ -70,6 +74,15 @@ void check_clearance(const test::TwoBody& s, double agent_width_m, int end) {
                              ->evaluate({objects, {}, {}, {}}, {s.agent_speed});
   expect_gradient(g, simulated(s, cost));
   EXPECT_NE(g.per_turn, 0.0);
+
+  const TermGradient gap_rate = simulated(s, gap);
+  const double u = gap(s) / sigma;
+  const double phi_curvature = u >= 0.0 ? std::exp(-u) : 0.0;
+  const double c = importance * phi_curvature / (sigma * sigma);
+  EXPECT_NEAR(g.curvature_turn, c * gap_rate.per_turn * gap_rate.per_turn,
+              1e-4 * (1.0 + g.curvature_turn));
+  EXPECT_NEAR(g.curvature_accel, c * gap_rate.per_accel * gap_rate.per_accel,
+              1e-4 * (1.0 + g.curvature_accel));
 }
 
 TEST(ClearanceGradient, OutsideTheWidenedExtentMatchesSimulation) {
@@ -140,6 +153,18 @@ TEST(ClearanceBehaviour, AnObjectBeyondTheGoalIsLeftOut) {
   EXPECT_GT(term->evaluate({objects, 0.0, 6.0, {}}, {1.0}).cost, 1.0);
 }
 
+// A person 2.4 m away, 60° to the left, beside a goal 1.35 m away that the agent is turning
+// towards: its depth (1.2 m) is less than the goal's distance, but no point of the straight path
+// to the goal comes within half the kept width of it. With the goal further, it counts.
+TEST(ClearanceBehaviour, AnObjectFurtherThanTheGoalSeenAtAnAngleIsLeftOut) {
+  test::TwoBody s;
+  s.point = {1.2, 2.4 * std::sin(std::numbers::pi / 3.0)};
+  const std::vector<ObjectFeatures> objects = {point_object(s)};
+  const auto term = clearance_term(options_without_convention(0.8));
+  EXPECT_EQ(term->evaluate({objects, -1.4, 1.35, {}}, {1.0}).cost, 0.0);
+  EXPECT_GT(term->evaluate({objects, -1.4, 3.0, {}}, {1.0}).cost, 0.0);
+}
+
 // The margin is kept in proportion to the speed: stepping slowly, the agent needs only its own
 // width, and the same post beside its course costs less.
 TEST(ClearanceBehaviour, ASlowAgentKeepsLessRoom) {
@@ -204,6 +229,20 @@ TEST(HeadingGradient, MatchesSimulation) {
   const TermGradient g =
       heading_term()->evaluate({{}, std::atan(s.image_x()), distance, {}}, {s.agent_speed});
   expect_gradient(g, simulated(s, cost));
+}
+
+// L_θ = ½ θ² with θ̇ = … − ω: its curvature along ω is 1, along a_c 0.
+TEST(HeadingGradient, CurvatureIsOneAlongTheTurn) {
+  test::TwoBody s;
+  s.point = {3.0, -2.5};
+  s.agent_speed = 0.8;
+  auto bearing = [](const test::TwoBody& b) { return std::atan(b.image_x()); };
+  const TermGradient rate = simulated(s, bearing);
+  const TermGradient g =
+      heading_term()->evaluate({{}, bearing(s), s.point.norm(), {}}, {s.agent_speed});
+  EXPECT_NEAR(g.curvature_turn, rate.per_turn * rate.per_turn, 1e-5);
+  EXPECT_NEAR(g.curvature_turn, 1.0, 1e-5);
+  EXPECT_EQ(g.curvature_accel, 0.0);
 }
 
 TEST(HeadingBehaviour, TheTurnStaysBoundedForAGoalBesideOrBehind) {

@@ -1,7 +1,9 @@
 #include "flowsteer/servo/control.hpp"
 
 #include <cmath>
+#include <memory>
 #include <numbers>
+#include <string_view>
 
 #include <gtest/gtest.h>
 
@@ -222,6 +224,35 @@ TEST(ControlInput, LimitsClampAndTheUnclampedCommandIsKept) {
   const ControlOutput out = c.step({{}, 1.2, 5.0, {}}, {1.0});
   EXPECT_EQ(out.command.turn_rate, 0.2);
   EXPECT_GT(out.unclamped.turn_rate, 0.2);
+}
+
+// A term whose cost is stiff along ω: the explicit step (CGF Eq. 15) turns by −λ g however long
+// the command is held; the implicit one by −λ g / (1 + λ T c), and by −λ g when T is not known.
+class StiffTerm final : public CostTerm {
+ public:
+  std::string_view name() const override { return "stiff"; }
+  TermGradient evaluate(const Percept&, const AgentState&) override {
+    return {1.0, 0.5, 4.0, 2.0, 300.0};
+  }
+};
+
+TEST(ControlStep, TheImplicitStepDampsAStiffCostByItsCurvatureOverThePeriod) {
+  auto controller = [](GradientStep step) {
+    NavigationFunction f;
+    f.add(1.0, std::make_unique<StiffTerm>());
+    return Controller(std::move(f), 2.0, {100.0, 100.0}, step);
+  };
+  Controller explicit_step = controller(GradientStep::explicit_euler);
+  Controller implicit_step = controller(GradientStep::implicit_euler);
+  const Percept nothing{{}, {}, {}, {}};
+  const ControlOutput e = explicit_step.step(nothing, {1.0, 0.05});
+  EXPECT_DOUBLE_EQ(e.command.turn_rate, -8.0);
+  EXPECT_DOUBLE_EQ(e.command.accel_mps2, -1.0);
+  const ControlOutput i = implicit_step.step(nothing, {1.0, 0.05});
+  EXPECT_DOUBLE_EQ(i.command.turn_rate, -8.0 / (1.0 + 2.0 * 0.05 * 300.0));
+  EXPECT_DOUBLE_EQ(i.command.accel_mps2, -1.0 / (1.0 + 2.0 * 0.05 * 2.0));
+  EXPECT_DOUBLE_EQ(implicit_step.step(nothing, {1.0, 0.0}).command.turn_rate, -8.0);
+  EXPECT_THROW(implicit_step.step(nothing, {1.0, -0.05}), std::invalid_argument);
 }
 
 TEST(ControlInput, BadSettingsAreRejected) {

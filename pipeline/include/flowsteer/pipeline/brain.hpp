@@ -107,6 +107,7 @@ class Brain {
   servo::ControlOutput output_;
   servo::FlowStatus status_ = servo::FlowStatus::ok;
   StageTimes times_;
+  std::optional<double> previous_frame_s_;  // for the control period
 };
 
 }  // namespace flowsteer::pipeline

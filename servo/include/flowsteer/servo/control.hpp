@@ -16,6 +16,8 @@ namespace flowsteer::servo {
 // What the agent knows about itself.
 struct AgentState {
   double speed_mps = 0.0;  // v_c, forward, along the optical axis
+  // How long the command is held: the time between frames. 0 when not known (the first frame).
+  double period_s = 0.0;
 };
 
 // What the agent perceives in one control step.
@@ -31,11 +33,15 @@ struct Percept {
 
 // A control term's value L and the partial derivatives of its time derivative L̇ with respect
 // to the controls: ∂L̇/∂a_c and ∂L̇/∂ω. Since every feature rate is affine in the controls,
-// these follow from the feature's FeatureRate (dynamics.hpp).
+// these follow from the feature's FeatureRate (dynamics.hpp). The curvatures are how fast those
+// derivatives grow as a control is held: for L(s) with ṡ = ... + b u, L''(s) b² (Gauss–Newton,
+// one control at a time), what GradientStep::implicit needs.
 struct TermGradient {
   double cost = 0.0;
   double per_accel = 0.0;
   double per_turn = 0.0;
+  double curvature_accel = 0.0;
+  double curvature_turn = 0.0;
 };
 
 // One control function L_k of CGF §6 / MIG §3.3.
@@ -201,10 +207,24 @@ struct ControlOutput {
   std::vector<TermEvaluation> terms;
 };
 
+// How the controller turns the gradient into a command.
+enum class GradientStep {
+  // CGF Eq. 15 as printed: u = −λ ∂L̇/∂u, the papers' continuous-time law.
+  explicit_euler,
+  // The same descent taken over the period the command is held (AgentState::period_s), with the
+  // gradient at the period's end: u = −λ ∂L̇/∂u / (1 + λ T c), c the term's curvature. Where the
+  // cost is stiff (the far ends of a corridor's walls, seen a few σ from the FOE) the explicit
+  // step turns the FOE past the minimum by many σ in one period and the command flips between
+  // its limits from frame to frame; the implicit one moves it at most about σ per period and
+  // equals the explicit one where λ T c ≪ 1.
+  implicit_euler,
+};
+
 // The gradient update of CGF Eq. 15, a_c = −λ ∂L̇/∂a_c and ω = −λ ∂L̇/∂ω, clamped to the limits.
 class Controller {
  public:
-  Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits);
+  Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits,
+             GradientStep gradient_step = GradientStep::explicit_euler);
 
   // Reuses `out.terms`' storage.
   void step(const Percept& percept, const AgentState& agent, ControlOutput& out);
@@ -214,6 +234,7 @@ class Controller {
   NavigationFunction navigation_;
   double lambda_;
   ControlLimits limits_;
+  GradientStep gradient_step_;
 };
 
 }  // namespace flowsteer::servo
