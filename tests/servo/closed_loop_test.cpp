@@ -20,6 +20,7 @@ struct RunResult {
   bool reached_goal = false;
   double min_clearance_m = std::numeric_limits<double>::infinity();
   double time_s = 0.0;
+  int turn_flips = 0;  // steps whose turn rate changed sign by 1 rad/s or more
 };
 
 double clearance(const SceneObject& o, const Eigen::Vector2d& p, double agent_radius) {
@@ -32,12 +33,17 @@ double clearance(const SceneObject& o, const Eigen::Vector2d& p, double agent_ra
   return outside.norm() - agent_radius;
 }
 
-RunResult run(std::vector<SceneObject> world, const Eigen::Vector2d& goal) {
-  constexpr double kDt = 0.1;
-  constexpr double kAgentRadius = 0.25;
+constexpr double kAgentRadius = 0.25;
+
+Controller papers_controller() {
   AvoidanceOptions avoidance;
   avoidance.agent_width_m = 2.0 * kAgentRadius;
-  Controller controller(goal_reaching({}, avoidance), 1.0, {1.0, 1.5});
+  return Controller(goal_reaching({}, avoidance), 1.0, {1.0, 1.5});
+}
+
+RunResult run(std::vector<SceneObject> world, const Eigen::Vector2d& goal,
+              Controller controller = papers_controller()) {
+  constexpr double kDt = 0.1;
   FeatureExtractor extractor;
   Segmentation segmentation;
   ControlOutput out;
@@ -76,8 +82,12 @@ RunResult run(std::vector<SceneObject> world, const Eigen::Vector2d& goal) {
     }
     // Bearing positive to the right; body y points left.
     const Percept percept{objects, -std::atan2(to_goal.y(), to_goal.x()), to_goal.norm(), {}};
-    controller.step(percept, {speed}, out);
+    controller.step(percept, {speed, kDt}, out);
 
+    if (turn_rate * out.command.turn_rate < 0.0 &&
+        std::abs(turn_rate - out.command.turn_rate) >= 1.0) {
+      ++result.turn_flips;
+    }
     turn_rate = out.command.turn_rate;
     speed = std::max(0.0, speed + kDt * out.command.accel_mps2);
     yaw -= kDt * turn_rate;  // ω about the camera's y axis (down): yaw rate −ω
@@ -126,6 +136,45 @@ TEST(ClosedLoop, ThreadsBetweenTwoPosts) {
   const RunResult r = run({left, right}, {12.0, 0.0});
   EXPECT_TRUE(r.reached_goal);
   EXPECT_GT(r.min_clearance_m, 0.0);
+}
+
+// A corridor 3 m wide, the agent walking along it 0.6 m left of its middle. The walls' far ends
+// make the flowsteer law's clearance stiff: held for a step, the explicit command (CGF Eq. 15)
+// turns the FOE past the balance and the next one turns it back, at the limits; the implicit
+// step walks the corridor without that chatter.
+Controller flowsteer_controller(GradientStep step) {
+  AvoidanceOptions avoidance;
+  avoidance.agent_width_m = 2.0 * kAgentRadius;
+  avoidance.margin_m = 0.5;
+  return Controller(flowsteer_goal_reaching({}, avoidance), 1.0, {1.0, 1.5}, step);
+}
+
+// Each wall a row of short blocks: the analytic scene's boxes keep their sides along the agent's
+// axes as it turns, which a short block does not notice and a 15 m wall would.
+std::vector<SceneObject> corridor() {
+  std::vector<SceneObject> walls;
+  for (int k = 0; k < 30; ++k) {
+    SceneObject block;
+    block.length_m = 0.5;
+    block.width_m = 0.2;
+    for (const double y : {0.9 + 0.1, -2.1 - 0.1}) {
+      block.id = static_cast<std::int32_t>(walls.size()) + 1;
+      block.position_m = {0.25 + 0.5 * k, y};
+      walls.push_back(block);
+    }
+  }
+  return walls;
+}
+
+TEST(ClosedLoop, TheImplicitStepWalksACorridorWithoutChatter) {
+  const RunResult implicit_step =
+      run(corridor(), {16.0, 0.0}, flowsteer_controller(GradientStep::implicit_euler));
+  EXPECT_TRUE(implicit_step.reached_goal);
+  EXPECT_GT(implicit_step.min_clearance_m, 0.0);
+  const RunResult explicit_step =
+      run(corridor(), {16.0, 0.0}, flowsteer_controller(GradientStep::explicit_euler));
+  EXPECT_GT(explicit_step.turn_flips, 10);
+  EXPECT_LE(implicit_step.turn_flips, explicit_step.turn_flips / 10);
 }
 
 }  // namespace
