@@ -389,12 +389,12 @@ void OdriveCanDrive::check_errors(bool need_closed_loop) {
 }
 
 template <typename Done>
-void OdriveCanDrive::wait_for(Done done, const std::string& what) {
+void OdriveCanDrive::wait_for(Done done, const std::string& what, AxisErrors errors) {
   const double deadline_s = base::monotonic_now_s() + config_.timeout_s;
   for (;;) {
     bool all = true;
     for (const Axis& axis : axes_) {
-      if (axis.heartbeat_s) {
+      if (axis.heartbeat_s && errors == AxisErrors::fail) {
         check_axis_error(axis);
       }
       all = all && done(axis);
@@ -474,6 +474,15 @@ void OdriveCanDrive::deactivate() {
     can.send(odrive::set_axis_requested_state(axis.config.node_id, odrive::kAxisStateIdle),
              config_.timeout_s);
   }
+  // Only a heartbeat sent after the request confirms it. An axis error does not stop the wait:
+  // the firmware drops an axis in error to idle, which is what is asked for here.
+  const double requested_s = base::monotonic_now_s();
+  wait_for(
+      [&](const Axis& axis) {
+        return axis.heartbeat_s && *axis.heartbeat_s > requested_s &&
+               axis.heartbeat.axis_state == odrive::kAxisStateIdle;
+      },
+      "did not confirm idle", AxisErrors::ignore);
 }
 
 void OdriveCanDrive::write(const WheelSpeeds& wheels) {

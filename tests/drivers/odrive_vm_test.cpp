@@ -1,7 +1,7 @@
 // Boots the CAN test VM (tests/vm/run_can_vm.sh), in which tests/vm/odrive_vm_probe drives a
 // simulated ODrive pair on vcan0 while candump records the bus, and checks candump's record:
-// the exact frames for activate and deactivate, the velocity stream, the watchdog's stop and
-// the stop after an axis error.
+// the exact frames for activate and deactivate, that deactivate waits for both axes to report
+// idle, the velocity stream, the watchdog's stop and the stop after an axis error.
 
 #include <algorithm>
 #include <array>
@@ -226,6 +226,33 @@ TEST_F(OdriveVm, DeactivateSendsZeroVelocityThenIdle) {
   ASSERT_GE(frames.size(), 4u);
   // An update() just before may have streamed one more zero; the last four are deactivate's.
   EXPECT_EQ(std::vector<std::string>(frames.end() - 4, frames.end()), expected);
+}
+
+// deactivate() returns only once each axis has sent a heartbeat saying idle after its idle
+// request: a base reported deactivated has its motors disarmed, not just asked to disarm.
+TEST_F(OdriveVm, DeactivateReturnsOnlyAfterBothAxesReportIdle) {
+  const double deactivated_s = stamp(run_, "deactivated");
+  for (const unsigned node : {3u, 5u}) {
+    SCOPED_TRACE("node " + std::to_string(node));
+    double requested_s = NAN;  // the last idle request
+    double confirmed_s = NAN;  // the first idle heartbeat after it
+    for (const Frame& f : run_.frames) {
+      if (f.node() != node || f.time_s > deactivated_s + kStampSlackS) {
+        continue;
+      }
+      if (f.cmd() == 0x07 && f.hex == "01000000") {
+        requested_s = f.time_s;
+        confirmed_s = NAN;
+      } else if (!std::isnan(requested_s) && std::isnan(confirmed_s) && f.cmd() == 0x01 &&
+                 f.hex.size() >= 10 && f.hex.substr(8, 2) == "01") {
+        confirmed_s = f.time_s;
+      }
+    }
+    ASSERT_FALSE(std::isnan(requested_s)) << "no idle request";
+    ASSERT_FALSE(std::isnan(confirmed_s)) << "deactivate returned before an idle heartbeat";
+    std::printf("node %u: idle confirmed %.1f ms after the request\n", node,
+                1e3 * (confirmed_s - requested_s));
+  }
 }
 
 TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStopped) {

@@ -101,7 +101,8 @@ struct OdriveCanConfig {
 // Two ODrive axes (one per wheel) over SocketCAN. configure() waits for both heartbeats and
 // reads the encoders; activate() sets velocity control and requests closed-loop control and
 // waits for it; write() streams Set_Input_Vel to both axes (the ODrive's own watchdog wants a
-// steady stream) and asks for encoder estimates; read() collects heartbeats and estimates.
+// steady stream) and asks for encoder estimates; read() collects heartbeats and estimates;
+// deactivate() commands zero, requests idle and waits for both axes to report it.
 // An axis error in a heartbeat, a lost heartbeat or an axis that leaves closed-loop control
 // stops both axes (zero velocity, then idle) and throws DriveError naming the node.
 class OdriveCanDrive final : public Drive {
@@ -135,8 +136,10 @@ class OdriveCanDrive final : public Drive {
   void check_axis_error(const Axis& axis);
   void check_errors(bool need_closed_loop);
   // Waits until `done` holds for both axes or the timeout passes; throws naming the laggard.
+  // An axis error met meanwhile fails at once, unless `errors` says to ignore it.
+  enum class AxisErrors { fail, ignore };
   template <typename Done>
-  void wait_for(Done done, const std::string& what);
+  void wait_for(Done done, const std::string& what, AxisErrors errors = AxisErrors::fail);
   void stop_axes() noexcept;
   [[noreturn]] void fail(const std::string& message);
   std::string axis_name(const Axis& axis) const;
