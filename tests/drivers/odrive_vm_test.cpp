@@ -1,7 +1,8 @@
 // Boots the CAN test VM (tests/vm/run_can_vm.sh), in which tests/vm/odrive_vm_probe drives a
 // simulated ODrive pair on vcan0 while candump records the bus, and checks candump's record:
 // the exact frames for activate and deactivate, that deactivate waits for both axes to report
-// idle, the velocity stream, the watchdog's stop and the stop after an axis error.
+// idle, the velocity stream, the watchdog's stop and the stops after an axis error and after a
+// lost heartbeat.
 
 #include <algorithm>
 #include <array>
@@ -267,8 +268,9 @@ TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStopped) {
     return f.id == 0x0a1 && f.hex.starts_with("00020000");
   });
   ASSERT_NE(error_hb, run_.frames.end());
+  const double next_case_s = stamp(run_, "heartbeat-lost-start");  // the base is reactivated
   std::vector<std::string> after;
-  for (auto it = error_hb; it != run_.frames.end(); ++it) {
+  for (auto it = error_hb; it != run_.frames.end() && it->time_s < next_case_s; ++it) {
     if (from_drive(*it)) {
       after.push_back(it->text());
     }
@@ -281,6 +283,46 @@ TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStopped) {
   for (auto it = first_idle; it != after.end(); ++it) {
     EXPECT_TRUE(it->starts_with("06D#00000000") || it->starts_with("0AD#00000000") ||
                 it->ends_with("#01000000"))
+        << "motion after the stop: " << *it;
+  }
+}
+
+// The left axis stops sending heartbeats while the base drives: within the drive's timeout and
+// two loop periods of its last heartbeat both axes are commanded to zero and idle, and the error
+// names the silent axis. Two periods: the drive files a heartbeat when a loop's read() takes it
+// off the socket, up to a period after it was on the bus, and finds it late at the first read()
+// after the timeout.
+TEST_F(OdriveVm, LostHeartbeatStopsBothAxesWithinTimeoutPlusOnePeriod) {
+  const std::string& message = run_.probe["heartbeat-lost"];
+  EXPECT_NE(message.find("no heartbeat from ODrive node 3 (left) on vcan0 for 0.3"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("base stopped"), std::string::npos) << message;
+  const auto last_heartbeat = std::find_if(run_.frames.rbegin(), run_.frames.rend(),
+                                           [](const Frame& f) { return f.id == 0x061; });
+  ASSERT_NE(last_heartbeat, run_.frames.rend());
+  const double lost_s = last_heartbeat->time_s;
+  for (const char* stop : {"06D#0000000000000000", "0AD#0000000000000000"}) {
+    SCOPED_TRACE(stop);
+    const auto first_stop =
+        std::find_if(run_.frames.begin(), run_.frames.end(),
+                     [&](const Frame& f) { return f.time_s > lost_s && f.text() == stop; });
+    ASSERT_NE(first_stop, run_.frames.end()) << "no stop after the last heartbeat";
+    const double delay_s = first_stop->time_s - lost_s;
+    std::printf("%s %.1f ms after the last heartbeat\n", stop, 1e3 * delay_s);
+    EXPECT_LE(delay_s, kTimeoutS + 2.0 * kPeriodS + 2.0 * kStampSlackS);  // both ends stamped
+    EXPECT_GT(delay_s, kTimeoutS - kStampSlackS);  // not before the heartbeat was late
+  }
+  std::vector<std::string> after;
+  for (const Frame& f : run_.frames) {
+    if (f.time_s > lost_s && from_drive(f)) {
+      after.push_back(f.text());
+    }
+  }
+  const auto first_zero = std::find(after.begin(), after.end(), "06D#0000000000000000");
+  const auto first_zero_right = std::find(after.begin(), after.end(), "0AD#0000000000000000");
+  for (auto it = std::max(first_zero, first_zero_right); it != after.end(); ++it) {
+    EXPECT_TRUE(it->ends_with("#0000000000000000") || it->ends_with("#01000000"))
         << "motion after the stop: " << *it;
   }
 }

@@ -1,8 +1,8 @@
 // Runs inside the test VM (tests/vm/run_can_vm.sh): a simulated pair of ODrive axes and the
 // ODrive CAN drive behind a Base on vcan0, through activate, a velocity stream, commands that
-// cease (the watchdog must stop the wheels), deactivate and an axis error. It prints what it
-// did as "PROBE key value" lines with CLOCK_REALTIME stamps, the clock candump stamps frames with;
-// the host test checks those against candump's capture of the bus.
+// cease (the watchdog must stop the wheels), deactivate, an axis error and a lost heartbeat. It
+// prints what it did as "PROBE key value" lines with CLOCK_REALTIME stamps, the clock candump
+// stamps frames with; the host test checks those against candump's capture of the bus.
 
 #include <time.h>
 
@@ -45,6 +45,7 @@ class SimulatedAxes {
     thread_.join();
   }
   std::atomic<int> fail_node{-1};
+  std::atomic<int> silent_node{-1};  // sends no heartbeat (a cable pulled, a board reset)
 
  private:
   struct Axis {
@@ -73,7 +74,9 @@ class SimulatedAxes {
             axis.vel_turns_per_s = 0.0f;
           }
           hb.axis_state = axis.state;
-          socket_.send(odrive::heartbeat_frame(axis.node, hb), 0.1);
+          if (silent_node != axis.node) {
+            socket_.send(odrive::heartbeat_frame(axis.node, hb), 0.1);
+          }
         }
       }
       const auto frame = socket_.receive(0.005);
@@ -187,6 +190,23 @@ int run() {
     std::printf("PROBE axis-error no error\n");
   } catch (const DriveError& e) {
     std::printf("PROBE axis-error %.6f %s\n", realtime_s(), e.what());
+  }
+
+  // A heartbeat lost while driving: the base stops both axes and names the silent one.
+  std::printf("PROBE heartbeat-lost-start %.6f\n", realtime_s());
+  axes.fail_node = -1;
+  base.configure();
+  base.activate(monotonic_now_s());
+  try {
+    run_loop(base, 2.0, [&](double t_s) {
+      if (t_s > 0.3) {
+        axes.silent_node = kLeftNode;
+      }
+      return true;
+    });
+    std::printf("PROBE heartbeat-lost no error\n");
+  } catch (const DriveError& e) {
+    std::printf("PROBE heartbeat-lost %.6f %s\n", realtime_s(), e.what());
   }
   std::printf("PROBE done\n");
   return 0;
