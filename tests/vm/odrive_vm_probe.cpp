@@ -132,6 +132,22 @@ double run_loop(Base& base, double duration_s, Command command, BaseState* comma
   return last_command_realtime_s;
 }
 
+// Drives for 2 s, calling inject() from 0.3 s on, and prints how the base failed under `key`.
+template <typename Inject>
+void drive_into_fault(Base& base, const char* key, Inject inject) {
+  try {
+    run_loop(base, 2.0, [&](double t_s) {
+      if (t_s > 0.3) {
+        inject();
+      }
+      return true;
+    });
+    std::printf("PROBE %s no error\n", key);
+  } catch (const DriveError& e) {
+    std::printf("PROBE %s %.6f %s\n", key, realtime_s(), e.what());
+  }
+}
+
 int run() {
   OdriveCanConfig drive_config;
   drive_config.interface = "vcan0";
@@ -180,34 +196,14 @@ int run() {
 
   // An axis error while driving: the base stops and says which axis and what.
   base.activate(monotonic_now_s());
-  try {
-    run_loop(base, 2.0, [&](double t_s) {
-      if (t_s > 0.3) {
-        axes.fail_node = kRightNode;
-      }
-      return true;
-    });
-    std::printf("PROBE axis-error no error\n");
-  } catch (const DriveError& e) {
-    std::printf("PROBE axis-error %.6f %s\n", realtime_s(), e.what());
-  }
+  drive_into_fault(base, "axis-error", [&] { axes.fail_node = kRightNode; });
 
   // A heartbeat lost while driving: the base stops both axes and names the silent one.
   std::printf("PROBE heartbeat-lost-start %.6f\n", realtime_s());
   axes.fail_node = -1;
   base.configure();
   base.activate(monotonic_now_s());
-  try {
-    run_loop(base, 2.0, [&](double t_s) {
-      if (t_s > 0.3) {
-        axes.silent_node = kLeftNode;
-      }
-      return true;
-    });
-    std::printf("PROBE heartbeat-lost no error\n");
-  } catch (const DriveError& e) {
-    std::printf("PROBE heartbeat-lost %.6f %s\n", realtime_s(), e.what());
-  }
+  drive_into_fault(base, "heartbeat-lost", [&] { axes.silent_node = kLeftNode; });
   std::printf("PROBE done\n");
   return 0;
 }
