@@ -292,7 +292,7 @@ TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStopped) {
 // names the silent axis. Two periods: the drive files a heartbeat when a loop's read() takes it
 // off the socket, up to a period after it was on the bus, and finds it late at the first read()
 // after the timeout.
-TEST_F(OdriveVm, LostHeartbeatStopsBothAxesWithinTimeoutPlusOnePeriod) {
+TEST_F(OdriveVm, LostHeartbeatStopsBothAxesWithinTimeoutPlusTwoPeriods) {
   const std::string& message = run_.probe["heartbeat-lost"];
   EXPECT_NE(message.find("no heartbeat from ODrive node 3 (left) on vcan0 for 0.3"),
             std::string::npos)
