@@ -223,11 +223,8 @@ class ClearanceTerm final : public CostTerm {
       const double sign = (end == 0 ? 1.0 : -1.0) / cone.sigma[end];
       const Falloff phi = falloff(cone.clearance[end]);
       const double importance = detail::importance(entry.contact_s, options_);
-      const double d = importance * phi.slope * sign;
-      const double c = importance * phi.curvature * sign * sign;
-      accumulate(sum, {importance * phi.value, d * separation.per_accel, d * separation.per_turn,
-                       c * separation.per_accel * separation.per_accel,
-                       c * separation.per_turn * separation.per_turn});
+      accumulate(sum, detail::through_rate(importance * phi.value, importance * phi.slope * sign,
+                                           importance * phi.curvature * sign * sign, separation));
     }
     sides_.next_step();
     return sum;

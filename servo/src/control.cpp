@@ -159,8 +159,7 @@ class AlignTerm final : public CostTerm {
     const double u = m.mean_u;
     const FeatureRate rate{0.0, mean_x_inv_depth,
                            -(agent.speed_mps * mean_inv_depth + 2.0 * m.mean_xu)};
-    return {u * u, 2.0 * u * rate.per_accel, 2.0 * u * rate.per_turn,
-            2.0 * rate.per_accel * rate.per_accel, 2.0 * rate.per_turn * rate.per_turn};
+    return detail::through_rate(u * u, 2.0 * u, 2.0, rate);
   }
 
  private:

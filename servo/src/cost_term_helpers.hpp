@@ -17,21 +17,25 @@ namespace flowsteer::servo::detail {
 // ln 10: σ = w / ln 10 makes exp(−|Δx|/σ) fall to 1/10 at |Δx| = w (CGF §6.2).
 constexpr double kLn10 = 2.302585092994046;
 
+// A term L(s) over a feature s whose rate is `rate`, from L, L'(s) and L''(s): L̇ = L'(s) ṡ, so
+// ∂L̇/∂u = L'(s) ∂ṡ/∂u, and the curvature along u is L''(s) (∂ṡ/∂u)².
+inline TermGradient through_rate(double cost, double slope, double curvature,
+                                 const FeatureRate& rate) {
+  return {cost, slope * rate.per_accel, slope * rate.per_turn,
+          curvature * rate.per_accel * rate.per_accel, curvature * rate.per_turn * rate.per_turn};
+}
+
 // The gradient of L = w·exp(−|s|/σ) (w constant) through the rate of s: L̇ = −L sign(s)/σ · ṡ.
 // `side` is the sign of s that the gradient takes (see SideMemory).
 inline TermGradient exp_falloff(double weight, double s, double side, double sigma,
                                 const FeatureRate& rate) {
   const double value = weight * std::exp(-std::abs(s) / sigma);
-  const double d = -value * side / sigma;
-  const double c = value / (sigma * sigma);
-  return {value, d * rate.per_accel, d * rate.per_turn, c * rate.per_accel * rate.per_accel,
-          c * rate.per_turn * rate.per_turn};
+  return through_rate(value, -value * side / sigma, value / (sigma * sigma), rate);
 }
 
 // The gradient of L = ½ s² through the rate of s: L̇ = s ṡ.
 inline TermGradient half_square(double s, const FeatureRate& rate) {
-  return {0.5 * s * s, s * rate.per_accel, s * rate.per_turn, rate.per_accel * rate.per_accel,
-          rate.per_turn * rate.per_turn};
+  return through_rate(0.5 * s * s, s, 1.0, rate);
 }
 
 inline void accumulate(TermGradient& sum, const TermGradient& g, double weight = 1.0) {
