@@ -49,18 +49,24 @@ void Base::require(Lifecycle expected, const char* operation) const {
 
 void Base::fail(const std::string& during, const std::exception& error) {
   lifecycle_ = Lifecycle::failed;
+  // The link may be what failed: then the zero cannot reach the wheels, and the message must
+  // not claim it did (deactivate() below still tries its own way).
+  std::string outcome = "base stopped";
   try {
     drive_->write({});
-  } catch (const std::exception&) {
-    // The link may be what failed; deactivate() below tries again its own way.
+  } catch (const std::exception& e) {
+    outcome = "the stop could not be sent either";
+    if (std::string(e.what()) != error.what()) {
+      outcome += std::string(" (") + e.what() + ")";
+    }
   }
   try {
     drive_->deactivate();
   } catch (const std::exception&) {
     // Already failing: the first error is the one worth reporting.
   }
-  throw DriveError(std::string(drive_->name()) + ": " + during +
-                   " failed, base stopped: " + error.what());
+  throw DriveError(std::string(drive_->name()) + ": " + during + " failed, " + outcome + ": " +
+                   error.what());
 }
 
 void Base::configure() {

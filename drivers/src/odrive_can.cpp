@@ -488,7 +488,13 @@ void OdriveCanDrive::deactivate() {
 void OdriveCanDrive::write(const WheelSpeeds& wheels) {
   CanSocket& can = socket();
   if (!active_) {
-    throw DriveError(name_ + ": write while not active");
+    if (wheels.left_radps != 0.0 || wheels.right_radps != 0.0) {
+      throw DriveError(name_ + ": write while not active");
+    }
+    for (const Axis& axis : axes_) {
+      can.send(odrive::set_input_vel(axis.config.node_id, 0.0f, 0.0f), config_.timeout_s);
+    }
+    return;
   }
   const double turns_per_rad = config_.motor_turns_per_wheel_turn / (2.0 * std::numbers::pi);
   const double wheel_radps[2] = {wheels.left_radps, wheels.right_radps};

@@ -54,6 +54,11 @@ void SimBase::deactivate() {
 }
 
 void SimBase::write(const WheelSpeeds& wheels) {
+  if (phase_ != Phase::unconfigured && wheels.left_radps == 0.0 && wheels.right_radps == 0.0) {
+    advance();
+    commanded_ = {};  // a stop, taken in any phase
+    return;
+  }
   require_active("write");
   if (!std::isfinite(wheels.left_radps) || !std::isfinite(wheels.right_radps)) {
     throw DriveError("sim_base: wheel speeds not finite");

@@ -1,10 +1,15 @@
 #include "flowsteer/eval/output_files.hpp"
 
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
-#include <fstream>
+#include <cstring>
 #include <iomanip>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
@@ -52,6 +57,44 @@ std::string json_number(double value) {
   return out.str();
 }
 
+constexpr char kStagingPrefix[] = ".staging-";
+
+// A run killed before its commit (SIGKILL, a power cut) leaves its staging folder behind; the
+// next run in the same folder removes every one whose process is gone.
+void remove_abandoned_staging(const std::filesystem::path& dir) {
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
+    const std::string name = entry.path().filename().string();
+    if (!name.starts_with(kStagingPrefix)) {
+      continue;
+    }
+    const std::string pid_text = name.substr(std::strlen(kStagingPrefix));
+    pid_t pid = 0;
+    const auto [end, status] =
+        std::from_chars(pid_text.data(), pid_text.data() + pid_text.size(), pid);
+    const bool ours = status == std::errc() && end == pid_text.data() + pid_text.size();
+    if (ours && pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) {
+      std::error_code ignored;
+      std::filesystem::remove_all(entry.path(), ignored);
+    }
+  }
+}
+
+// Writes `size` bytes to `path`, or throws std::runtime_error naming the file and the reason
+// (a full disk shows at the write or at the close, as ENOSPC).
+void write_bytes(const std::filesystem::path& path, const void* data, std::size_t size) {
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) {
+    throw std::runtime_error("cannot write " + path.string() + ": " + std::strerror(errno));
+  }
+  const bool written = std::fwrite(data, 1, size, file) == size && std::fflush(file) == 0;
+  const int write_errno = errno;
+  if (std::fclose(file) != 0 || !written) {
+    throw std::runtime_error("cannot write " + path.string() + ": " +
+                             std::strerror(written ? errno : write_errno));
+  }
+}
+
 }  // namespace
 
 OutputDir::OutputDir(std::filesystem::path dir) : dir_(std::move(dir)) {
@@ -61,8 +104,9 @@ OutputDir::OutputDir(std::filesystem::path dir) : dir_(std::move(dir)) {
     throw std::runtime_error("cannot create the output folder " + dir_.string() + ": " +
                              error.message());
   }
-  std::random_device random;
-  staging_ = dir_ / (".staging-" + std::to_string(random()));
+  remove_abandoned_staging(dir_);
+  staging_ = dir_ / (std::string(kStagingPrefix) + std::to_string(::getpid()));
+  std::filesystem::remove_all(staging_, error);  // a dead run's, under a reused process id
   std::filesystem::create_directory(staging_, error);
   if (error) {
     throw std::runtime_error("cannot write into the output folder " + dir_.string() + ": " +
@@ -97,24 +141,22 @@ void OutputDir::commit() {
 }
 
 void write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) {
-    throw std::runtime_error("cannot write " + path.string());
-  }
+  write_bytes(path, text.data(), text.size());
 }
 
 void write_image(const std::filesystem::path& path, const cv::Mat& image) {
-  bool written = false;
+  std::vector<std::uint8_t> encoded;
+  bool ok = false;
   try {
-    written = cv::imwrite(path.string(), image);
+    ok = cv::imencode(path.extension().string(), image, encoded);
   } catch (const cv::Exception& e) {
     throw std::runtime_error("cannot write " + path.string() + ": " + e.what());
   }
-  if (!written) {
-    throw std::runtime_error("cannot write " + path.string());
+  if (!ok) {
+    throw std::runtime_error("cannot write " + path.string() + ": cannot encode the image as " +
+                             path.extension().string());
   }
+  write_bytes(path, encoded.data(), encoded.size());
 }
 
 std::string format_csv_number(double value) {

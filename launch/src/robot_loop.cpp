@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <iomanip>
 #include <sstream>
 
@@ -11,10 +12,12 @@
 namespace flowsteer::launch {
 namespace {
 
-// Leaves the base stopped and deactivated however the loop ends.
+// Leaves the base stopped and deactivated however the loop ends; when an error ends it (the
+// camera gone, a perception failure) the log says the base was stopped before the error shows.
 class BaseStopper {
  public:
-  BaseStopper(drivers::Base* robot_base, std::ostream& log) : base_(robot_base), log_(log) {}
+  BaseStopper(drivers::Base* robot_base, std::ostream& log)
+      : base_(robot_base), log_(log), exceptions_(std::uncaught_exceptions()) {}
   ~BaseStopper() {
     if (base_ == nullptr || base_->lifecycle() != drivers::Lifecycle::active) {
       return;
@@ -22,6 +25,9 @@ class BaseStopper {
     try {
       base_->emergency_stop();
       base_->deactivate();
+      if (std::uncaught_exceptions() > exceptions_) {
+        log_ << "flowsteer run: the run failed: base " << base_->drive().name() << " stopped\n";
+      }
     } catch (const std::exception& e) {
       log_ << "flowsteer run: stopping " << base_->drive().name() << " failed: " << e.what()
            << "\n";
@@ -33,6 +39,7 @@ class BaseStopper {
  private:
   drivers::Base* base_;
   std::ostream& log_;
+  int exceptions_;
 };
 
 }  // namespace

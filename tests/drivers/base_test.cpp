@@ -91,6 +91,19 @@ TEST(SimBase, WheelLagAndStopWhenCommandsCease) {
   }
 }
 
+TEST(SimBase, AStopIsTakenInAnyPhaseOnceConfigured) {
+  SimClock clock;
+  const std::unique_ptr<SimBase> sim = sim_base(clock);
+  EXPECT_THROW(sim->write({}), DriveError);  // not configured: no device to stop
+  sim->configure();
+  EXPECT_NO_THROW(sim->write({}));
+  EXPECT_THROW(sim->write({1.0, 1.0}), DriveError);
+  sim->activate();
+  sim->write({1.0, 1.0});
+  sim->deactivate();
+  EXPECT_NO_THROW(sim->write({}));
+}
+
 // A drive whose write fails on demand, recording what the base did about it.
 class FlakyDrive final : public Drive {
  public:

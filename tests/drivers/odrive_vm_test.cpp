@@ -19,100 +19,17 @@
 
 #include <gtest/gtest.h>
 
+#include "can_capture.hpp"
 #include "vm_test_support.hpp"
 
 namespace {
 
-struct Frame {
-  double time_s = 0.0;
-  unsigned id = 0;
-  bool rtr = false;
-  std::string hex;  // payload as candump prints it, upper case
-  unsigned node() const { return id >> 5; }
-  unsigned cmd() const { return id & 0x1f; }
-  float f32(int index) const {
-    std::uint8_t b[4];
-    for (int i = 0; i < 4; ++i) {
-      b[i] = static_cast<std::uint8_t>(std::stoul(hex.substr(8 * index + 2 * i, 2), nullptr, 16));
-    }
-    float value;
-    std::memcpy(&value, b, 4);
-    return value;
-  }
-  std::string text() const {
-    char id_text[8];
-    std::snprintf(id_text, sizeof id_text, "%03X", id);
-    return std::string(id_text) + "#" + (rtr ? "R" : hex);
-  }
-};
+using flowsteer::vm_test::CanFrame;
+using flowsteer::vm_test::drive_frames_between;
+using flowsteer::vm_test::stamp;
+using VmRun = flowsteer::vm_test::CanCaptureRun;
 
-struct VmRun {
-  std::string console;
-  std::map<std::string, std::string> probe;  // "activate" → "1700000000.123456", ...
-  std::vector<Frame> frames;
-};
-
-// "(1700000000.123456) vcan0 06B#0200000001000000" → Frame.
-std::optional<Frame> parse_candump(const std::string& line) {
-  Frame f;
-  char iface[32];
-  char body[64];
-  if (std::sscanf(line.c_str(), " (%lf) %31s %63s", &f.time_s, iface, body) != 3) {
-    return std::nullopt;
-  }
-  const std::string text = body;
-  const std::size_t hash = text.find('#');
-  if (hash == std::string::npos || hash > 3) {  // standard 11-bit ids only
-    return std::nullopt;
-  }
-  f.id = static_cast<unsigned>(std::stoul(text.substr(0, hash), nullptr, 16));
-  const std::string data = text.substr(hash + 1);
-  f.rtr = !data.empty() && data[0] == 'R';
-  f.hex = f.rtr ? "" : data;
-  return f;
-}
-
-VmRun parse(const std::string& console) {
-  VmRun run;
-  run.console = console;
-  bool in_capture = false;
-  flowsteer::vm_test::for_each_line(console, [&](const std::string& line) {
-    if (line.find("=== CAPTURE BEGIN ===") != std::string::npos) {
-      in_capture = true;
-    } else if (line.find("=== CAPTURE END ===") != std::string::npos) {
-      in_capture = false;
-    } else if (in_capture) {
-      if (const auto frame = parse_candump(line)) {
-        run.frames.push_back(*frame);
-      }
-    } else if (const auto probe = flowsteer::vm_test::probe_line(line)) {
-      run.probe[probe->key] = probe->value;
-    }
-  });
-  return run;
-}
-
-double stamp(const VmRun& run, const std::string& key) {
-  const auto it = run.probe.find(key);
-  return it == run.probe.end() ? NAN : std::atof(it->second.c_str());
-}
-
-// Frames the drive sends (not the axes' heartbeats and estimates, not the RTR requests).
-bool from_drive(const Frame& f) {
-  return !f.rtr && (f.cmd() == 0x07 || f.cmd() == 0x0b || f.cmd() == 0x0d);
-}
-
-std::vector<std::string> drive_frames_between(const VmRun& run, double from_s, double to_s) {
-  std::vector<std::string> out;
-  for (const Frame& f : run.frames) {
-    if (f.time_s >= from_s && f.time_s <= to_s && from_drive(f)) {
-      out.push_back(f.text());
-    }
-  }
-  return out;
-}
-
-class OdriveVm : public flowsteer::vm_test::VmTest<VmRun, parse> {
+class OdriveVm : public flowsteer::vm_test::VmTest<VmRun, flowsteer::vm_test::parse_can_capture> {
  protected:
   void SetUp() override {
     VmTest::SetUp();
@@ -154,8 +71,8 @@ TEST_F(OdriveVm, StreamsTheCommandedWheelSpeedsAtTheLoopRate) {
   // (0.5 + 0.6·0.2) / 0.05 rad/s forward; the right motor is mirrored (direction −1).
   const double left_turns = (0.5 + 0.6 * 0.2) / 0.05 / (2.0 * std::numbers::pi);
   const double right_turns = -(0.5 - 0.6 * 0.2) / 0.05 / (2.0 * std::numbers::pi);
-  std::map<unsigned, std::vector<Frame>> vel;
-  for (const Frame& f : run_.frames) {
+  std::map<unsigned, std::vector<CanFrame>> vel;
+  for (const CanFrame& f : run_.frames) {
     if (f.time_s > from_s && f.time_s <= last_s + kStampSlackS && f.cmd() == 0x0d && !f.rtr) {
       vel[f.node()].push_back(f);
     }
@@ -195,7 +112,7 @@ TEST_F(OdriveVm, WatchdogStopsTheWheelsWithinTimeoutPlusOnePeriod) {
     SCOPED_TRACE("node " + std::to_string(node));
     std::optional<double> first_zero_s;
     double previous = INFINITY;
-    for (const Frame& f : run_.frames) {
+    for (const CanFrame& f : run_.frames) {
       if (f.time_s <= last_s || f.time_s >= deactivate_s || f.node() != node || f.cmd() != 0x0d ||
           f.rtr) {
         continue;
@@ -237,7 +154,7 @@ TEST_F(OdriveVm, DeactivateReturnsOnlyAfterBothAxesReportIdle) {
     SCOPED_TRACE("node " + std::to_string(node));
     double requested_s = NAN;  // the last idle request
     double confirmed_s = NAN;  // the first idle heartbeat after it
-    for (const Frame& f : run_.frames) {
+    for (const CanFrame& f : run_.frames) {
       if (f.node() != node || f.time_s > deactivated_s + kStampSlackS) {
         continue;
       }
@@ -264,7 +181,7 @@ TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStopped) {
       << message;
   EXPECT_NE(message.find("base stopped"), std::string::npos) << message;
   // The first heartbeat with the error, then the stops for both axes, and no motion after.
-  const auto error_hb = std::find_if(run_.frames.begin(), run_.frames.end(), [](const Frame& f) {
+  const auto error_hb = std::find_if(run_.frames.begin(), run_.frames.end(), [](const CanFrame& f) {
     return f.id == 0x0a1 && f.hex.starts_with("00020000");
   });
   ASSERT_NE(error_hb, run_.frames.end());
@@ -299,14 +216,14 @@ TEST_F(OdriveVm, LostHeartbeatStopsBothAxesWithinTimeoutPlusTwoPeriods) {
       << message;
   EXPECT_NE(message.find("base stopped"), std::string::npos) << message;
   const auto last_heartbeat = std::find_if(run_.frames.rbegin(), run_.frames.rend(),
-                                           [](const Frame& f) { return f.id == 0x061; });
+                                           [](const CanFrame& f) { return f.id == 0x061; });
   ASSERT_NE(last_heartbeat, run_.frames.rend());
   const double lost_s = last_heartbeat->time_s;
   for (const char* stop : {"06D#0000000000000000", "0AD#0000000000000000"}) {
     SCOPED_TRACE(stop);
     const auto first_stop =
         std::find_if(run_.frames.begin(), run_.frames.end(),
-                     [&](const Frame& f) { return f.time_s > lost_s && f.text() == stop; });
+                     [&](const CanFrame& f) { return f.time_s > lost_s && f.text() == stop; });
     ASSERT_NE(first_stop, run_.frames.end()) << "no stop after the last heartbeat";
     const double delay_s = first_stop->time_s - lost_s;
     std::printf("%s %.1f ms after the last heartbeat\n", stop, 1e3 * delay_s);
@@ -314,7 +231,7 @@ TEST_F(OdriveVm, LostHeartbeatStopsBothAxesWithinTimeoutPlusTwoPeriods) {
     EXPECT_GT(delay_s, kTimeoutS - kStampSlackS);  // not before the heartbeat was late
   }
   std::vector<std::string> after;
-  for (const Frame& f : run_.frames) {
+  for (const CanFrame& f : run_.frames) {
     if (f.time_s > lost_s && from_drive(f)) {
       after.push_back(f.text());
     }

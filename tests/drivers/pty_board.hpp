@@ -47,6 +47,13 @@ class Pty {
   }
   int master() const { return master_.get(); }
   const std::string& slave_path() const { return slave_path_; }
+  // The board's end goes away, as when a USB adapter is pulled: closing both of the test's
+  // descriptors leaves the drive's slave descriptor hung up (reads and writes fail with EIO).
+  // The board must be stopped first.
+  void hang_up() {
+    master_.reset();
+    slave_.reset();
+  }
 
  private:
   UniqueFd master_;

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -42,6 +43,35 @@ CommandStageConfig stage_config() {
   c.geometry = {0.4, 0.05};
   c.watchdog = {0.5, 0.2};
   return c;
+}
+
+// Drives `base` until its board's port goes away (the adapter pulled: the pty's other end
+// closed), then expects the next update to fail at once, saying the port hung up and that the
+// stop could not be sent, and the base to be left failed. Prints the time from the hang-up to
+// the error.
+void expect_hang_up_fails_the_base(Base& base, Board& board, Pty& pty, const std::string& port) {
+  base.configure();
+  base.activate(now_s());
+  base.command({0.2, 0.3}, now_s());
+  base.update(now_s());
+  board.stop();
+  pty.hang_up();
+  const double hung_up_s = now_s();
+  base.command({0.2, 0.3}, now_s());
+  try {
+    base.update(now_s());
+    ADD_FAILURE() << "no DriveError after the port hung up";
+  } catch (const DriveError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("update failed, the stop could not be sent either"), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("serial " + port + ": "), std::string::npos) << message;
+    EXPECT_NE(message.find("Input/output error"), std::string::npos) << message;
+  }
+  const double error_after_s = now_s() - hung_up_s;
+  std::printf("time from hang-up to the error: %.3f ms\n", 1e3 * error_after_s);
+  EXPECT_LT(error_after_s, 0.5) << "the drive waited on a port that is gone";
+  EXPECT_EQ(base.lifecycle(), Lifecycle::failed);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -184,6 +214,14 @@ TEST(ArduinoBridge, GarbledReplyStopsTheBase) {
   board.stop();
   EXPECT_EQ(base.lifecycle(), Lifecycle::failed);
   EXPECT_EQ(board.lines().back(), "m 0 0");  // the base was told to stop
+}
+
+TEST(ArduinoBridge, PortGoneMidRunIsAClearErrorAndFailsTheBase) {
+  Pty pty;
+  ArduinoBoard board(pty);
+  board.start();
+  Base base(std::make_unique<ArduinoBridgeDrive>(arduino_config(pty)), stage_config());
+  expect_hang_up_fails_the_base(base, board, pty, pty.slave_path());
 }
 
 TEST(ArduinoBridge, ShortReplyTimesOut) {
@@ -421,6 +459,14 @@ TEST(RoboClaw, ReplyWithBadCrcIsAClearErrorAndStopsTheBase) {
   EXPECT_EQ(p[p.size() - 3].command, 78);
   EXPECT_EQ(p.back().command, 37);
   EXPECT_EQ(p.back().data, std::vector<std::uint8_t>(8, 0));
+}
+
+TEST(RoboClaw, PortGoneMidRunIsAClearErrorAndFailsTheBase) {
+  Pty pty;
+  RoboClawBoard board(pty);
+  board.start();
+  Base base(std::make_unique<RoboClawDrive>(roboclaw_config(pty)), stage_config());
+  expect_hang_up_fails_the_base(base, board, pty, pty.slave_path());
 }
 
 TEST(RoboClaw, GarbledAckIsAClearError) {

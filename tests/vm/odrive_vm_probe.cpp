@@ -18,6 +18,7 @@
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/drivers/base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
+#include "simulated_odrive.hpp"
 
 namespace {
 
@@ -33,82 +34,6 @@ double realtime_s() {
   clock_gettime(CLOCK_REALTIME, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
-
-// Two ODrive axes as firmware 0.5.x presents them on the bus: heartbeats every 20 ms,
-// Set_Axis_Requested_State obeyed, Set_Input_Vel integrated into the position, encoder
-// estimates on request. `fail_node` makes that axis report CONTROLLER_FAILED and drop to idle.
-class SimulatedAxes {
- public:
-  SimulatedAxes() : socket_("vcan0"), thread_([this] { run(); }) {}
-  ~SimulatedAxes() {
-    stop_ = true;
-    thread_.join();
-  }
-  std::atomic<int> fail_node{-1};
-  std::atomic<int> silent_node{-1};  // sends no heartbeat (a cable pulled, a board reset)
-
- private:
-  struct Axis {
-    std::uint8_t node;
-    std::uint8_t state = odrive::kAxisStateIdle;
-    float vel_turns_per_s = 0.0f;
-    float pos_turns = 0.0f;
-  };
-
-  void run() {
-    double last_heartbeat_s = 0.0;
-    double last_s = monotonic_now_s();
-    while (!stop_) {
-      const double now_s = monotonic_now_s();
-      for (Axis& axis : axes_) {
-        axis.pos_turns += static_cast<float>(axis.vel_turns_per_s * (now_s - last_s));
-      }
-      last_s = now_s;
-      if (now_s - last_heartbeat_s >= 0.02) {
-        last_heartbeat_s = now_s;
-        for (Axis& axis : axes_) {
-          odrive::Heartbeat hb;
-          if (fail_node == axis.node) {
-            hb.axis_error = 0x200;
-            axis.state = odrive::kAxisStateIdle;
-            axis.vel_turns_per_s = 0.0f;
-          }
-          hb.axis_state = axis.state;
-          if (silent_node != axis.node) {
-            socket_.send(odrive::heartbeat_frame(axis.node, hb), 0.1);
-          }
-        }
-      }
-      const auto frame = socket_.receive(0.005);
-      if (!frame) {
-        continue;
-      }
-      for (Axis& axis : axes_) {
-        if (odrive::node_of(frame->can_id) != axis.node) {
-          continue;
-        }
-        const std::uint32_t cmd = odrive::cmd_of(frame->can_id);
-        if (cmd == odrive::kSetAxisRequestedState && frame->can_dlc >= 4) {
-          std::uint32_t requested = 0;
-          std::memcpy(&requested, frame->data, 4);
-          if (fail_node != axis.node) {
-            axis.state = static_cast<std::uint8_t>(requested);
-          }
-        } else if (cmd == odrive::kSetInputVel && frame->can_dlc == 8) {
-          std::memcpy(&axis.vel_turns_per_s, frame->data, 4);
-        } else if (cmd == odrive::kGetEncoderEstimates && (frame->can_id & CAN_RTR_FLAG) != 0) {
-          const float vel = axis.state == odrive::kAxisStateClosedLoop ? axis.vel_turns_per_s : 0;
-          socket_.send(odrive::encoder_estimates_frame(axis.node, {axis.pos_turns, vel}), 0.1);
-        }
-      }
-    }
-  }
-
-  CanSocket socket_;
-  Axis axes_[2] = {{kLeftNode}, {kRightNode}};
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-};
 
 // Calls update() every loop period for duration_s; `command` says whether to send a fresh
 // command first. Returns the realtime of the last command sent; `commanded` gets the state
@@ -168,7 +93,7 @@ int run() {
     }
   }
 
-  SimulatedAxes axes;
+  flowsteer::vm_test::SimulatedAxes axes("vcan0", kLeftNode, kRightNode);
   CommandStageConfig stage;
   stage.geometry = {0.4, 0.05};
   stage.limits.max_speed_mps = 0.5;

@@ -1,13 +1,20 @@
 #!/usr/bin/env bash
-# Usage: run_vm.sh KERNEL_CACHE WORK_DIR INIT TIMEOUT_S [--modules "m1 m2"] [--binaries "b1 b2"]
+# Usage: run_vm.sh KERNEL_CACHE WORK_DIR INIT TIMEOUT_S [--memory-mb N] [--modules "m1 m2"]
+#                  [--binaries "b1 b2"]
 # A test VM: fetches the kernel (cached under KERNEL_CACHE, which every VM test shares), builds
 # WORK_DIR/initramfs.cpio.gz with INIT as /init and the modules and binaries (a name without a
-# slash is looked up on PATH), boots it for at most TIMEOUT_S and leaves the console in
-# WORK_DIR/console.log. Exits 77 with the reason on stdout when qemu cannot run at all.
+# slash is looked up on PATH), boots it with N MB of memory (default 512) for at most TIMEOUT_S
+# and leaves the console in WORK_DIR/console.log. Exits 77 with the reason on stdout when qemu
+# cannot run at all.
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
 kernel_cache=${1:?usage}; work=${2:?usage}; init=${3:?usage}; timeout_s=${4:?usage}; shift 4
+memory_mb=512
+if [[ ${1:-} == --memory-mb ]]; then
+  memory_mb=${2:?usage}
+  shift 2
+fi
 mkdir -p "$work"
 
 if ! command -v qemu-system-x86_64 > /dev/null; then
@@ -22,4 +29,4 @@ fi
 kroot=$("$here/fetch_kernel.sh" "$kernel_cache")
 # The rest of the arguments (--modules, --binaries) are make_initramfs.sh's.
 "$here/make_initramfs.sh" "$kroot" "$work/initramfs.cpio.gz" "$init" "$@"
-"$here/boot.sh" "$kroot" "$work/initramfs.cpio.gz" "$work/console.log" "$timeout_s"
+"$here/boot.sh" "$kroot" "$work/initramfs.cpio.gz" "$work/console.log" "$timeout_s" "$memory_mb"

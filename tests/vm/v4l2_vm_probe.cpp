@@ -9,7 +9,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <exception>
 #include <functional>
 #include <string>
@@ -19,6 +18,7 @@
 
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/camera_io/v4l2_camera.hpp"
+#include "vivid_control.hpp"
 
 namespace {
 
@@ -28,6 +28,7 @@ using flowsteer::camera_io::PixelFormat;
 using flowsteer::camera_io::ReadStatus;
 using flowsteer::camera_io::V4l2Camera;
 using flowsteer::camera_io::V4l2Options;
+using flowsteer::vm_test::set_vivid_control;
 
 std::uint32_t device_caps(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDWR | O_NONBLOCK);
@@ -38,25 +39,6 @@ std::uint32_t device_caps(const std::string& path) {
   const bool ok = ::ioctl(fd, VIDIOC_QUERYCAP, &cap) == 0;
   ::close(fd);
   return ok ? cap.device_caps : 0;
-}
-
-// Sets a vivid control by its name; the driver's private control ids are not in any header.
-void set_control(const std::string& device, const char* name, std::int32_t value) {
-  const int fd = ::open(device.c_str(), O_RDWR | O_NONBLOCK);
-  v4l2_queryctrl query{};
-  query.id = V4L2_CTRL_FLAG_NEXT_CTRL;
-  while (::ioctl(fd, VIDIOC_QUERYCTRL, &query) == 0) {
-    if (std::strcmp(reinterpret_cast<const char*>(query.name), name) == 0) {
-      v4l2_control control{query.id, value};
-      const int result = ::ioctl(fd, VIDIOC_S_CTRL, &control);
-      std::printf("PROBE control %s=%d %s\n", name, value, result == 0 ? "set" : "failed");
-      ::close(fd);
-      return;
-    }
-    query.id |= V4L2_CTRL_FLAG_NEXT_CTRL;
-  }
-  std::printf("PROBE control %s not found\n", name);
-  ::close(fd);
 }
 
 // Mean BGR over a 16×16 patch at the centre of each of the eight colour bars, half-way down.
@@ -157,11 +139,11 @@ int main() {
     options.format = PixelFormat::yuyv;
     options.width_px = 320;
     options.height_px = 180;
-    set_control(capture_node, "Percentage of Dropped Buffers", 50);
+    set_vivid_control(capture_node, "Percentage of Dropped Buffers", 50);
     capture("drop", options, 15, false);
 
     // A camera that stops delivering: every buffer dropped.
-    set_control(capture_node, "Percentage of Dropped Buffers", 100);
+    set_vivid_control(capture_node, "Percentage of Dropped Buffers", 100);
     {
       V4l2Camera camera(options);
       Frame frame;
@@ -172,7 +154,7 @@ int main() {
       std::printf("PROBE timeout %s %.3f\n", status == ReadStatus::timeout ? "timeout" : "frame",
                   waited_s);
     }
-    set_control(capture_node, "Percentage of Dropped Buffers", 0);
+    set_vivid_control(capture_node, "Percentage of Dropped Buffers", 0);
 
     expect_error("missing-device", [] {
       V4l2Options missing;

@@ -3,7 +3,8 @@
 // The host side of a VM test (tests/vm): boots the VM once per test suite with the runner the
 // test was built with and reads what the probe printed on the console, "PROBE key value" lines.
 // The test's CMake target defines FLOWSTEER_VM_SCRIPT (run_*_vm.sh), FLOWSTEER_VM_KERNEL_CACHE,
-// FLOWSTEER_VM_WORK_DIR and FLOWSTEER_VM_PROBE (flowsteer_add_vm_test in tests/CMakeLists.txt).
+// FLOWSTEER_VM_WORK_DIR, FLOWSTEER_VM_PROBE and FLOWSTEER_VM_ALSO (a second program for the
+// script, or empty; flowsteer_add_vm_test in tests/CMakeLists.txt).
 
 #include <sys/wait.h>
 
@@ -76,9 +77,11 @@ template <typename ProbeRun, ProbeRun (*Parse)(const std::string& console)>
 class VmTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
+    const std::string also = FLOWSTEER_VM_ALSO;
     script_output_ = run_command(std::string("bash '") + FLOWSTEER_VM_SCRIPT + "' '" +
                                      FLOWSTEER_VM_KERNEL_CACHE + "' '" + FLOWSTEER_VM_WORK_DIR +
-                                     "' '" + FLOWSTEER_VM_PROBE + "' 2>&1",
+                                     "' '" + FLOWSTEER_VM_PROBE + "'" +
+                                     (also.empty() ? "" : " '" + also + "'") + " 2>&1",
                                  status_);
     std::ifstream log(std::string(FLOWSTEER_VM_WORK_DIR) + "/console.log");
     std::stringstream console;

@@ -38,8 +38,10 @@ struct DriveState {
 // A differential base's motor controller, with the lifecycle of a ros2_control hardware
 // interface: configure() opens the device and checks that the controller answers, activate()
 // enables the motors with a zero command, write() sends wheel speeds, read() collects feedback,
-// deactivate() commands zero and disables the motors. Every call either succeeds or throws
-// DriveError; none blocks longer than the drive's configured timeout.
+// deactivate() commands zero and disables the motors. A write() of zero is a stop and is sent
+// in any phase once configured, also after a drive has stopped itself on a fault, so a caller
+// can always try to stop the wheels. Every call either succeeds or throws DriveError; none
+// blocks longer than the drive's configured timeout.
 //
 // Drives see wheel speeds only. Limits, the watchdog and the conversion from the controller's
 // turn rate live in `CommandStage`, in front of every drive (see base.hpp).

@@ -10,9 +10,10 @@
 
 namespace flowsteer::eval {
 
-// An output folder that is written all at once: files go to a staging folder inside it and
-// move into place on commit(); without a commit (an error on the way) the staging folder is
-// removed and the folder keeps what it had.
+// An output folder that is written all at once: files go to a staging folder inside it
+// (.staging-PID) and move into place on commit(), each by one rename, so no file in the folder
+// is ever half-written. Without a commit (an error on the way) the staging folder is removed
+// and the folder keeps what it had; one left by a killed run is removed by the next run there.
 class OutputDir {
  public:
   // Creates the folder; throws std::runtime_error naming it when that fails.

@@ -1,0 +1,177 @@
+// Boots the robot test VM (tests/vm/run_robot_vm.sh), in which tests/vm/robot_vm_probe runs
+// `flowsteer run` on vivid's camera and a simulated ODrive pair on vcan0 and ends it four
+// ways, and checks each end against candump's record of the bus: SIGINT and SIGTERM stop the
+// wheels and exit 0; the camera unplugged stops the wheels and exits 1 naming the camera; the
+// CAN interface taken down ends the run at once with status 1 naming the interface. Each test
+// prints the time from the fault to the first zero command on the bus (or to the exit).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "can_capture.hpp"
+#include "vm_test_support.hpp"
+
+namespace {
+
+using flowsteer::vm_test::CanCaptureRun;
+using flowsteer::vm_test::CanFrame;
+using flowsteer::vm_test::stamp;
+
+constexpr unsigned kNodes[] = {3, 5};
+constexpr unsigned kSetAxisRequestedState = 0x07;
+constexpr unsigned kSetInputVel = 0x0d;
+constexpr char kIdleRequest[] = "01000000";
+// The VM emulates its CPU: flowsteer's loop, a frame's perception included, takes a few times
+// what it takes on the machine itself. A stop must still come within this.
+constexpr double kStopWithinS = 0.5;
+
+struct Exit {
+  int status = -1;
+  double realtime_s = NAN;
+};
+
+class RobotVm
+    : public flowsteer::vm_test::VmTest<CanCaptureRun, flowsteer::vm_test::parse_can_capture> {
+ protected:
+  // The fault's stamp; a failure (and NaN) when the probe never saw the run start driving.
+  double fault_s(const std::string& name) {
+    const double at_s = stamp(run_, name + "-fault");
+    EXPECT_TRUE(std::isfinite(at_s)) << name << "-fault " << run_.probe[name + "-fault"];
+    return at_s;
+  }
+
+  Exit exit_of(const std::string& name) {
+    Exit e;
+    std::istringstream in(run_.probe[name + "-exit"]);
+    in >> e.status >> e.realtime_s;
+    return e;
+  }
+
+  // flowsteer's output for the case, one line per line.
+  std::string log_of(const std::string& name) {
+    std::string log;
+    for (int k = 0; run_.probe.count(name + "-log-" + std::to_string(k)); ++k) {
+      log += run_.probe[name + "-log-" + std::to_string(k)] + "\n";
+    }
+    return log;
+  }
+
+  // The first Set_Input_Vel of zero to `node` after `from_s`.
+  std::optional<double> first_zero_velocity(unsigned node, double from_s) {
+    for (const CanFrame& f : run_.frames) {
+      if (f.time_s > from_s && f.node() == node && f.cmd() == kSetInputVel && !f.rtr &&
+          f.f32(0) == 0.0f) {
+        return f.time_s;
+      }
+    }
+    return std::nullopt;
+  }
+
+  // Whether `node` was sent a non-zero velocity in (from_s, to_s].
+  bool driven(unsigned node, double from_s, double to_s) {
+    for (const CanFrame& f : run_.frames) {
+      if (f.time_s > from_s && f.time_s <= to_s && f.node() == node && f.cmd() == kSetInputVel &&
+          !f.rtr && f.f32(0) != 0.0f) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // Both axes: a zero velocity within kStopWithinS of the fault, no other velocity after it
+  // until the run ended, then an idle request. Returns the later of the two zero commands'
+  // delays.
+  double expect_wheels_stopped(double fault_s, double exit_s) {
+    double slowest_s = 0.0;
+    for (const unsigned node : kNodes) {
+      SCOPED_TRACE("node " + std::to_string(node));
+      const std::optional<double> zero_s = first_zero_velocity(node, fault_s);
+      if (!zero_s) {
+        ADD_FAILURE() << "no zero velocity on the bus after the fault";
+        continue;
+      }
+      slowest_s = std::max(slowest_s, *zero_s - fault_s);
+      EXPECT_LT(*zero_s - fault_s, kStopWithinS);
+      EXPECT_FALSE(driven(node, *zero_s, exit_s)) << "a wheel was driven again after the stop";
+      bool idle_requested = false;
+      for (const CanFrame& f : run_.frames) {
+        idle_requested |= f.time_s > *zero_s && f.time_s <= exit_s && f.node() == node &&
+                          f.cmd() == kSetAxisRequestedState && f.hex == kIdleRequest;
+      }
+      EXPECT_TRUE(idle_requested) << "the axis was not set idle before flowsteer exited";
+    }
+    return slowest_s;
+  }
+
+  // The run had been driving: the controller sent non-zero wheel speeds before the fault.
+  void expect_driving_before(const std::string& name, double fault_s) {
+    const double start_s = stamp(run_, name + "-start");
+    for (const unsigned node : kNodes) {
+      EXPECT_TRUE(driven(node, start_s, fault_s))
+          << "node " << node << " never driven before the fault\n"
+          << log_of(name);
+    }
+  }
+
+  void check_signal_stop(const std::string& name) {
+    const double at_s = fault_s(name);
+    const Exit e = exit_of(name);
+    const std::string log = log_of(name);
+    expect_driving_before(name, at_s);
+    EXPECT_EQ(e.status, 0) << log;
+    EXPECT_NE(log.find("flowsteer run: stop requested: base odrive vcan0 stopped"),
+              std::string::npos)
+        << log;
+    const double stop_s = expect_wheels_stopped(at_s, e.realtime_s);
+    std::printf("%s: first zero command on the bus %.1f ms after the signal, exit after %.1f ms\n",
+                name.c_str(), 1e3 * stop_s, 1e3 * (e.realtime_s - at_s));
+  }
+};
+
+TEST_F(RobotVm, SigintStopsTheWheelsAndExitsZero) {
+  check_signal_stop("sigint");
+}
+
+TEST_F(RobotVm, SigtermStopsTheWheelsAndExitsZero) {
+  check_signal_stop("sigterm");
+}
+
+TEST_F(RobotVm, CameraUnpluggedStopsTheWheelsAndExitsOneNamingTheCamera) {
+  const double at_s = fault_s("camera-gone");
+  const Exit e = exit_of("camera-gone");
+  const std::string log = log_of("camera-gone");
+  expect_driving_before("camera-gone", at_s);
+  EXPECT_EQ(e.status, 1) << log;
+  EXPECT_NE(log.find("flowsteer run: the run failed: base odrive vcan0 stopped\n"
+                     "flowsteer: error: VIDIOC_DQBUF on /dev/video0 failed: No such device"),
+            std::string::npos)
+      << log;
+  const double stop_s = expect_wheels_stopped(at_s, e.realtime_s);
+  std::printf("camera unplugged: first zero command on the bus %.1f ms after the fault\n",
+              1e3 * stop_s);
+}
+
+TEST_F(RobotVm, CanInterfaceDownEndsTheRunAtOnceNamingTheInterface) {
+  const double at_s = fault_s("can-down");
+  const Exit e = exit_of("can-down");
+  const std::string log = log_of("can-down");
+  expect_driving_before("can-down", at_s);
+  EXPECT_EQ(e.status, 1) << log;
+  // Nothing can reach the axes any more; the run says so instead of claiming a stop.
+  EXPECT_NE(log.find("the stop could not be sent either"), std::string::npos) << log;
+  EXPECT_NE(log.find("vcan0"), std::string::npos) << log;
+  EXPECT_NE(log.find("Network is down"), std::string::npos) << log;
+  // No retrying on a dead bus: the run ends within a loop period or two of the fault.
+  EXPECT_LT(e.realtime_s - at_s, kStopWithinS) << log;
+  std::printf("CAN interface down: flowsteer exited %.1f ms after the fault\n",
+              1e3 * (e.realtime_s - at_s));
+}
+
+}  // namespace

@@ -1,0 +1,113 @@
+#pragma once
+
+// A CAN VM test's console (tests/vm): the probe's "PROBE key value" lines and candump's record
+// of the bus (`candump -L`), which the VM's /init prints between "=== CAPTURE BEGIN ===" and
+// "=== CAPTURE END ===".
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vm_test_support.hpp"
+
+namespace flowsteer::vm_test {
+
+struct CanFrame {
+  double time_s = 0.0;  // candump's CLOCK_REALTIME stamp
+  unsigned id = 0;
+  bool rtr = false;
+  std::string hex;  // payload as candump prints it, upper case
+  // ODrive CAN Simple: the node id in the upper six bits, the command in the lower five.
+  unsigned node() const { return id >> 5; }
+  unsigned cmd() const { return id & 0x1f; }
+  float f32(int index) const {
+    std::uint8_t b[4];
+    for (int i = 0; i < 4; ++i) {
+      b[i] = static_cast<std::uint8_t>(std::stoul(hex.substr(8 * index + 2 * i, 2), nullptr, 16));
+    }
+    float value;
+    std::memcpy(&value, b, 4);
+    return value;
+  }
+  std::string text() const {
+    char id_text[8];
+    std::snprintf(id_text, sizeof id_text, "%03X", id);
+    return std::string(id_text) + "#" + (rtr ? "R" : hex);
+  }
+};
+
+struct CanCaptureRun {
+  std::string console;
+  std::map<std::string, std::string> probe;  // "activate" → "1700000000.123456", ...
+  std::vector<CanFrame> frames;
+};
+
+// "(1700000000.123456) vcan0 06B#0200000001000000" → CanFrame.
+inline std::optional<CanFrame> parse_candump(const std::string& line) {
+  CanFrame f;
+  char iface[32];
+  char body[64];
+  if (std::sscanf(line.c_str(), " (%lf) %31s %63s", &f.time_s, iface, body) != 3) {
+    return std::nullopt;
+  }
+  const std::string text = body;
+  const std::size_t hash = text.find('#');
+  if (hash == std::string::npos || hash > 3) {  // standard 11-bit ids only
+    return std::nullopt;
+  }
+  f.id = static_cast<unsigned>(std::stoul(text.substr(0, hash), nullptr, 16));
+  const std::string data = text.substr(hash + 1);
+  f.rtr = !data.empty() && data[0] == 'R';
+  f.hex = f.rtr ? "" : data;
+  return f;
+}
+
+inline CanCaptureRun parse_can_capture(const std::string& console) {
+  CanCaptureRun run;
+  run.console = console;
+  bool in_capture = false;
+  for_each_line(console, [&](const std::string& line) {
+    if (line.find("=== CAPTURE BEGIN ===") != std::string::npos) {
+      in_capture = true;
+    } else if (line.find("=== CAPTURE END ===") != std::string::npos) {
+      in_capture = false;
+    } else if (in_capture) {
+      if (const auto frame = parse_candump(line)) {
+        run.frames.push_back(*frame);
+      }
+    } else if (const auto probe = probe_line(line)) {
+      run.probe[probe->key] = probe->value;
+    }
+  });
+  return run;
+}
+
+// The number a probe line starts with (a CLOCK_REALTIME stamp); NaN when the key is missing.
+inline double stamp(const CanCaptureRun& run, const std::string& key) {
+  const auto it = run.probe.find(key);
+  return it == run.probe.end() ? NAN : std::atof(it->second.c_str());
+}
+
+// Frames the drive sends (not the axes' heartbeats and estimates, not the RTR requests).
+inline bool from_drive(const CanFrame& f) {
+  return !f.rtr && (f.cmd() == 0x07 || f.cmd() == 0x0b || f.cmd() == 0x0d);
+}
+
+inline std::vector<std::string> drive_frames_between(const CanCaptureRun& run, double from_s,
+                                                     double to_s) {
+  std::vector<std::string> out;
+  for (const CanFrame& f : run.frames) {
+    if (f.time_s >= from_s && f.time_s <= to_s && from_drive(f)) {
+      out.push_back(f.text());
+    }
+  }
+  return out;
+}
+
+}  // namespace flowsteer::vm_test

@@ -1,0 +1,183 @@
+// Runs inside the robot test VM (tests/vm/robot_init.sh): `flowsteer run` as a user runs it,
+// with vivid's capture node as the camera and two simulated ODrive axes on vcan0 as the drive,
+// ended four ways while it drives: SIGINT, SIGTERM, the camera unplugged (vivid's "Disconnect")
+// and the CAN interface taken down. For each it prints, as "PROBE key value" lines, the
+// CLOCK_REALTIME of the fault (candump's clock), how and when flowsteer exited and what it said;
+// tests/launch/robot_vm_test.cpp checks those against candump's record of the bus.
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <thread>
+
+#include "flowsteer/base/clock.hpp"
+#include "simulated_odrive.hpp"
+#include "vivid_control.hpp"
+
+namespace {
+
+using flowsteer::base::monotonic_now_s;
+
+constexpr char kLaunchPath[] = "/tmp/robot.yaml";
+constexpr char kCamera[] = "/dev/video0";
+
+// vivid's webcam input at its smallest size, so the emulated CPU keeps up; the goal far away,
+// so the robot is still driving when the fault comes.
+constexpr char kLaunch[] = R"(camera:
+  type: v4l2
+  timeout_s: 1.0
+  horizontal_fov_rad: 1.047
+  v4l2: {device: /dev/video0, width_px: 320, height_px: 180, frame_rate_hz: 15,
+         pixel_format: YUYV}
+drive:
+  type: odrive_can
+  loop_rate_hz: 50
+  geometry: {wheel_separation_m: 0.40, wheel_radius_m: 0.05}
+  limits: {max_speed_mps: 0.5, max_accel_mps2: 0.5, max_turn_rate: 1.0}
+  watchdog: {timeout_s: 0.5, ramp_s: 0.1}
+  odrive:
+    can_interface: vcan0
+    left: {node_id: 3, direction: 1}
+    right: {node_id: 5, direction: -1}
+    timeout_s: 0.5
+perception:
+  flow: dis_ultrafast
+  segmentation: flow_graph_fast
+  height_m: 0.35
+  pitch_deg: 5.0
+controller:
+  preferred_speed_mps: 0.3
+  robot_width_m: 0.45
+  max_accel_mps2: 0.5
+  max_turn_rate: 1.0
+goal:
+  bearing_rad: 0.0
+  distance_m: 50.0
+)";
+
+double realtime_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// `flowsteer run` with its stdout and stderr in `log_path`.
+pid_t start_flowsteer(const std::string& log_path) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int log = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(log, STDOUT_FILENO);
+    ::dup2(log, STDERR_FILENO);
+    ::execl("/bin/flowsteer", "flowsteer", "run", kLaunchPath, static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+bool log_has(const std::string& log_path, const std::string& text) {
+  std::ifstream in(log_path);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.find(text) != std::string::npos) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// Waits for the run to have started its loop with the drive (its first line names the drive),
+// then lets it drive for `drive_s`; false when it did not start within the time.
+bool wait_until_driving(const std::string& log_path, double drive_s) {
+  const double start_s = monotonic_now_s();
+  while (!log_has(log_path, "drive odrive")) {
+    if (monotonic_now_s() - start_s > 20.0) {
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(std::chrono::duration<double>(drive_s));
+  return true;
+}
+
+struct Exit {
+  int status = -1;  // exit status; 128 + signal when killed
+  double realtime_s = 0.0;
+};
+
+// Waits up to `limit_s` for the process to end; kills it (status 128 + 9) when it does not.
+Exit wait_for_exit(pid_t pid, double limit_s) {
+  const double start_s = monotonic_now_s();
+  Exit result;
+  int raw = 0;
+  while (::waitpid(pid, &raw, WNOHANG) == 0) {
+    if (monotonic_now_s() - start_s > limit_s) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &raw, 0);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  result.realtime_s = realtime_s();
+  result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  return result;
+}
+
+// One run ended by `fault`: prints "PROBE <name>-start T", "PROBE <name>-fault T",
+// "PROBE <name>-exit STATUS T" and each line flowsteer wrote as "PROBE <name>-log-<k> LINE".
+void run_case(const std::string& name, const std::function<void(pid_t)>& fault) {
+  const std::string log_path = "/tmp/" + name + ".log";
+  std::printf("PROBE %s-start %.6f\n", name.c_str(), realtime_s());
+  const pid_t pid = start_flowsteer(log_path);
+  if (!wait_until_driving(log_path, 2.0)) {
+    std::printf("PROBE %s-fault never: flowsteer did not start driving\n", name.c_str());
+  } else {
+    std::printf("PROBE %s-fault %.6f\n", name.c_str(), realtime_s());
+    fault(pid);
+  }
+  const Exit exit = wait_for_exit(pid, 10.0);
+  std::printf("PROBE %s-exit %d %.6f\n", name.c_str(), exit.status, exit.realtime_s);
+  std::ifstream in(log_path);
+  std::string line;
+  for (int k = 0; std::getline(in, line); ++k) {
+    std::printf("PROBE %s-log-%d %s\n", name.c_str(), k, line.c_str());
+  }
+}
+
+int run() {
+  std::ofstream(kLaunchPath) << kLaunch;
+  flowsteer::vm_test::SimulatedAxes axes("vcan0", 3, 5);
+  run_case("sigint", [](pid_t pid) { ::kill(pid, SIGINT); });
+  run_case("sigterm", [](pid_t pid) { ::kill(pid, SIGTERM); });
+  // A button: any value presses it. vivid answers every call on the node with ENODEV until
+  // its last file handle is closed, as a USB camera pulled out does.
+  run_case("camera-gone",
+           [](pid_t) { flowsteer::vm_test::set_vivid_control(kCamera, "Disconnect", 1); });
+  run_case("can-down", [](pid_t) {
+    if (std::system("ip link set vcan0 down") != 0) {
+      std::printf("PROBE can-down-failed ip link set vcan0 down\n");
+    }
+  });
+  std::printf("PROBE done\n");
+  return 0;
+}
+
+}  // namespace
+
+int main() {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  try {
+    return run();
+  } catch (const std::exception& e) {
+    std::printf("PROBE failed %s\n", e.what());
+    return 1;
+  }
+}
