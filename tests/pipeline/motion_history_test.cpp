@@ -13,8 +13,8 @@ namespace {
 // A camera at 30 Hz that dropped frames 3–4 and 8 (the gaps are 2/30 and 3/30 s), and a base
 // whose measured turn rate and speed change at every frame.
 struct Drive {
-  std::vector<double> frame_s = {0.0,       1.0 / 30, 2.0 / 30, 5.0 / 30,
-                                 6.0 / 30,  7.0 / 30, 9.0 / 30, 10.0 / 30};
+  std::vector<double> frame_s = {0.0,      1.0 / 30, 2.0 / 30, 5.0 / 30,
+                                 6.0 / 30, 7.0 / 30, 9.0 / 30, 10.0 / 30};
   // Measured over (frame_s[k-1], frame_s[k]]: held since the frame before.
   double turn_rate(std::size_t k) const { return 0.3 * std::sin(1.7 * static_cast<double>(k)); }
   double speed(std::size_t k) const { return 0.5 + 0.1 * static_cast<double>(k); }
