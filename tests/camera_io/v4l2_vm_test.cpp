@@ -1,7 +1,8 @@
 // Boots the V4L2 test VM (tests/vm/run_vivid_vm.sh), in which tests/vm/v4l2_vm_probe runs
 // V4l2Camera against the kernel's vivid driver, and checks what the probe printed: formats,
 // frames and their sequence and timestamps, vivid's colour bars, a clean stop, dropped frames,
-// a timeout and the errors for bad devices and formats.
+// buffers flagged as errors, a timeout, a stream the driver gives up on and the errors for bad
+// devices and formats.
 
 #include <array>
 #include <cstdio>
@@ -188,6 +189,28 @@ TEST_F(VividVm, ACameraThatDeliversNothingTimesOut) {
   EXPECT_STREQ(status, "timeout");
   EXPECT_GE(waited_s, 0.5);
   EXPECT_LT(waited_s, 1.0);
+}
+
+// Three buffers flagged V4L2_BUF_FLAG_ERROR in the stream: none ends it, and every sequence
+// number after the first frame is either a frame delivered or one counted as dropped (the
+// emulated machine also drops some while it converts, so the count is at least three).
+TEST_F(VividVm, BuffersFlaggedErrorAreSkippedAndCountedAsDropped) {
+  int delivered = 0;
+  unsigned long long dropped = 0;
+  unsigned spanned = 0;
+  ASSERT_EQ(std::sscanf(run_.probe["buffer-errors"].c_str(), "%d %llu %u", &delivered, &dropped,
+                        &spanned),
+            3)
+      << run_.probe["buffer-errors"];
+  EXPECT_EQ(delivered, 12);
+  EXPECT_GE(dropped, 3u);
+  EXPECT_EQ(dropped + static_cast<unsigned long long>(delivered - 1), spanned);
+}
+
+TEST_F(VividVm, AStreamTheDriverGivesUpOnIsAClearError) {
+  const std::string& message = run_.probe["fatal-stream-error"];
+  EXPECT_NE(message.find("VIDIOC_DQBUF on /dev/video"), std::string::npos) << message;
+  EXPECT_NE(message.find("Input/output error"), std::string::npos) << message;
 }
 
 TEST_F(VividVm, MissingDeviceIsAClearError) {

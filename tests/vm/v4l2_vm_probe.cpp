@@ -92,6 +92,33 @@ void capture(const char* key, const V4l2Options& options, int frames, bool bars)
   }
 }
 
+// At each press of vivid's button the next buffer it fills comes back flagged
+// V4L2_BUF_FLAG_ERROR: the camera skips it, counts it as dropped and reads on. Prints the frames
+// delivered (three reads before the first press and after each), the frames counted as dropped
+// after the first, and the driver's sequence numbers they span.
+void capture_through_buffer_errors(const V4l2Options& options, int presses) {
+  V4l2Camera camera(options);
+  Frame frame;
+  int delivered = 0;
+  std::uint32_t first_sequence = 0;
+  std::uint64_t dropped_before = 0;
+  for (int press = 0; press <= presses; ++press) {
+    if (press > 0) {
+      set_vivid_control(options.device, "Inject V4L2_BUF_FLAG_ERROR", 1);
+    }
+    for (int i = 0; i < 3; ++i) {
+      delivered += camera.read(frame, 2.0) == ReadStatus::ok ? 1 : 0;
+      if (delivered == 1) {
+        first_sequence = camera.driver_sequence();
+        dropped_before = camera.dropped_frames();
+      }
+    }
+  }
+  std::printf("PROBE buffer-errors %d %llu %u\n", delivered,
+              static_cast<unsigned long long>(camera.dropped_frames() - dropped_before),
+              camera.driver_sequence() - first_sequence);
+}
+
 }  // namespace
 
 int main() {
@@ -155,6 +182,19 @@ int main() {
                   waited_s);
     }
     set_vivid_control(capture_node, "Percentage of Dropped Buffers", 0);
+
+    capture_through_buffer_errors(options, 3);
+
+    // A stream the driver gives up on (vb2_queue_error): the read fails, naming the call.
+    expect_error("fatal-stream-error", [&] {
+      V4l2Camera camera(options);
+      Frame frame;
+      camera.read(frame, 2.0);
+      set_vivid_control(capture_node, "Inject Fatal Streaming Error", 1);
+      for (int i = 0; i < 10; ++i) {
+        camera.read(frame, 2.0);
+      }
+    });
 
     expect_error("missing-device", [] {
       V4l2Options missing;
