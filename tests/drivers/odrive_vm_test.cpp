@@ -173,7 +173,7 @@ TEST_F(OdriveVm, DeactivateReturnsOnlyAfterBothAxesReportIdle) {
   }
 }
 
-TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStopped) {
+TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStoppedWithinOnePeriod) {
   const std::string& message = run_.probe["axis-error"];
   EXPECT_NE(message.find("ODrive node 5 (right) on vcan0 reports axis error 0x00000200 "
                          "(CONTROLLER_FAILED)"),
@@ -195,6 +195,15 @@ TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStopped) {
   for (const char* stop :
        {"06D#0000000000000000", "067#01000000", "0AD#0000000000000000", "0A7#01000000"}) {
     EXPECT_NE(std::find(after.begin(), after.end(), stop), after.end()) << stop;
+  }
+  // Within one loop period of the heartbeat that reported it: the next read() finds it.
+  for (const char* stop : {"06D#0000000000000000", "0AD#0000000000000000"}) {
+    const auto first_stop = std::find_if(error_hb, run_.frames.end(),
+                                         [&](const CanFrame& f) { return f.text() == stop; });
+    ASSERT_NE(first_stop, run_.frames.end()) << stop;
+    const double delay_s = first_stop->time_s - error_hb->time_s;
+    std::printf("%s %.1f ms after the axis error's heartbeat\n", stop, 1e3 * delay_s);
+    EXPECT_LE(delay_s, kPeriodS + 2.0 * kStampSlackS);
   }
   const auto first_idle = std::find(after.begin(), after.end(), "067#01000000");
   for (auto it = first_idle; it != after.end(); ++it) {
