@@ -6,6 +6,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <cmath>
@@ -65,6 +66,24 @@ bool wait_fd(int fd, short events, double timeout_s, const std::string& what) {
     }
     return ready > 0;
   }
+}
+
+// The kernel's receive stamp (SO_TIMESTAMPNS, CLOCK_REALTIME) moved onto the monotonic clock by
+// its age; now when the stamp is missing or a clock step makes it look younger than nothing.
+double receive_time_s(msghdr& message) {
+  const double now_s = base::monotonic_now_s();
+  for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
+    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+      timespec stamp{};
+      std::memcpy(&stamp, CMSG_DATA(c), sizeof stamp);
+      timespec realtime{};
+      ::clock_gettime(CLOCK_REALTIME, &realtime);
+      const double age_s = static_cast<double>(realtime.tv_sec - stamp.tv_sec) +
+                           1e-9 * static_cast<double>(realtime.tv_nsec - stamp.tv_nsec);
+      return now_s - std::max(0.0, age_s);
+    }
+  }
+  return now_s;
 }
 
 }  // namespace
@@ -209,6 +228,10 @@ CanSocket::CanSocket(const std::string& interface) : interface_(interface) {
   if (::bind(fd_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
     throw DriveError(where + ": bind: " + std::strerror(errno));
   }
+  const int on = 1;
+  if (::setsockopt(fd_.get(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) != 0) {
+    throw DriveError(where + ": SO_TIMESTAMPNS: " + std::strerror(errno));
+  }
 }
 
 void CanSocket::set_filters(const can_filter* filters, std::size_t count) {
@@ -252,12 +275,20 @@ void CanSocket::send(const can_frame& frame, double timeout_s) {
   }
 }
 
-std::optional<can_frame> CanSocket::receive(double timeout_s) {
+std::optional<ReceivedCanFrame> CanSocket::receive(double timeout_s) {
   for (;;) {
-    can_frame frame{};
-    const ssize_t n = ::read(fd_.get(), &frame, sizeof frame);
-    if (n == static_cast<ssize_t>(sizeof frame)) {
-      return frame;
+    ReceivedCanFrame received{};
+    iovec payload{&received.frame, sizeof received.frame};
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+    msghdr message{};
+    message.msg_iov = &payload;
+    message.msg_iovlen = 1;
+    message.msg_control = control;
+    message.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(fd_.get(), &message, 0);
+    if (n == static_cast<ssize_t>(sizeof received.frame)) {
+      received.received_s = receive_time_s(message);
+      return received;
     }
     if (n >= 0) {
       throw DriveError("CAN interface " + interface_ + ": short read of " + std::to_string(n) +
@@ -314,8 +345,9 @@ CanSocket& OdriveCanDrive::socket() {
 void OdriveCanDrive::drain(double wait_s) {
   CanSocket& can = socket();
   double timeout_s = wait_s;
-  while (const std::optional<can_frame> frame = can.receive(timeout_s)) {
+  while (const std::optional<ReceivedCanFrame> received = can.receive(timeout_s)) {
     timeout_s = 0.0;
+    const can_frame* frame = &received->frame;
     if ((frame->can_id & (CAN_EFF_FLAG | CAN_ERR_FLAG)) != 0) {
       continue;
     }
@@ -328,12 +360,12 @@ void OdriveCanDrive::drain(double wait_s) {
       if (cmd == odrive::kHeartbeat) {
         if (const auto heartbeat = odrive::parse_heartbeat(*frame)) {
           axis.heartbeat = *heartbeat;
-          axis.heartbeat_s = base::monotonic_now_s();
+          axis.heartbeat_s = received->received_s;
         }
       } else if (cmd == odrive::kGetEncoderEstimates) {
         if (const auto estimates = odrive::parse_encoder_estimates(*frame)) {
           axis.estimates = *estimates;
-          axis.estimates_s = base::monotonic_now_s();
+          axis.estimates_s = received->received_s;
         }
       }
     }

@@ -76,13 +76,13 @@ class SimulatedAxes {
         }
       }
     }
-    const auto frame = socket_.receive(0.005);
-    if (!frame) {
+    const auto received = socket_.receive(0.005);
+    if (!received) {
       return;
     }
     for (Axis& axis : axes_) {
-      if (odrive::node_of(frame->can_id) == axis.node) {
-        obey(axis, *frame);
+      if (odrive::node_of(received->frame.can_id) == axis.node) {
+        obey(axis, received->frame);
       }
     }
   }

@@ -65,7 +65,15 @@ std::string describe_axis_error(std::uint32_t axis_error);
 
 }  // namespace odrive
 
+// A frame and when the kernel received it, on base::monotonic_now_s()'s clock.
+struct ReceivedCanFrame {
+  can_frame frame;
+  double received_s;
+};
+
 // A raw SocketCAN socket bound to one interface, non-blocking, with deadlines on every wait.
+// Frames carry the kernel's receive time, so a loop that reads once a period still dates each
+// to when it came, not to when the loop got to it.
 class CanSocket {
  public:
   // Throws DriveError naming the interface when it does not exist or the socket fails.
@@ -74,7 +82,7 @@ class CanSocket {
   void set_filters(const can_filter* filters, std::size_t count);
   void send(const can_frame& frame, double timeout_s);
   // The next frame, or std::nullopt when none arrives within timeout_s (0: only what waits).
-  std::optional<can_frame> receive(double timeout_s);
+  std::optional<ReceivedCanFrame> receive(double timeout_s);
   const std::string& interface() const { return interface_; }
 
  private:
