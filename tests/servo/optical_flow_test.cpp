@@ -88,7 +88,7 @@ TEST(OpticalFlow, BadFramesGiveAStatusNotACrash) {
   EXPECT_EQ(flow.update(shifted(texture, 64, 48, 3, 0), 0.5, field), FlowStatus::no_previous_frame);
   EXPECT_THROW(flow.update(cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0F)), 0.6, field),
                std::invalid_argument);
-  EXPECT_THROW(OpticalFlow(FlowMethod::synthetic), std::invalid_argument);
+  EXPECT_THROW(OpticalFlow{FlowMethod::synthetic}, std::invalid_argument);
 }
 
 // Along a straight edge only the motion across it can be seen (the aperture problem): such pixels
@@ -227,7 +227,7 @@ TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame
     EXPECT_EQ(out.source_ids[static_cast<std::size_t>(out.labels[field.index(10, 10)])], left_id);
     EXPECT_EQ(out.source_ids[static_cast<std::size_t>(out.labels[field.index(50, 10)])], right_id);
   }
-  EXPECT_THROW(FlowSegmenter(SegmentationMethod::semantic), std::invalid_argument);
+  EXPECT_THROW(FlowSegmenter{SegmentationMethod::semantic}, std::invalid_argument);
   FlowSegmenter segmenter(SegmentationMethod::flow_graph);
   Segmentation out;
   EXPECT_THROW(segmenter.segment(field, std::vector<std::uint8_t>(3, 0), out),
