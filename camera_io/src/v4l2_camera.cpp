@@ -469,13 +469,23 @@ ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
       ++dropped_frames_;
       continue;
     }
-    driver_timestamps_ = monotonic;
-    frame.timestamp_s = monotonic ? stamped_s : dequeued_s;
+    frame.timestamp_s = frame_time_s(monotonic, stamped_s, dequeued_s);
     frame.image = lens_->apply(converted_);
     frame.sequence = sequence_++;
     frame.sim.reset();
     return ReadStatus::ok;
   }
+}
+
+double V4l2Camera::frame_time_s(bool monotonic_stamp, double stamped_s, double dequeued_s) {
+  const bool plausible =
+      std::abs(stamped_s - dequeued_s) < kStampWindow_s && stamped_s > last_timestamp_s_;
+  driver_stamps_distrusted_ = driver_stamps_distrusted_ || (monotonic_stamp && !plausible);
+  driver_timestamps_ = monotonic_stamp && !driver_stamps_distrusted_;
+  // A stamp may have run a little ahead of this dequeue: the times must still increase.
+  last_timestamp_s_ =
+      driver_timestamps_ ? stamped_s : std::max(dequeued_s, last_timestamp_s_ + 1e-6);
+  return last_timestamp_s_;
 }
 
 void V4l2Camera::stop() {

@@ -1,8 +1,8 @@
 // Boots the V4L2 test VM (tests/vm/run_vivid_vm.sh), in which tests/vm/v4l2_vm_probe runs
 // V4l2Camera against the kernel's vivid driver, and checks what the probe printed: formats,
 // frames and their sequence and timestamps, vivid's colour bars, a clean stop, dropped frames,
-// buffers flagged as errors, a timeout, a stream the driver gives up on and the errors for bad
-// devices and formats.
+// buffers flagged as errors, a driver clock that cannot be monotonic, a timeout, a stream the
+// driver gives up on and the errors for bad devices and formats.
 
 #include <array>
 #include <cstdio>
@@ -205,6 +205,23 @@ TEST_F(VividVm, BuffersFlaggedErrorAreSkippedAndCountedAsDropped) {
   EXPECT_EQ(delivered, 12);
   EXPECT_GE(dropped, 3u);
   EXPECT_EQ(dropped + static_cast<unsigned long long>(delivered - 1), spanned);
+}
+
+// Stamps 292 years ahead of the monotonic clock: the camera falls back to the time of dequeue,
+// so frame times still increase and lie on the stack's clock.
+TEST_F(VividVm, ADriverClockThatCannotBeMonotonicFallsBackToTheDequeueTime) {
+  ASSERT_NE(run_.console.find("PROBE control Wrap Timestamp=1 set"), std::string::npos);
+  const std::vector<ProbeFrame>& frames = run_.frames["wrapped"];
+  ASSERT_EQ(frames.size(), 5u) << run_.console;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    EXPECT_EQ(frames[i].driver_timestamps, 0);
+    EXPECT_LE(frames[i].timestamp_s, frames[i].dequeued_s);
+    EXPECT_GT(frames[i].timestamp_s, frames[i].dequeued_s - 0.5);
+    if (i > 0) {
+      EXPECT_GT(frames[i].timestamp_s, frames[i - 1].timestamp_s);
+    }
+  }
 }
 
 TEST_F(VividVm, AStreamTheDriverGivesUpOnIsAClearError) {

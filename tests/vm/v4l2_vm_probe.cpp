@@ -185,6 +185,12 @@ int main() {
 
     capture_through_buffer_errors(options, 3);
 
+    // A driver clock that cannot be the monotonic one: with vivid's "Wrap Timestamp" set before
+    // streaming starts, buffers are stamped 16 s before the 64-bit nanosecond clock wraps.
+    set_vivid_control(capture_node, "Wrap Timestamp", 1);
+    capture("wrapped", options, 5, false);
+    set_vivid_control(capture_node, "Wrap Timestamp", 0);
+
     // A stream the driver gives up on (vb2_queue_error): the read fails, naming the call.
     expect_error("fatal-stream-error", [&] {
       V4l2Camera camera(options);

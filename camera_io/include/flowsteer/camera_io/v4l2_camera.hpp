@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -61,8 +62,11 @@ class V4l2Camera final : public FrameSource {
   // Waits up to timeout_s for the next filled buffer, converts it to BGR and undistorts it;
   // frame.image shares the camera's buffer for that, valid until the next read(). Timestamps are
   // the driver's when it stamps buffers with the monotonic clock (driver_timestamps()), else the
-  // time of dequeue. Buffers the driver flags as corrupt are returned to it, counted as dropped,
-  // and the wait goes on. Throws std::runtime_error once stop() has been called.
+  // time of dequeue. A driver stamp that cannot be right (more than kStampWindow_s after the
+  // dequeue or before it, or not after the last frame's: a clock that wrapped or jumped) makes
+  // the camera use dequeue times from then on, so frame times only ever increase. Buffers
+  // the driver flags as corrupt are returned to it, counted as dropped, and the wait goes on.
+  // Throws std::runtime_error once stop() has been called.
   ReadStatus read(Frame& frame, double timeout_s) override;
 
   // STREAMOFF, unmap, release the buffers and close the device. Throws if STREAMOFF or the
@@ -76,7 +80,11 @@ class V4l2Camera final : public FrameSource {
   std::uint32_t driver_sequence() const { return last_driver_sequence_.value_or(0); }
   // The frame rate the driver set (S_PARM), 0 when it cannot set one.
   double frame_rate_hz() const { return frame_rate_hz_; }
+  // Whether the last frame's time is the driver's stamp (see read()).
   bool driver_timestamps() const { return driver_timestamps_; }
+  // A filled buffer waits in the queue a few frame periods at most, and a stamp for the end of
+  // an exposure may come a little ahead of the handover (vivid's by up to a period).
+  static constexpr double kStampWindow_s = 5.0;
   // The driver's name and the card's, from VIDIOC_QUERYCAP.
   const std::string& driver() const { return driver_; }
   const std::string& card() const { return card_; }
@@ -87,6 +95,8 @@ class V4l2Camera final : public FrameSource {
   static std::vector<std::string> list_formats(const std::string& device);
 
  private:
+  // The frame's time by the rule in read(); updates the trust in the driver's stamps.
+  double frame_time_s(bool monotonic_stamp, double stamped_s, double dequeued_s);
   // Owns the device's file descriptor.
   class DeviceFd {
    public:
@@ -143,6 +153,8 @@ class V4l2Camera final : public FrameSource {
   std::optional<Lens> lens_;
   cv::Mat converted_;  // BGR, before undistortion
   bool driver_timestamps_ = false;
+  bool driver_stamps_distrusted_ = false;
+  double last_timestamp_s_ = -std::numeric_limits<double>::infinity();
   std::optional<std::uint32_t> last_driver_sequence_;  // none before the first frame
   std::uint64_t dropped_frames_ = 0;
   std::uint64_t sequence_ = 0;
