@@ -32,26 +32,28 @@ constexpr char kIdleRequest[] = "01000000";
 // what it takes on the machine itself. A stop must still come within this.
 constexpr double kStopWithinS = 0.5;
 
-struct Exit {
+// One run of flowsteer as the probe ended it.
+struct EndedRun {
+  double fault_s = NAN;  // CLOCK_REALTIME, as candump's stamps
   int status = -1;
-  double realtime_s = NAN;
+  double exited_s = NAN;
+  std::string log;  // what flowsteer printed
 };
 
 class RobotVm
     : public flowsteer::vm_test::VmTest<CanCaptureRun, flowsteer::vm_test::parse_can_capture> {
  protected:
-  // The fault's stamp; a failure (and NaN) when the probe never saw the run start driving.
-  double fault_s(const std::string& name) {
-    const double at_s = stamp(run_, name + "-fault");
-    EXPECT_TRUE(std::isfinite(at_s)) << name << "-fault " << run_.probe[name + "-fault"];
-    return at_s;
-  }
-
-  Exit exit_of(const std::string& name) {
-    Exit e;
-    std::istringstream in(run_.probe[name + "-exit"]);
-    in >> e.status >> e.realtime_s;
-    return e;
+  // The case's fault, exit and output, after checking that it was driving when the fault came
+  // and exited with `status`.
+  EndedRun ended(const std::string& name, int status) {
+    EndedRun run;
+    run.fault_s = stamp(run_, name + "-fault");
+    EXPECT_TRUE(std::isfinite(run.fault_s)) << name << "-fault " << run_.probe[name + "-fault"];
+    std::istringstream(run_.probe[name + "-exit"]) >> run.status >> run.exited_s;
+    run.log = log_of(name);
+    expect_driving_before(name, run.fault_s);
+    EXPECT_EQ(run.status, status) << run.log;
+    return run;
   }
 
   // flowsteer's output for the case, one line per line.
@@ -121,17 +123,13 @@ class RobotVm
   }
 
   void check_signal_stop(const std::string& name) {
-    const double at_s = fault_s(name);
-    const Exit e = exit_of(name);
-    const std::string log = log_of(name);
-    expect_driving_before(name, at_s);
-    EXPECT_EQ(e.status, 0) << log;
-    EXPECT_NE(log.find("flowsteer run: stop requested: base odrive vcan0 stopped"),
+    const EndedRun run = ended(name, 0);
+    EXPECT_NE(run.log.find("flowsteer run: stop requested: base odrive vcan0 stopped"),
               std::string::npos)
-        << log;
-    const double stop_s = expect_wheels_stopped(at_s, e.realtime_s);
+        << run.log;
+    const double stop_s = expect_wheels_stopped(run.fault_s, run.exited_s);
     std::printf("%s: first zero command on the bus %.1f ms after the signal, exit after %.1f ms\n",
-                name.c_str(), 1e3 * stop_s, 1e3 * (e.realtime_s - at_s));
+                name.c_str(), 1e3 * stop_s, 1e3 * (run.exited_s - run.fault_s));
   }
 };
 
@@ -144,34 +142,26 @@ TEST_F(RobotVm, SigtermStopsTheWheelsAndExitsZero) {
 }
 
 TEST_F(RobotVm, CameraUnpluggedStopsTheWheelsAndExitsOneNamingTheCamera) {
-  const double at_s = fault_s("camera-gone");
-  const Exit e = exit_of("camera-gone");
-  const std::string log = log_of("camera-gone");
-  expect_driving_before("camera-gone", at_s);
-  EXPECT_EQ(e.status, 1) << log;
-  EXPECT_NE(log.find("flowsteer run: the run failed: base odrive vcan0 stopped\n"
-                     "flowsteer: error: VIDIOC_DQBUF on /dev/video0 failed: No such device"),
+  const EndedRun run = ended("camera-gone", 1);
+  EXPECT_NE(run.log.find("flowsteer run: the run failed: base odrive vcan0 stopped\n"
+                         "flowsteer: error: VIDIOC_DQBUF on /dev/video0 failed: No such device"),
             std::string::npos)
-      << log;
-  const double stop_s = expect_wheels_stopped(at_s, e.realtime_s);
+      << run.log;
+  const double stop_s = expect_wheels_stopped(run.fault_s, run.exited_s);
   std::printf("camera unplugged: first zero command on the bus %.1f ms after the fault\n",
               1e3 * stop_s);
 }
 
 TEST_F(RobotVm, CanInterfaceDownEndsTheRunAtOnceNamingTheInterface) {
-  const double at_s = fault_s("can-down");
-  const Exit e = exit_of("can-down");
-  const std::string log = log_of("can-down");
-  expect_driving_before("can-down", at_s);
-  EXPECT_EQ(e.status, 1) << log;
+  const EndedRun run = ended("can-down", 1);
   // Nothing can reach the axes any more; the run says so instead of claiming a stop.
-  EXPECT_NE(log.find("the stop could not be sent either"), std::string::npos) << log;
-  EXPECT_NE(log.find("vcan0"), std::string::npos) << log;
-  EXPECT_NE(log.find("Network is down"), std::string::npos) << log;
+  EXPECT_NE(run.log.find("the stop could not be sent either"), std::string::npos) << run.log;
+  EXPECT_NE(run.log.find("vcan0"), std::string::npos) << run.log;
+  EXPECT_NE(run.log.find("Network is down"), std::string::npos) << run.log;
   // No retrying on a dead bus: the run ends within a loop period or two of the fault.
-  EXPECT_LT(e.realtime_s - at_s, kStopWithinS) << log;
+  EXPECT_LT(run.exited_s - run.fault_s, kStopWithinS) << run.log;
   std::printf("CAN interface down: flowsteer exited %.1f ms after the fault\n",
-              1e3 * (e.realtime_s - at_s));
+              1e3 * (run.exited_s - run.fault_s));
 }
 
 }  // namespace

@@ -4,13 +4,8 @@
 // prints what it did as "PROBE key value" lines with CLOCK_REALTIME stamps, the clock candump
 // stamps frames with; the host test checks those against candump's capture of the bus.
 
-#include <time.h>
-
-#include <atomic>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
-#include <exception>
 #include <memory>
 #include <string>
 #include <thread>
@@ -18,22 +13,18 @@
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/drivers/base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
+#include "probe_support.hpp"
 #include "simulated_odrive.hpp"
 
 namespace {
 
 using namespace flowsteer::drivers;
 using flowsteer::base::monotonic_now_s;
+using flowsteer::vm_test::realtime_s;
 
 constexpr double kLoopPeriodS = 0.02;
 constexpr std::uint8_t kLeftNode = 3;
 constexpr std::uint8_t kRightNode = 5;
-
-double realtime_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // Calls update() every loop period for duration_s; `command` says whether to send a fresh
 // command first. Returns the realtime of the last command sent; `commanded` gets the state
@@ -136,11 +127,5 @@ int run() {
 }  // namespace
 
 int main() {
-  std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  try {
-    return run();
-  } catch (const std::exception& e) {
-    std::printf("PROBE failed %s\n", e.what());
-    return 1;
-  }
+  return flowsteer::vm_test::probe_main(run);
 }

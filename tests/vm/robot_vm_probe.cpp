@@ -8,7 +8,6 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -20,12 +19,14 @@
 #include <thread>
 
 #include "flowsteer/base/clock.hpp"
+#include "probe_support.hpp"
 #include "simulated_odrive.hpp"
 #include "vivid_control.hpp"
 
 namespace {
 
 using flowsteer::base::monotonic_now_s;
+using flowsteer::vm_test::realtime_s;
 
 constexpr char kLaunchPath[] = "/tmp/robot.yaml";
 constexpr char kCamera[] = "/dev/video0";
@@ -63,12 +64,6 @@ goal:
   bearing_rad: 0.0
   distance_m: 50.0
 )";
-
-double realtime_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // `flowsteer run` with its stdout and stderr in `log_path`.
 pid_t start_flowsteer(const std::string& log_path) {
@@ -109,8 +104,8 @@ bool wait_until_driving(const std::string& log_path, double drive_s) {
 }
 
 struct Exit {
-  int status = -1;  // exit status; 128 + signal when killed
-  double realtime_s = 0.0;
+  int status = -1;        // exit status; 128 + signal when killed
+  double exited_s = 0.0;  // CLOCK_REALTIME
 };
 
 // Waits up to `limit_s` for the process to end; kills it (status 128 + 9) when it does not.
@@ -126,7 +121,7 @@ Exit wait_for_exit(pid_t pid, double limit_s) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  result.realtime_s = realtime_s();
+  result.exited_s = realtime_s();
   result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
   return result;
 }
@@ -144,7 +139,7 @@ void run_case(const std::string& name, const std::function<void(pid_t)>& fault) 
     fault(pid);
   }
   const Exit exit = wait_for_exit(pid, 10.0);
-  std::printf("PROBE %s-exit %d %.6f\n", name.c_str(), exit.status, exit.realtime_s);
+  std::printf("PROBE %s-exit %d %.6f\n", name.c_str(), exit.status, exit.exited_s);
   std::ifstream in(log_path);
   std::string line;
   for (int k = 0; std::getline(in, line); ++k) {
@@ -173,11 +168,5 @@ int run() {
 }  // namespace
 
 int main() {
-  std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  try {
-    return run();
-  } catch (const std::exception& e) {
-    std::printf("PROBE failed %s\n", e.what());
-    return 1;
-  }
+  return flowsteer::vm_test::probe_main(run);
 }
