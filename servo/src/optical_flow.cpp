@@ -117,6 +117,8 @@ const char* to_string(FlowStatus status) {
       return "single-colour frame";
     case FlowStatus::no_time_elapsed:
       return "timestamp did not increase";
+    case FlowStatus::time_went_back:
+      return "timestamp went back";
   }
   return "unknown";
 }
@@ -178,6 +180,11 @@ FlowStatus OpticalFlow::update(const cv::Mat& image, double timestamp_s, FlowFie
   } else if (newest->grey.size() != grey_.size() || grey_.cols != field.width() ||
              grey_.rows != field.height()) {
     status = FlowStatus::size_changed;
+    reset();
+  } else if (timestamp_s < newest->timestamp_s) {
+    // Waiting for the clock to pass the old images' times would leave the robot blind for as
+    // long as it jumped back.
+    status = FlowStatus::time_went_back;
     reset();
   } else if (!(timestamp_s > newest->timestamp_s)) {
     return FlowStatus::no_time_elapsed;

@@ -86,6 +86,10 @@ TEST(OpticalFlow, BadFramesGiveAStatusNotACrash) {
   EXPECT_EQ(flow.update(cv::Mat(48, 64, CV_8UC3, cv::Scalar(9, 9, 9)), 0.4, field),
             FlowStatus::untextured);
   EXPECT_EQ(flow.update(shifted(texture, 64, 48, 3, 0), 0.5, field), FlowStatus::no_previous_frame);
+  // A clock that jumps back: that image starts the history again, the next one has flow.
+  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 4, 0), 0.55, field), FlowStatus::ok);
+  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 5, 0), 0.05, field), FlowStatus::time_went_back);
+  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 6, 0), 0.1, field), FlowStatus::ok);
   EXPECT_THROW(flow.update(cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0F)), 0.6, field),
                std::invalid_argument);
   EXPECT_THROW(OpticalFlow{FlowMethod::synthetic}, std::invalid_argument);

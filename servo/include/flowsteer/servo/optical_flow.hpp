@@ -38,7 +38,9 @@ enum class FlowStatus {
   size_changed,       // the image's size differs from the previous one's or the field's
   empty_frame,        // an empty image
   untextured,         // a single-colour image: no motion can be seen in it
-  no_time_elapsed,    // the timestamp did not increase
+  no_time_elapsed,    // the timestamp is the previous image's
+  time_went_back,     // the timestamp is before the previous image's (a camera or a recording
+                      // whose clock jumped back): the image starts the history again
 };
 
 const char* to_string(FlowStatus status);
