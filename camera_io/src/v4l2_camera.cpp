@@ -22,8 +22,17 @@
 
 #include "flowsteer/base/clock.hpp"
 #include "sequence_gaps.hpp"
+#include "v4l2_io.hpp"
 
 namespace flowsteer::camera_io {
+
+using v4l2::checked_ioctl;
+using v4l2::errno_message;
+using v4l2::fixed_text;
+using v4l2::fourcc_text;
+using v4l2::throw_errno;
+using v4l2::try_ioctl;
+
 namespace {
 
 std::uint32_t to_fourcc(PixelFormat format) {
@@ -36,52 +45,6 @@ std::uint32_t to_fourcc(PixelFormat format) {
       return V4L2_PIX_FMT_GREY;
   }
   throw std::invalid_argument("unknown pixel format");
-}
-
-std::string fourcc_text(std::uint32_t fourcc) {
-  // Bit 31 marks the big-endian variant of a format (as v4l2-ctl prints it, "-BE").
-  const bool big_endian = (fourcc & (1u << 31)) != 0;
-  std::string text;
-  for (int i = 0; i < 4; ++i) {
-    const char c = static_cast<char>((fourcc >> (8 * i)) & (i == 3 ? 0x7f : 0xff));
-    if (c != ' ') {
-      text += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
-    }
-  }
-  return big_endian ? text + "-BE" : text;
-}
-
-// The driver fills these fixed-size char arrays with a NUL-terminated string, but a full one
-// has no terminator.
-template <std::size_t N>
-std::string fixed_text(const std::uint8_t (&chars)[N]) {
-  const auto* begin = reinterpret_cast<const char*>(chars);
-  return std::string(begin, strnlen(begin, N));
-}
-
-// "VIDIOC_S_FMT on /dev/video0 failed: Invalid argument".
-std::string errno_message(const std::string& device, const char* what, int error) {
-  return std::string(what) + " on " + device + " failed: " + std::strerror(error);
-}
-
-[[noreturn]] void throw_errno(const std::string& device, const char* what, int error) {
-  throw std::runtime_error(errno_message(device, what, error));
-}
-
-// ioctl, retried when a signal interrupts it. Returns false with errno set on failure.
-bool try_ioctl(int fd, unsigned long request, void* arg) {
-  int result;
-  do {
-    result = ::ioctl(fd, request, arg);
-  } while (result == -1 && errno == EINTR);
-  return result != -1;
-}
-
-void checked_ioctl(int fd, unsigned long request, void* arg, const char* name,
-                   const std::string& device) {
-  if (!try_ioctl(fd, request, arg)) {
-    throw_errno(device, name, errno);
-  }
 }
 
 // The fourcc names of the pixel formats the device offers (VIDIOC_ENUM_FMT). The driver ends the
@@ -154,33 +117,6 @@ std::optional<PixelFormat> pixel_format_from_name(std::string_view name) {
   return std::nullopt;
 }
 
-V4l2Camera::DeviceFd::~DeviceFd() {
-  if (fd_ >= 0) {
-    // The descriptor is gone even when close() reports an error; retrying could close another.
-    ::close(fd_);
-  }
-}
-
-V4l2Camera::DeviceFd& V4l2Camera::DeviceFd::operator=(DeviceFd&& other) noexcept {
-  if (this != &other) {
-    if (fd_ >= 0) {
-      ::close(fd_);
-    }
-    fd_ = std::exchange(other.fd_, -1);
-  }
-  return *this;
-}
-
-V4l2Camera::Mapping::~Mapping() {
-  if (data_ != nullptr) {
-    ::munmap(data_, length_);
-  }
-}
-
-std::span<const std::uint8_t> V4l2Camera::Mapping::bytes(std::size_t bytes_used) const {
-  return {static_cast<const std::uint8_t*>(data_), std::min(bytes_used, length_)};
-}
-
 V4l2Camera::V4l2Camera(const V4l2Options& options)
     : device_(options.device), converter_(nullptr, v4lconvert_destroy) {
   if (options.buffer_count < 2) {
@@ -221,7 +157,7 @@ void V4l2Camera::open_device() {
     const int error = errno;
     throw std::runtime_error("cannot open camera " + device_ + ": " + std::strerror(error));
   }
-  fd_ = DeviceFd(fd);
+  fd_ = v4l2::DeviceFd(fd);
   v4l2_capability cap{};
   if (!try_ioctl(fd, VIDIOC_QUERYCAP, &cap)) {
     const int error = errno;
@@ -508,7 +444,7 @@ void V4l2Camera::stop() {
     failure = errno_message(device_, "VIDIOC_REQBUFS(0)", errno);
   }
   converter_.reset();
-  fd_ = DeviceFd();
+  fd_ = v4l2::DeviceFd();
   if (!failure.empty()) {
     throw std::runtime_error(failure);
   }

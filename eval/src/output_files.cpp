@@ -18,8 +18,6 @@
 
 namespace flowsteer::eval {
 
-namespace {
-
 std::string json_string(const std::string& s) {
   std::ostringstream out;
   out << '"';
@@ -47,7 +45,6 @@ std::string json_string(const std::string& s) {
   return out.str();
 }
 
-// JSON has no NaN or infinity: those become null.
 std::string json_number(double value) {
   if (!std::isfinite(value)) {
     return "null";
@@ -56,6 +53,8 @@ std::string json_number(double value) {
   out << std::setprecision(6) << value;
   return out.str();
 }
+
+namespace {
 
 constexpr char kStagingPrefix[] = ".staging-";
 

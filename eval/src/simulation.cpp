@@ -28,7 +28,7 @@ namespace {
 
 // Everything one agent keeps from step to step.
 struct AgentLoop {
-  std::unique_ptr<SimulatedAgent> agent;
+  std::unique_ptr<SimulatedAgent> agent;  // none for the agent an AgentDriver steers
   AgentResult result;
   Eigen::Vector2d last_position;
   std::unique_ptr<cv::VideoWriter> video;
@@ -173,7 +173,7 @@ double straight_line_m(const sim_camera::AgentSpec& agent) {
 class SimulationRun {
  public:
   SimulationRun(const sim_camera::WorldSpec& spec, const SimOptions& options)
-      : spec_(spec),
+      : spec_(checked(spec, options)),
         options_(options),
         world_(spec_),
         arena_(threads(options)),
@@ -193,7 +193,9 @@ class SimulationRun {
       const auto reads =
           options.video ? sim_camera::RenderChannels::all : sim_camera::RenderChannels::geometry;
       AgentLoop loop;
-      loop.agent = std::make_unique<SimulatedAgent>(world_, i, reads);
+      if (!driven(i)) {
+        loop.agent = std::make_unique<SimulatedAgent>(world_, i, reads);
+      }
       loop.last_position = spec_.agents[i].start_m;
       loop.result.name = spec_.agents[i].name;
       loop.result.min_clearance_m = world_.clearance(i);
@@ -226,6 +228,9 @@ class SimulationRun {
         record(i);
       }
     }
+    if (options_.driver != nullptr) {
+      drive(options_.driven_agent);
+    }
     for (std::size_t i = 0; i < loops_.size(); ++i) {
       const sim_camera::AgentState& s = world_.agents()[i];
       trajectories_.push_back({world_.time_s(), static_cast<double>(i), s.position_m.x(),
@@ -257,9 +262,12 @@ class SimulationRun {
     return result;
   }
 
-  // trajectories.csv, costs.csv, the videos, topview.png and summary.json, committed together;
-  // nothing without an output folder.
+  // trajectories.csv, costs.csv, the videos, topview.png and summary.json, committed together
+  // with the driver's files; nothing without an output folder.
   void write(const SimResult& result) {
+    if (options_.driver != nullptr) {
+      options_.driver->finish(out_ ? &*out_ : nullptr);
+    }
     if (!out_) {
       return;
     }
@@ -281,6 +289,16 @@ class SimulationRun {
     return std::max(0, options.steps ? std::min(*options.steps, max_steps) : max_steps);
   }
 
+  static const sim_camera::WorldSpec& checked(const sim_camera::WorldSpec& spec,
+                                              const SimOptions& options) {
+    if (options.driver != nullptr && options.driven_agent >= spec.agents.size()) {
+      throw std::invalid_argument("simulation: the driven agent " +
+                                  std::to_string(options.driven_agent) + " is not in " + spec.name +
+                                  ", which has " + std::to_string(spec.agents.size()) + " agents");
+    }
+    return spec;
+  }
+
   static int threads(const SimOptions& options) {
     if (options.threads < 0) {
       throw std::invalid_argument("simulation: threads must be >= 0 (0: every core), got " +
@@ -289,10 +307,14 @@ class SimulationRun {
     return options.threads == 0 ? tbb::task_arena::automatic : options.threads;
   }
 
+  bool driven(std::size_t i) const {
+    return options_.driver != nullptr && options_.driven_agent == i;
+  }
+
   // Agent i's perception and control, when it still steers; touches nothing but its own loop.
   void think(std::size_t i, sim_camera::Renderer& renderer) {
     AgentLoop& loop = loops_[i];
-    loop.steered = !world_.agents()[i].reached_goal || spec_.agents[i].leader;
+    loop.steered = !driven(i) && (!world_.agents()[i].reached_goal || spec_.agents[i].leader);
     if (loop.steered) {
       loop.agent->step(renderer, loop.times);
     }
@@ -312,6 +334,16 @@ class SimulationRun {
                                 overlay_size(loop.agent->frame().image.size()), 1.0 / spec_.step_s);
       }
       loop.video->write(draw_overlay(*loop.agent));
+    }
+  }
+
+  // The driven agent's command. The driver is asked every step, also once the agent is at its
+  // goal: a robot in the loop needs its frames until it is told to stop.
+  void drive(std::size_t i) {
+    const base::Command command = options_.driver->step(world_, *renderers_.local());
+    if (!world_.agents()[i].reached_goal) {
+      commands_[i] = {command.accel_mps2, command.turn_rate};
+      loops_[i].result.turn_rates.push_back(command.turn_rate);
     }
   }
 
@@ -394,7 +426,8 @@ SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& o
   Progress progress(log, options.progress_bar, run.total_steps());
   const base::Stopwatch wall;
   int step = 0;
-  for (; step < run.total_steps() && !run.world().finished(); ++step) {
+  const auto driver_done = [&] { return options.driver != nullptr && options.driver->finished(); };
+  for (; step < run.total_steps() && !run.world().finished() && !driver_done(); ++step) {
     run.step();
     progress.update(step + 1, run.world().time_s());
   }

@@ -2,6 +2,8 @@
 
 #include <iomanip>
 
+#include "flowsteer/base/clock.hpp"
+
 namespace flowsteer::launch {
 
 pipeline::BrainConfig robot_brain_config(const config::PerceptionSection& perception,
@@ -21,8 +23,8 @@ pipeline::BrainConfig robot_brain_config(const config::PerceptionSection& percep
 
 RobotBrain::RobotBrain(const base::CameraIntrinsics& intrinsics,
                        const pipeline::BrainConfig& config, std::ostream& log,
-                       std::ostream* frame_log)
-    : brain_(intrinsics, config), log_(log), frame_log_(frame_log) {}
+                       std::ostream* frame_log, bool live_camera)
+    : brain_(intrinsics, config), log_(log), frame_log_(frame_log), live_camera_(live_camera) {}
 
 base::Command RobotBrain::step(const LoopInput& input) {
   const servo::ControlOutput& output =
@@ -44,7 +46,11 @@ base::Command RobotBrain::step(const LoopInput& input) {
     *frame_log_ << "frame " << input.frame.sequence << " t_s " << std::fixed << std::setprecision(3)
                 << input.frame.timestamp_s << " " << servo::to_string(status) << " objects "
                 << brain_.objects().size() << " accel_mps2 " << output.command.accel_mps2
-                << " turn_rate " << output.command.turn_rate << std::defaultfloat << "\n";
+                << " turn_rate " << output.command.turn_rate;
+    if (live_camera_) {
+      *frame_log_ << " latency_ms " << 1e3 * (base::monotonic_now_s() - input.frame.timestamp_s);
+    }
+    *frame_log_ << std::defaultfloat << "\n";
   }
   return output.command;
 }

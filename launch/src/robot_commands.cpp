@@ -99,8 +99,9 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   if (launch.drive) {
     robot_base = config::make_base(*launch.drive);
   }
+  const bool live_camera = !std::holds_alternative<camera_io::ReplayOptions>(launch.camera.source);
   RobotBrain brain(camera->intrinsics(), robot_brain_config(launch.perception, launch.controller),
-                   events, frame_log);
+                   events, frame_log, live_camera);
 
   RobotLoopOptions options;
   options.camera_timeout_s = launch.camera.timeout_s;
@@ -122,8 +123,9 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   events << "\n";
   const RobotLoopResult result =
       run_robot_loop(*camera, robot_base.get(), brain, options, stop_requested, events);
-  events << "flowsteer run: " << result.frames << " frames in " << result.duration_s << " s ("
-         << stop_reason_name(result.reason) << ")\n";
+  events << "flowsteer run: " << result.frames << " frames (" << result.repeated_frames
+         << " repeated) in " << result.duration_s << " s (" << stop_reason_name(result.reason)
+         << ")\n";
   events.flush();
   return result;
 }

@@ -12,6 +12,15 @@
 namespace flowsteer::launch {
 namespace {
 
+bool same_picture(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0.0;
+}
+
+// Above an encoder's noise at rest.
+bool moving(const drivers::BodyVelocity& measured) {
+  return std::abs(measured.speed_mps) > 0.01 || std::abs(measured.turn_rate) > 0.01;
+}
+
 // Leaves the base stopped and deactivated however the loop ends; when an error ends it (the
 // camera gone, a perception failure) the log says the base was stopped before the error shows.
 class BaseStopper {
@@ -97,6 +106,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ro
   double last_frame_s = base::monotonic_now_s();
   double last_update_s = last_frame_s;
   camera_io::Frame frame;
+  cv::Mat last_picture;  // the last frame the brain saw
   const auto stop = [&](StopReason reason, const std::string& why) {
     result.reason = reason;
     log << "flowsteer run: " << why;
@@ -123,25 +133,36 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ro
       stop(StopReason::end_of_stream, options.camera_name + " ended");
       break;
     }
+    bool repeated = false;
     if (status == camera_io::ReadStatus::ok) {
-      last_frame_s = after_s;
       ++result.frames;
-      LoopInput input{frame, measured, std::nullopt, std::nullopt};
-      if (goal) {
-        input.goal_bearing_rad = goal->bearing_rad();
-        input.goal_distance_m = goal->distance_m();
-      }
-      const base::Command command = brain.step(input);
-      if (robot_base != nullptr) {
-        if (const auto rejected = robot_base->command(command, base::monotonic_now_s())) {
-          log << "flowsteer run: frame " << frame.sequence << ": command rejected: " << *rejected
-              << "\n";
+      repeated = moving(measured) && same_picture(frame.image, last_picture);
+      result.repeated_frames += repeated ? 1 : 0;
+      if (!repeated) {
+        last_frame_s = after_s;
+        frame.image.copyTo(last_picture);
+        LoopInput input{frame, measured, std::nullopt, std::nullopt};
+        if (goal) {
+          input.goal_bearing_rad = goal->bearing_rad();
+          input.goal_distance_m = goal->distance_m();
+        }
+        const base::Command command = brain.step(input);
+        if (robot_base != nullptr) {
+          if (const auto rejected = robot_base->command(command, base::monotonic_now_s())) {
+            log << "flowsteer run: frame " << frame.sequence << ": command rejected: " << *rejected
+                << "\n";
+          }
         }
       }
-    } else if (after_s - last_frame_s >= options.camera_timeout_s) {
+    }
+    // A picture repeated for as long while the base moves counts as none: a frozen source must
+    // not keep the robot on its last command.
+    if (after_s - last_frame_s >= options.camera_timeout_s) {
       std::ostringstream why;
-      why << options.camera_name << " delivered no frame for " << std::fixed << std::setprecision(2)
-          << after_s - last_frame_s << " s (timeout " << options.camera_timeout_s << " s)";
+      why << options.camera_name
+          << (repeated ? " repeated one picture for " : " delivered no frame for ") << std::fixed
+          << std::setprecision(2) << after_s - last_frame_s << " s (timeout "
+          << options.camera_timeout_s << " s)";
       stop(StopReason::camera_timeout, why.str());
       break;
     }

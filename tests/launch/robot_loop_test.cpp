@@ -108,10 +108,12 @@ class ForwardBrain : public launch::FrameHandler {
   std::optional<double> last_goal_distance_m;
 };
 
-// A camera that delivers `frames` frames 20 ms apart, then nothing, or throws.
+// A camera that delivers `frames` frames 20 ms apart, each a new picture (or all one picture, as
+// a frozen source gives), then nothing, or throws.
 class StallingCamera : public camera_io::FrameSource {
  public:
-  StallingCamera(int frames, bool throw_after) : frames_(frames), throw_after_(throw_after) {
+  StallingCamera(int frames, bool throw_after, bool one_picture = false)
+      : frames_(frames), throw_after_(throw_after), one_picture_(one_picture) {
     intrinsics_ = base::CameraIntrinsics::from_horizontal_fov(32, 24, 1.0);
   }
   const base::CameraIntrinsics& intrinsics() const override { return intrinsics_; }
@@ -124,7 +126,7 @@ class StallingCamera : public camera_io::FrameSource {
       return camera_io::ReadStatus::timeout;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    frame.image = cv::Mat(24, 32, CV_8UC3, cv::Scalar::all(100));
+    frame.image = cv::Mat(24, 32, CV_8UC3, cv::Scalar::all(one_picture_ ? 100 : delivered_ % 250));
     frame.sequence = static_cast<std::uint64_t>(delivered_++);
     return camera_io::ReadStatus::ok;
   }
@@ -132,6 +134,7 @@ class StallingCamera : public camera_io::FrameSource {
  private:
   int frames_;
   bool throw_after_;
+  bool one_picture_;
   int delivered_ = 0;
   base::CameraIntrinsics intrinsics_;
 };
@@ -201,6 +204,27 @@ TEST(RobotLoop, ACameraTimeoutStopsTheMovingBaseWithinTheTimeout) {
             std::string::npos)
       << log.str();
   EXPECT_NE(log.str().find("(timeout 0.20 s): base sim_base stopped"), std::string::npos)
+      << log.str();
+}
+
+TEST(RobotLoop, ARepeatedPictureIsNotSeenAgainAndAFrozenOneStopsTheBase) {
+  StallingCamera camera(1000, false, true);
+  auto base = sim_base();
+  ForwardBrain brain;
+  launch::RobotLoopOptions options;
+  options.camera_timeout_s = 0.2;
+  options.camera_name = "camera /dev/video0";
+  std::atomic<bool> stop{false};
+  std::ostringstream log;
+  const auto result = launch::run_robot_loop(camera, base.get(), brain, options, stop, log);
+  EXPECT_EQ(result.reason, launch::StopReason::camera_timeout);
+  // The brain sees the picture until the base moves, then no more.
+  EXPECT_LT(brain.frames, 5);
+  EXPECT_GE(result.frames, 9u);
+  EXPECT_EQ(result.repeated_frames, result.frames - static_cast<std::size_t>(brain.frames));
+  EXPECT_TRUE(base->stage().emergency_stopped());
+  EXPECT_NE(log.str().find("flowsteer run: camera /dev/video0 repeated one picture for 0.2"),
+            std::string::npos)
       << log.str();
 }
 

@@ -22,11 +22,12 @@ namespace {
 
 using flowsteer::vm_test::CanCaptureRun;
 using flowsteer::vm_test::CanFrame;
+using flowsteer::vm_test::driven;
+using flowsteer::vm_test::first_zero_velocity;
 using flowsteer::vm_test::stamp;
 
 constexpr unsigned kNodes[] = {3, 5};
 constexpr unsigned kSetAxisRequestedState = 0x07;
-constexpr unsigned kSetInputVel = 0x0d;
 constexpr char kIdleRequest[] = "01000000";
 // The VM emulates its CPU: flowsteer's loop, a frame's perception included, takes a few times
 // what it takes on the machine itself. A stop must still come within this.
@@ -65,28 +66,6 @@ class RobotVm
     return log;
   }
 
-  // The first Set_Input_Vel of zero to `node` after `from_s`.
-  std::optional<double> first_zero_velocity(unsigned node, double from_s) {
-    for (const CanFrame& f : run_.frames) {
-      if (f.time_s > from_s && f.node() == node && f.cmd() == kSetInputVel && !f.rtr &&
-          f.f32(0) == 0.0f) {
-        return f.time_s;
-      }
-    }
-    return std::nullopt;
-  }
-
-  // Whether `node` was sent a non-zero velocity in (from_s, to_s].
-  bool driven(unsigned node, double from_s, double to_s) {
-    for (const CanFrame& f : run_.frames) {
-      if (f.time_s > from_s && f.time_s <= to_s && f.node() == node && f.cmd() == kSetInputVel &&
-          !f.rtr && f.f32(0) != 0.0f) {
-        return true;
-      }
-    }
-    return false;
-  }
-
   // Both axes: a zero velocity within kStopWithinS of the fault, no other velocity after it
   // until the run ended, then an idle request. Returns the later of the two zero commands'
   // delays.
@@ -94,14 +73,15 @@ class RobotVm
     double slowest_s = 0.0;
     for (const unsigned node : kNodes) {
       SCOPED_TRACE("node " + std::to_string(node));
-      const std::optional<double> zero_s = first_zero_velocity(node, fault_s);
+      const std::optional<double> zero_s = first_zero_velocity(run_, node, fault_s);
       if (!zero_s) {
         ADD_FAILURE() << "no zero velocity on the bus after the fault";
         continue;
       }
       slowest_s = std::max(slowest_s, *zero_s - fault_s);
       EXPECT_LT(*zero_s - fault_s, kStopWithinS);
-      EXPECT_FALSE(driven(node, *zero_s, exit_s)) << "a wheel was driven again after the stop";
+      EXPECT_FALSE(driven(run_, node, *zero_s, exit_s))
+          << "a wheel was driven again after the stop";
       bool idle_requested = false;
       for (const CanFrame& f : run_.frames) {
         idle_requested |= f.time_s > *zero_s && f.time_s <= exit_s && f.node() == node &&
@@ -116,7 +96,7 @@ class RobotVm
   void expect_driving_before(const std::string& name, double fault_s) {
     const double start_s = stamp(run_, name + "-start");
     for (const unsigned node : kNodes) {
-      EXPECT_TRUE(driven(node, start_s, fault_s))
+      EXPECT_TRUE(driven(run_, node, start_s, fault_s))
           << "node " << node << " never driven before the fault\n"
           << log_of(name);
     }

@@ -4,7 +4,8 @@
 
 # What each module may use besides itself. Data flows camera -> flow -> features -> control ->
 # drive: the stages (camera_io, servo, drivers) know only base; pipeline joins camera and servo;
-# the simulator, the experiments, the file readers and launch sit above.
+# the simulator, the experiments, the file readers, the simulator in the loop and launch sit
+# above.
 set(allowed_base "")
 set(allowed_camera_io base)
 set(allowed_servo base)
@@ -14,8 +15,9 @@ set(allowed_sim_camera base camera_io servo)
 set(allowed_pipeline base camera_io servo)
 set(allowed_eval base camera_io servo sim_camera pipeline)
 set(allowed_config base camera_io servo sim_camera drivers calibration)
-set(allowed_launch base camera_io servo sim_camera drivers calibration pipeline eval config)
-set(modules base camera_io servo drivers calibration sim_camera pipeline eval config launch)
+set(allowed_sil base camera_io servo sim_camera drivers calibration pipeline eval config)
+set(allowed_launch base camera_io servo sim_camera drivers calibration pipeline eval config sil)
+set(modules base camera_io servo drivers calibration sim_camera pipeline eval config sil launch)
 
 cmake_policy(VERSION 3.25)
 

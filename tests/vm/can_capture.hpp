@@ -110,4 +110,30 @@ inline std::vector<std::string> drive_frames_between(const CanCaptureRun& run, d
   return out;
 }
 
+// ODrive's Set_Input_Vel to `node` (not a request).
+inline bool is_set_input_vel(const CanFrame& f, unsigned node) {
+  return !f.rtr && f.node() == node && f.cmd() == 0x0d;
+}
+
+// The time of the first Set_Input_Vel of zero to `node` after `from_s`.
+inline std::optional<double> first_zero_velocity(const CanCaptureRun& run, unsigned node,
+                                                 double from_s) {
+  for (const CanFrame& f : run.frames) {
+    if (f.time_s > from_s && is_set_input_vel(f, node) && f.f32(0) == 0.0f) {
+      return f.time_s;
+    }
+  }
+  return std::nullopt;
+}
+
+// Whether `node` was sent a non-zero velocity in (from_s, to_s].
+inline bool driven(const CanCaptureRun& run, unsigned node, double from_s, double to_s) {
+  for (const CanFrame& f : run.frames) {
+    if (f.time_s > from_s && f.time_s <= to_s && is_set_input_vel(f, node) && f.f32(0) != 0.0f) {
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace flowsteer::vm_test

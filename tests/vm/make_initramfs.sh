@@ -1,18 +1,21 @@
 #!/usr/bin/env bash
 # Usage: make_initramfs.sh KERNEL_ROOT OUT.cpio.gz INIT [--modules "m1 m2"] [--binaries "b1 b2"]
+#                          [--files "f1 src=dest"]
 # (a binary named without a slash is looked up on PATH)
 # Builds a busybox-static initramfs for the kernel unpacked at KERNEL_ROOT (fetch_kernel.sh):
 # INIT becomes /init, the named modules and everything they depend on go under /lib/modules
 # (depmod -b, so busybox's modprobe finds them), and each binary goes to /bin with the shared
-# libraries ldd names, at their own paths.
+# libraries ldd names, at their own paths; each file goes to its own path (or to dest for
+# src=dest), a shared library among them (what a program dlopens) with the libraries it needs.
 set -euo pipefail
 
 kroot=${1:?usage}; out=${2:?usage}; init=${3:?usage}; shift 3
-modules=""; binaries=""
+modules=""; binaries=""; files=""
 while [[ $# -gt 0 ]]; do
   case $1 in
     --modules) modules=$2; shift 2 ;;
     --binaries) binaries=$2; shift 2 ;;
+    --files) files=$2; shift 2 ;;
     *) echo "make_initramfs: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -51,6 +54,12 @@ copy_with_path() {
   mkdir -p "$stage/$(dirname "$1")"
   cp -L "$1" "$stage/$1"
 }
+# Lines look like "libc.so.6 => /lib/x86_64-linux-gnu/libc.so.6 (0x...)" or
+# "/lib64/ld-linux-x86-64.so.2 (0x...)".
+copy_libraries_of() {
+  ldd "$1" | awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\// { print $1 }' |
+    while read -r lib; do copy_with_path "$lib"; done
+}
 for binary in $binaries; do
   if [[ $binary != */* ]]; then
     name=$binary
@@ -60,10 +69,16 @@ for binary in $binaries; do
     }
   fi
   cp "$binary" "$stage/bin/"
-  # Lines look like "libc.so.6 => /lib/x86_64-linux-gnu/libc.so.6 (0x...)" or
-  # "/lib64/ld-linux-x86-64.so.2 (0x...)".
-  ldd "$binary" | awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\// { print $1 }' |
-    while read -r lib; do copy_with_path "$lib"; done
+  copy_libraries_of "$binary"
+done
+for file in $files; do
+  src=${file%%=*}
+  dest=${file#*=}
+  mkdir -p "$stage/$(dirname "$dest")"
+  cp -L "$src" "$stage/$dest"
+  if [[ $src == *.so* ]]; then
+    copy_libraries_of "$src"
+  fi
 done
 
 cp "$init" "$stage/init"

@@ -13,8 +13,8 @@
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/drivers/base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
+#include "flowsteer/drivers/simulated_odrive.hpp"
 #include "probe_support.hpp"
-#include "simulated_odrive.hpp"
 
 namespace {
 
@@ -84,7 +84,7 @@ int run() {
     }
   }
 
-  flowsteer::vm_test::SimulatedAxes axes("vcan0", kLeftNode, kRightNode);
+  flowsteer::drivers::SimulatedOdrive axes("vcan0", kLeftNode, kRightNode);
   CommandStageConfig stage;
   stage.geometry = {0.4, 0.05};
   stage.limits.max_speed_mps = 0.5;
@@ -112,14 +112,14 @@ int run() {
 
   // An axis error while driving: the base stops and says which axis and what.
   base.activate(monotonic_now_s());
-  drive_into_fault(base, "axis-error", [&] { axes.fail_node = kRightNode; });
+  drive_into_fault(base, "axis-error", [&] { axes.fail_axis(kRightNode); });
 
   // A heartbeat lost while driving: the base stops both axes and names the silent one.
   std::printf("PROBE heartbeat-lost-start %.6f\n", realtime_s());
-  axes.fail_node = -1;
+  axes.fail_axis(std::nullopt);
   base.configure();
   base.activate(monotonic_now_s());
-  drive_into_fault(base, "heartbeat-lost", [&] { axes.silent_node = kLeftNode; });
+  drive_into_fault(base, "heartbeat-lost", [&] { axes.silence_axis(kLeftNode); });
   std::printf("PROBE done\n");
   return 0;
 }

@@ -19,8 +19,8 @@
 #include <thread>
 
 #include "flowsteer/base/clock.hpp"
+#include "flowsteer/drivers/simulated_odrive.hpp"
 #include "probe_support.hpp"
-#include "simulated_odrive.hpp"
 #include "vivid_control.hpp"
 
 namespace {
@@ -149,7 +149,7 @@ void run_case(const std::string& name, const std::function<void(pid_t)>& fault) 
 
 int run() {
   std::ofstream(kLaunchPath) << kLaunch;
-  flowsteer::vm_test::SimulatedAxes axes("vcan0", 3, 5);
+  flowsteer::drivers::SimulatedOdrive axes("vcan0", 3, 5);
   run_case("sigint", [](pid_t pid) { ::kill(pid, SIGINT); });
   run_case("sigterm", [](pid_t pid) { ::kill(pid, SIGTERM); });
   // A button: any value presses it. vivid answers every call on the node with ENODEV until

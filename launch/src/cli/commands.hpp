@@ -34,6 +34,7 @@ Subcommand add_eval_merge(CLI::App& eval);
 std::vector<Subcommand> add_calibrate(CLI::App& app);
 Subcommand add_run(CLI::App& app);
 Subcommand add_replay(CLI::App& app);
+Subcommand add_sil(CLI::App& app);
 
 // The flow method `name`, the value of `option`; CLI::ValidationError "unknown <noun> 'NAME'
 // (known: <known>)" when no method has that name or, with refuse_synthetic, for synthetic.

@@ -15,6 +15,7 @@
 
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/camera_io/lens.hpp"
+#include "flowsteer/camera_io/v4l2_device.hpp"
 
 struct v4lconvert_data;
 
@@ -97,35 +98,6 @@ class V4l2Camera final : public FrameSource {
  private:
   // The frame's time by the rule in read(); updates the trust in the driver's stamps.
   double frame_time_s(bool monotonic_stamp, double stamped_s, double dequeued_s);
-  // Owns the device's file descriptor.
-  class DeviceFd {
-   public:
-    DeviceFd() = default;
-    explicit DeviceFd(int fd) : fd_(fd) {}
-    ~DeviceFd();
-    DeviceFd(DeviceFd&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
-    DeviceFd& operator=(DeviceFd&& other) noexcept;
-    int get() const { return fd_; }
-
-   private:
-    int fd_ = -1;
-  };
-  // One mmap'ed driver buffer, unmapped when destroyed.
-  class Mapping {
-   public:
-    Mapping(void* data, std::size_t length) : data_(data), length_(length) {}
-    ~Mapping();
-    Mapping(Mapping&& other) noexcept
-        : data_(std::exchange(other.data_, nullptr)), length_(other.length_) {}
-    Mapping& operator=(Mapping&&) = delete;
-    // The first bytes_used bytes, clamped to the mapping.
-    std::span<const std::uint8_t> bytes(std::size_t bytes_used) const;
-
-   private:
-    void* data_;
-    std::size_t length_;
-  };
-
   struct OpenOnly {};
   // Opens and checks the device without configuring or streaming (for list_formats).
   V4l2Camera(const std::string& device, OpenOnly);
@@ -137,7 +109,7 @@ class V4l2Camera final : public FrameSource {
   void convert(std::span<const std::uint8_t> data, cv::Mat& bgr);
 
   std::string device_;
-  DeviceFd fd_;
+  v4l2::DeviceFd fd_;
   std::string driver_;
   std::string card_;
   std::uint32_t fourcc_ = 0;
@@ -145,7 +117,7 @@ class V4l2Camera final : public FrameSource {
   int height_px_ = 0;
   std::uint32_t bytes_per_line_ = 0;
   double frame_rate_hz_ = 0.0;
-  std::vector<Mapping> buffers_;
+  std::vector<v4l2::Mapping> buffers_;
   bool streaming_ = false;
   // Only for MJPEG, whose decoding (including the Huffman tables many webcams leave out) is
   // libv4lconvert's.

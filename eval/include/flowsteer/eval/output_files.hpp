@@ -32,6 +32,12 @@ class OutputDir {
   std::filesystem::path staging_;
 };
 
+// A string as a JSON string literal, quotes included.
+std::string json_string(const std::string& s);
+// A number as JSON holds it, 6 significant digits; JSON has no NaN or infinity: those become
+// null.
+std::string json_number(double value);
+
 // A number as CSV cells hold it: 7 significant digits, NaN and infinities as an empty cell.
 std::string format_csv_number(double value);
 

@@ -10,10 +10,29 @@
 
 #include <opencv2/core.hpp>
 
+#include "flowsteer/base/command.hpp"
 #include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::eval {
+
+class OutputDir;
+
+// Steers one agent from outside the simulation in place of its own brain: a robot process in
+// the loop (flowsteer sil). Called once per step on the simulation's thread, with that
+// thread's renderer, before the world moves.
+class AgentDriver {
+ public:
+  virtual ~AgentDriver() = default;
+  // The agent's (a_c, ω) for this step, from the world as it is now.
+  virtual base::Command step(const sim_camera::World& world, sim_camera::Renderer& renderer) = 0;
+  // True once the driver can steer no more (its process ended): the run ends after this step.
+  virtual bool finished() const = 0;
+  // Once, when the run has ended: the driver ends what it runs and writes its own files into
+  // out's staging folder (none without outputs), committed with the run's.
+  virtual void finish(OutputDir* out) = 0;
+};
 
 struct SimOptions {
   std::filesystem::path out_dir = "flowsteer_out";
@@ -27,6 +46,9 @@ struct SimOptions {
   bool write_outputs = true;  // false: only the returned result (tests, benchmarks)
   // Threads the agents are stepped on; 0: one per core. The result is the same for any number.
   int threads = 1;
+  // When set, agent driven_agent is steered by `driver` (which outlives the run), not by a brain.
+  AgentDriver* driver = nullptr;
+  std::size_t driven_agent = 0;
 };
 
 struct AgentResult {

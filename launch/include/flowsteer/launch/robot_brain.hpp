@@ -15,11 +15,13 @@ pipeline::BrainConfig robot_brain_config(const config::PerceptionSection& percep
 
 // The robot's pipeline::Brain in the robot loop: the same brain the simulator's agents run, with
 // the robot's log. Each change between seeing and blind is logged once, with the reason; with a
-// frame log, each frame gets a line with the status, the objects and the command.
+// frame log, each frame gets a line with the status, the objects and the command, and, when the
+// frames' times are on the monotonic clock (a live camera, not a recording), latency_ms: the
+// time from the frame's capture to its command.
 class RobotBrain final : public FrameHandler {
  public:
   RobotBrain(const base::CameraIntrinsics& intrinsics, const pipeline::BrainConfig& config,
-             std::ostream& log, std::ostream* frame_log = nullptr);
+             std::ostream& log, std::ostream* frame_log = nullptr, bool live_camera = false);
 
   base::Command step(const LoopInput& input) override;
 
@@ -29,6 +31,7 @@ class RobotBrain final : public FrameHandler {
   pipeline::Brain brain_;
   std::ostream& log_;
   std::ostream* frame_log_;
+  bool live_camera_;
   std::optional<servo::FlowStatus> logged_status_;
 };
 

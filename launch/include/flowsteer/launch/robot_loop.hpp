@@ -64,6 +64,11 @@ struct RobotLoopOptions {
 struct RobotLoopResult {
   StopReason reason = StopReason::end_of_stream;
   std::size_t frames = 0;
+  // Frames equal to the one before to the last byte while the base moves: a capture device
+  // faster than its source (an HDMI grabber, vivid's loop) repeats a picture, which carries no
+  // motion, so the brain does not see it; the last command stands until a new picture comes. (On
+  // a base at rest in a still scene the same picture is the truth, and the brain sees it.)
+  std::size_t repeated_frames = 0;
   double duration_s = 0.0;
   double max_measured_speed_mps = 0.0;  // the fastest the base was measured to go
 };

@@ -1,0 +1,79 @@
+#include "v4l2_io.hpp"
+
+#include "flowsteer/camera_io/v4l2_device.hpp"
+
+#include <sys/ioctl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <stdexcept>
+
+namespace flowsteer::camera_io::v4l2 {
+
+std::string fourcc_text(std::uint32_t fourcc) {
+  // Bit 31 marks the big-endian variant of a format (as v4l2-ctl prints it, "-BE").
+  const bool big_endian = (fourcc & (1u << 31)) != 0;
+  std::string text;
+  for (int i = 0; i < 4; ++i) {
+    const char c = static_cast<char>((fourcc >> (8 * i)) & (i == 3 ? 0x7f : 0xff));
+    if (c != ' ') {
+      text += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+    }
+  }
+  return big_endian ? text + "-BE" : text;
+}
+
+std::string errno_message(const std::string& device, const char* what, int error) {
+  return std::string(what) + " on " + device + " failed: " + std::strerror(error);
+}
+
+[[noreturn]] void throw_errno(const std::string& device, const char* what, int error) {
+  throw std::runtime_error(errno_message(device, what, error));
+}
+
+bool try_ioctl(int fd, unsigned long request, void* arg) {
+  int result;
+  do {
+    result = ::ioctl(fd, request, arg);
+  } while (result == -1 && errno == EINTR);
+  return result != -1;
+}
+
+void checked_ioctl(int fd, unsigned long request, void* arg, const char* name,
+                   const std::string& device) {
+  if (!try_ioctl(fd, request, arg)) {
+    throw_errno(device, name, errno);
+  }
+}
+
+DeviceFd::~DeviceFd() {
+  if (fd_ >= 0) {
+    // The descriptor is gone even when close() reports an error; retrying could close another.
+    ::close(fd_);
+  }
+}
+
+DeviceFd& DeviceFd::operator=(DeviceFd&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) {
+      ::close(fd_);
+    }
+    fd_ = std::exchange(other.fd_, -1);
+  }
+  return *this;
+}
+
+Mapping::~Mapping() {
+  if (data_ != nullptr) {
+    ::munmap(data_, length_);
+  }
+}
+
+std::span<const std::uint8_t> Mapping::bytes(std::size_t bytes_used) const {
+  return {static_cast<const std::uint8_t*>(data_), std::min(bytes_used, length_)};
+}
+
+}  // namespace flowsteer::camera_io::v4l2

@@ -1,0 +1,33 @@
+#pragma once
+
+// What the V4L2 capture and output devices share: ioctls that name their failure, and the
+// driver's strings and fourccs as text.
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+
+namespace flowsteer::camera_io::v4l2 {
+
+// "YUYV"; a big-endian variant gets "-BE", as v4l2-ctl prints it.
+std::string fourcc_text(std::uint32_t fourcc);
+
+// The driver fills these fixed-size char arrays with a NUL-terminated string, but a full one
+// has no terminator.
+template <std::size_t N>
+std::string fixed_text(const std::uint8_t (&chars)[N]) {
+  const auto* begin = reinterpret_cast<const char*>(chars);
+  return std::string(begin, strnlen(begin, N));
+}
+
+// "VIDIOC_S_FMT on /dev/video0 failed: Invalid argument".
+std::string errno_message(const std::string& device, const char* what, int error);
+[[noreturn]] void throw_errno(const std::string& device, const char* what, int error);
+
+// ioctl, retried when a signal interrupts it. Returns false with errno set on failure.
+bool try_ioctl(int fd, unsigned long request, void* arg);
+// The same, throwing std::runtime_error (errno_message) on failure.
+void checked_ioctl(int fd, unsigned long request, void* arg, const char* name,
+                   const std::string& device);
+
+}  // namespace flowsteer::camera_io::v4l2

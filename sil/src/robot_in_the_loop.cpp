@@ -1,0 +1,205 @@
+#include "robot_in_the_loop.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "flowsteer/base/clock.hpp"
+#include "flowsteer/eval/output_files.hpp"
+#include "flowsteer/sim_camera/renderer.hpp"
+#include "vivid_loop.hpp"
+
+namespace flowsteer::sil {
+
+namespace {
+
+void sleep_until(double monotonic_s) {
+  const double left_s = monotonic_s - base::monotonic_now_s();
+  if (left_s > 0.0) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(left_s));
+  }
+}
+
+}  // namespace
+
+void LatencyStats::add(double ms) {
+  ++count;
+  mean_ms += (ms - mean_ms) / count;
+  max_ms = std::max(max_ms, ms);
+}
+
+RobotInTheLoop::RobotInTheLoop(RobotLink link, std::ostream& log)
+    : link_(std::move(link)), log_(log) {
+  connect_vivid_loop(link_.capture_device, link_.output_device);
+  output_.emplace(
+      camera_io::V4l2OutputOptions{link_.output_device, link_.width_px, link_.height_px, 3});
+  try {
+    odrive_.emplace(link_.odrive.interface, link_.odrive.left.node_id, link_.odrive.right.node_id);
+  } catch (const drivers::DriveError& e) {
+    throw std::runtime_error(
+        std::string(e.what()) + " (a virtual bus: `modprobe vcan && ip link add dev " +
+        link_.odrive.interface + " type vcan && ip link set " + link_.odrive.interface + " up`)");
+  }
+}
+
+base::Command RobotInTheLoop::step(const sim_camera::World& world, sim_camera::Renderer& renderer) {
+  world_ = &world;
+  const double dt = world.spec().step_s;
+  if (!robot_) {
+    render(world, renderer);
+    show();
+    start_robot();
+  }
+  const double due_s = start_s_ + static_cast<double>(steps_++) * dt;
+  const double behind_s = base::monotonic_now_s() - due_s;
+  report_.max_behind_ms = std::max(report_.max_behind_ms, 1e3 * behind_s);
+  // The world keeps to the wall clock, which the robot's odometry and watchdog run on: a step
+  // the renderer cannot show in time goes without its view, as a camera drops a frame.
+  const bool view = behind_s < dt && report_.output_error.empty();
+  if (view) {
+    render(world, renderer);
+  }
+  sleep_until(due_s);
+  if (view) {
+    show();
+  } else {
+    ++report_.views_dropped;
+  }
+  const double now_s = base::monotonic_now_s();
+  if (const std::optional<int> status = robot_->poll()) {
+    report_.robot_ended_itself = true;
+    report_.robot_exit_status = *status;
+    report_.robot_end_time_s = world.time_s();
+  }
+  const drivers::BodyVelocity motion = wheel_motion(now_s);
+  const sim_camera::AgentState& agent = world.agents()[link_.agent];
+  // The world integrates (a_c, ω) over the step: this a_c gives the wheels' speed at once.
+  return {(motion.speed_mps - agent.speed_mps) / dt, motion.turn_rate};
+}
+
+void RobotInTheLoop::render(const sim_camera::World& world, sim_camera::Renderer& renderer) {
+  renderer.render(world, sim_camera::View::of_agent(world, link_.agent), view_,
+                  sim_camera::RenderChannels::all);
+}
+
+void RobotInTheLoop::show() {
+  try {
+    output_->show(view_.image);
+    ++report_.views_shown;
+  } catch (const std::runtime_error& e) {
+    // vivid fails its output with its capture stream: the robot's camera is gone, and the run
+    // goes on to record what the robot does about it.
+    report_.output_error = e.what();
+    log_ << "flowsteer sil: the views can no longer be shown: " << e.what() << "\n";
+  }
+}
+
+void RobotInTheLoop::start_robot() {
+  log_ << "flowsteer sil: starting the robot:";
+  for (const std::string& arg : link_.robot_argv) {
+    log_ << " " << arg;
+  }
+  log_ << "\n";
+  const double started_s = base::monotonic_now_s();
+  robot_ = std::make_unique<RobotProcess>(link_.robot_argv);
+  for (;;) {
+    const auto axes = odrive_->axes();
+    if (axes[0].state == drivers::odrive::kAxisStateClosedLoop &&
+        axes[1].state == drivers::odrive::kAxisStateClosedLoop) {
+      break;
+    }
+    if (const std::optional<int> status = robot_->poll()) {
+      throw std::runtime_error(
+          "the robot process exited with status " + std::to_string(*status) +
+          " before it activated its drive (its log: " + link_.robot_log.string() + ")");
+    }
+    if (base::monotonic_now_s() - started_s > link_.startup_timeout_s) {
+      throw std::runtime_error(
+          "the robot process did not activate its drive (both axes in "
+          "closed-loop control) within " +
+          std::to_string(link_.startup_timeout_s) + " s");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  start_s_ = base::monotonic_now_s();
+  report_.wait_for_robot_s = start_s_ - started_s;
+  log_ << "flowsteer sil: the robot activated its drive after " << report_.wait_for_robot_s
+       << " s; the world runs\n";
+}
+
+drivers::BodyVelocity RobotInTheLoop::wheel_motion(double now_s) {
+  const auto axes = odrive_->axes();
+  const std::array<const drivers::OdriveAxisConfig*, 2> configs{&link_.odrive.left,
+                                                                &link_.odrive.right};
+  std::array<double, 2> wheel_radps{};
+  for (std::size_t i = 0; i < 2; ++i) {
+    wheel_radps[i] = axes[i].vel_turns_per_s * 2.0 * std::numbers::pi /
+                     link_.odrive.motor_turns_per_wheel_turn * configs[i]->direction;
+    if (axes[i].setpoint_changed_s && *axes[i].setpoint_changed_s > last_setpoint_s_[i]) {
+      last_setpoint_s_[i] = *axes[i].setpoint_changed_s;
+      report_.command_to_motion.add(1e3 * (now_s - last_setpoint_s_[i]));
+    }
+  }
+  return drivers::from_wheels({wheel_radps[0], wheel_radps[1]}, link_.geometry);
+}
+
+void RobotInTheLoop::finish(eval::OutputDir* out) {
+  if (robot_ && !report_.robot_ended_itself) {
+    report_.robot_exit_status = robot_->stop(5.0);
+    report_.robot_end_time_s = world_ != nullptr ? world_->time_s() : 0.0;
+  }
+  if (world_ != nullptr) {
+    report_.robot_stop_position_m = world_->agents()[link_.agent].position_m;
+  }
+  read_robot_log();
+  if (out != nullptr) {
+    std::ifstream robot_log(link_.robot_log);
+    std::ostringstream text;
+    text << robot_log.rdbuf();
+    eval::write_text(out->staging_path("robot.log"), text.str());
+    write_report(out->staging_path("sil.json"));
+  }
+  std::error_code ignored;
+  std::filesystem::remove(link_.robot_log, ignored);
+}
+
+// The robot's frame log has a line per frame with "latency_ms X", the delay from the frame's
+// capture to its command (launch/src/robot_brain.cpp).
+void RobotInTheLoop::read_robot_log() {
+  std::ifstream in(link_.robot_log);
+  std::string line;
+  while (std::getline(in, line)) {
+    const std::size_t at = line.find(" latency_ms ");
+    if (line.rfind("frame ", 0) == 0 && at != std::string::npos) {
+      report_.capture_to_command.add(std::stod(line.substr(at + 12)));
+    }
+  }
+}
+
+void RobotInTheLoop::write_report(const std::filesystem::path& path) const {
+  const auto latency = [](const LatencyStats& s) {
+    return "{\"count\": " + std::to_string(s.count) +
+           ", \"mean_ms\": " + eval::json_number(s.mean_ms) +
+           ", \"max_ms\": " + eval::json_number(s.max_ms) + "}";
+  };
+  const SilReport& r = report_;
+  std::ostringstream json;
+  json << "{\n  \"robot_exit_status\": " << r.robot_exit_status
+       << ",\n  \"robot_ended_itself\": " << (r.robot_ended_itself ? "true" : "false")
+       << ",\n  \"robot_end_time_s\": " << eval::json_number(r.robot_end_time_s)
+       << ",\n  \"robot_stop_position_m\": [" << eval::json_number(r.robot_stop_position_m.x())
+       << ", " << eval::json_number(r.robot_stop_position_m.y())
+       << "],\n  \"capture_to_command\": " << latency(r.capture_to_command)
+       << ",\n  \"command_to_motion\": " << latency(r.command_to_motion)
+       << ",\n  \"views_shown\": " << r.views_shown << ",\n  \"views_dropped\": " << r.views_dropped
+       << ",\n  \"max_behind_ms\": " << eval::json_number(r.max_behind_ms)
+       << ",\n  \"output_error\": " << eval::json_string(r.output_error)
+       << ",\n  \"wait_for_robot_s\": " << eval::json_number(r.wait_for_robot_s) << "\n}\n";
+  eval::write_text(path, json.str());
+}
+
+}  // namespace flowsteer::sil
