@@ -1,18 +1,22 @@
 #!/usr/bin/env bash
 # Usage: make_initramfs.sh KERNEL_ROOT OUT.cpio.gz INIT [--modules "m1 m2"] [--binaries "b1 b2"]
+#                          [--files "/abs/f1 /abs/f2"]
 # (a binary named without a slash is looked up on PATH)
 # Builds a busybox-static initramfs for the kernel unpacked at KERNEL_ROOT (fetch_kernel.sh):
 # INIT becomes /init, the named modules and everything they depend on go under /lib/modules
 # (depmod -b, so busybox's modprobe finds them), and each binary goes to /bin with the shared
-# libraries ldd names, at their own paths.
+# libraries ldd names, at their own paths. Each file goes to its own path, with the libraries
+# ldd names where it is a dynamic executable or library: what a program loads at run time
+# (plugins it dlopens, helpers it runs, their data), which ldd cannot see.
 set -euo pipefail
 
 kroot=${1:?usage}; out=${2:?usage}; init=${3:?usage}; shift 3
-modules=""; binaries=""
+modules=""; binaries=""; files=""
 while [[ $# -gt 0 ]]; do
   case $1 in
     --modules) modules=$2; shift 2 ;;
     --binaries) binaries=$2; shift 2 ;;
+    --files) files=$2; shift 2 ;;
     *) echo "make_initramfs: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -51,6 +55,12 @@ copy_with_path() {
   mkdir -p "$stage/$(dirname "$1")"
   cp -L "$1" "$stage/$1"
 }
+# The shared libraries ldd lists for $1, at their own paths. Lines look like
+# "libc.so.6 => /lib/x86_64-linux-gnu/libc.so.6 (0x...)" or "/lib64/ld-linux-x86-64.so.2 (0x...)".
+copy_libraries() {
+  ldd "$1" | awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\// { print $1 }' |
+    while read -r lib; do copy_with_path "$lib"; done
+}
 for binary in $binaries; do
   if [[ $binary != */* ]]; then
     name=$binary
@@ -60,10 +70,18 @@ for binary in $binaries; do
     }
   fi
   cp "$binary" "$stage/bin/"
-  # Lines look like "libc.so.6 => /lib/x86_64-linux-gnu/libc.so.6 (0x...)" or
-  # "/lib64/ld-linux-x86-64.so.2 (0x...)".
-  ldd "$binary" | awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\// { print $1 }' |
-    while read -r lib; do copy_with_path "$lib"; done
+  copy_libraries "$binary"
+done
+for file in $files; do
+  [[ -f $file ]] || {
+    echo "make_initramfs: $file not found: scripts/setup installs what the VM tests need" >&2
+    exit 1
+  }
+  copy_with_path "$file"
+  # ldd fails on what is not a dynamic ELF file (data, scripts): those have no libraries.
+  if ldd "$file" > /dev/null 2>&1; then
+    copy_libraries "$file"
+  fi
 done
 
 cp "$init" "$stage/init"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Usage: run_vm.sh KERNEL_CACHE WORK_DIR INIT TIMEOUT_S [--memory-mb N] [--modules "m1 m2"]
-#                  [--binaries "b1 b2"]
+#                  [--binaries "b1 b2"] [--files "/abs/f1 /abs/f2"]
 # A test VM: fetches the kernel (cached under KERNEL_CACHE, which every VM test shares), builds
 # WORK_DIR/initramfs.cpio.gz with INIT as /init and the modules and binaries (a name without a
 # slash is looked up on PATH), boots it with N MB of memory (default 512) for at most TIMEOUT_S
@@ -27,6 +27,6 @@ if ! version=$(qemu-system-x86_64 --version 2>&1); then
 fi
 
 kroot=$("$here/fetch_kernel.sh" "$kernel_cache")
-# The rest of the arguments (--modules, --binaries) are make_initramfs.sh's.
+# The rest of the arguments (--modules, --binaries, --files) are make_initramfs.sh's.
 "$here/make_initramfs.sh" "$kroot" "$work/initramfs.cpio.gz" "$init" "$@"
 "$here/boot.sh" "$kroot" "$work/initramfs.cpio.gz" "$work/console.log" "$timeout_s" "$memory_mb"
