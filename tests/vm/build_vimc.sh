@@ -15,6 +15,7 @@ cache=${1:?usage: build_vimc.sh KERNEL_CACHE}
 kroot=$("$here/fetch_kernel.sh" "$cache")
 # make -C changes directory: every path it is given must be absolute.
 kroot=$(cd "$kroot" && pwd)
+cache=$(dirname "$kroot")
 release=$(ls "$kroot/lib/modules")
 if [[ -f $kroot/.vimc-ready ]]; then
   echo "$kroot"
@@ -40,8 +41,9 @@ deps=$(apt-cache show "$headers_pkg=$version" 2>/dev/null |
   exit 1
 }
 
-work=$(mktemp -d "$kroot/../vimc-build.XXXXXX")
-work=$(cd "$work" && pwd)
+# What a build killed midway left (the VM tests run one at a time: none is in progress).
+rm -rf "$cache"/vimc-build.*
+work=$(mktemp -d "$cache/vimc-build.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 packages=()
 for pkg in "$source_pkg" "$headers_pkg" $deps; do
