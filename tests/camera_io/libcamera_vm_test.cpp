@@ -36,12 +36,17 @@ struct VmRun {
   std::map<std::string, std::string> probe;               // last line per key
   std::vector<std::string> cameras;                       // "PROBE camera ID", in order
   std::map<std::string, std::vector<ProbeFrame>> frames;  // "default" → its frames
+  std::string exit_status;                                // vimc_init.sh's "VM: probe exit status"
 };
 
 VmRun parse(const std::string& console) {
   VmRun run;
   run.console = console;
   flowsteer::vm_test::for_each_line(console, [&](const std::string& line) {
+    const std::string exit_line = "VM: probe exit status ";
+    if (line.starts_with(exit_line)) {
+      run.exit_status = line.substr(exit_line.size());
+    }
     const auto probe = flowsteer::vm_test::probe_line(line);
     if (!probe) {
       return;
@@ -235,6 +240,12 @@ TEST_F(VimcVm, ASecondCameraManagerIsAClearError) {
     const std::string& message = run_.probe[std::string(key) + "-second-manager"];
     EXPECT_TRUE(contains(message, "one camera manager per process")) << key << ": " << message;
   }
+}
+
+// The probe ends after every camera has been closed; under the sanitizers a leak or an error
+// in closing would make its exit status non-zero.
+TEST_F(VimcVm, ProbeExitsCleanly) {
+  EXPECT_EQ(run_.exit_status, "0") << run_.console;
 }
 
 TEST_F(VimcVm, ErrorsNameWhatWasWrong) {
