@@ -3,6 +3,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -30,10 +31,49 @@ struct PlaneMapping {
   std::size_t length = 0;
 };
 
+// libcamera allows one CameraManager per process and aborts the process (a Fatal log) on a
+// second; a ManagerSlot is held for each manager's lifetime, so a second one is an exception.
+class ManagerSlot {
+ public:
+  ManagerSlot() {
+    std::lock_guard lock(mutex_);
+    if (taken_) {
+      throw std::logic_error(
+          "libcamera: one camera manager per process, and a LibcameraCamera holds it: close it "
+          "before opening another camera or listing cameras");
+    }
+    taken_ = true;
+  }
+  ~ManagerSlot() {
+    std::lock_guard lock(mutex_);
+    taken_ = false;
+  }
+  ManagerSlot(const ManagerSlot&) = delete;
+  ManagerSlot& operator=(const ManagerSlot&) = delete;
+
+ private:
+  static inline std::mutex mutex_;
+  static inline bool taken_ = false;
+};
+
+// The formats read() converts to BGR, in the order tried when none is asked for.
+constexpr std::array<libcamera::PixelFormat, 4> kConvertedFormats = {
+    libcamera::formats::RGB888, libcamera::formats::BGR888, libcamera::formats::XRGB8888,
+    libcamera::formats::YUYV};
+
+std::string format_names(const std::vector<libcamera::PixelFormat>& formats) {
+  std::string names;
+  for (const libcamera::PixelFormat& format : formats) {
+    names += (names.empty() ? "" : ", ") + format.toString();
+  }
+  return names;
+}
+
 }  // namespace
 
 struct LibcameraCamera::Impl {
   std::string name;  // "libcamera camera <id>", for messages
+  ManagerSlot slot;  // before the manager: claimed first, released last
   libcamera::CameraManager manager;
   std::shared_ptr<libcamera::Camera> camera;
   bool acquired = false;
@@ -55,7 +95,7 @@ struct LibcameraCamera::Impl {
 
   std::optional<Lens> lens;
   cv::Mat converted;
-  std::optional<std::uint32_t> last_sequence;
+  std::optional<std::uint32_t> last_sequence;  // libcamera's, of the last frame read
   std::uint64_t dropped = 0;
   std::uint64_t sequence = 0;
 
@@ -65,7 +105,7 @@ struct LibcameraCamera::Impl {
   void select_camera(const std::string& camera_id);
   void acquire_camera();
   void configure(const LibcameraOptions& options);
-  void choose_pixel_format(libcamera::StreamConfiguration& stream_config);
+  void choose_pixel_format(libcamera::StreamConfiguration& stream_config, const std::string& asked);
   void create_requests();
   PlaneMapping map_plane(const libcamera::FrameBuffer::Plane& plane, long page) const;
   void start(double frame_rate_hz);
@@ -110,6 +150,15 @@ void check_options(const LibcameraOptions& options) {
       !(options.frame_rate_hz >= 0.0)) {
     throw std::invalid_argument(
         "libcamera: need a positive size, a frame rate >= 0 and at least 2 buffers");
+  }
+  if (!options.pixel_format.empty() &&
+      std::find(kConvertedFormats.begin(), kConvertedFormats.end(),
+                libcamera::PixelFormat::fromString(options.pixel_format)) ==
+          kConvertedFormats.end()) {
+    throw std::invalid_argument("libcamera: pixel format '" + options.pixel_format +
+                                "' is not one LibcameraCamera converts (" +
+                                format_names({kConvertedFormats.begin(), kConvertedFormats.end()}) +
+                                ")");
   }
 }
 
@@ -161,14 +210,15 @@ void LibcameraCamera::Impl::configure(const LibcameraOptions& options) {
     throw std::runtime_error(name + ": offers no video stream");
   }
   libcamera::StreamConfiguration& stream_config = config->at(0);
-  stream_config.size = {static_cast<unsigned int>(options.width_px),
-                        static_cast<unsigned int>(options.height_px)};
+  const libcamera::Size asked(static_cast<unsigned int>(options.width_px),
+                              static_cast<unsigned int>(options.height_px));
+  stream_config.size = asked;
   stream_config.bufferCount = static_cast<unsigned int>(options.buffer_count);
-  choose_pixel_format(stream_config);
-  if (stream_config.size.width != static_cast<unsigned int>(options.width_px) ||
-      stream_config.size.height != static_cast<unsigned int>(options.height_px)) {
-    throw std::runtime_error(name + ": does not offer " + std::to_string(options.width_px) + "x" +
-                             std::to_string(options.height_px) + ": it chose " +
+  choose_pixel_format(stream_config, options.pixel_format);
+  if (stream_config.size != asked) {
+    // validate() replaced the size with the nearest the pipeline can give.
+    throw std::runtime_error(name + ": does not offer " + asked.toString() + " in " +
+                             stream_config.pixelFormat.toString() + ": the nearest it offers is " +
                              stream_config.size.toString());
   }
   if (const int error = camera->configure(config.get()); error != 0) {
@@ -181,20 +231,27 @@ void LibcameraCamera::Impl::configure(const LibcameraOptions& options) {
   height_px = static_cast<int>(stream_config.size.height);
 }
 
-// The first of the formats read() converts that the camera keeps when the configuration is
-// validated (validate() replaces a format the camera lacks with one it has).
-void LibcameraCamera::Impl::choose_pixel_format(libcamera::StreamConfiguration& stream_config) {
-  const std::array<libcamera::PixelFormat, 3> wanted = {
-      libcamera::formats::RGB888, libcamera::formats::XRGB8888, libcamera::formats::YUYV};
+// The format asked for, else the first of the formats read() converts, that the camera keeps
+// when the configuration is validated (validate() replaces a format the camera lacks with one
+// it has, and may adjust the size to it: each try starts from the size asked for).
+void LibcameraCamera::Impl::choose_pixel_format(libcamera::StreamConfiguration& stream_config,
+                                                const std::string& asked) {
+  std::vector<libcamera::PixelFormat> wanted(kConvertedFormats.begin(), kConvertedFormats.end());
+  if (!asked.empty()) {
+    wanted = {libcamera::PixelFormat::fromString(asked)};  // check_options() checked it
+  }
+  const libcamera::Size size = stream_config.size;
   for (const libcamera::PixelFormat& wanted_format : wanted) {
     stream_config.pixelFormat = wanted_format;
+    stream_config.size = size;
     if (config->validate() != libcamera::CameraConfiguration::Invalid &&
         stream_config.pixelFormat == wanted_format) {
       return;
     }
   }
-  throw std::runtime_error(name + ": offers none of RGB888, XRGB8888, YUYV (it offers " +
-                           stream_config.toString() + ")");
+  throw std::runtime_error(name + ": does not offer pixel format " + format_names(wanted) +
+                           " (it offers " + format_names(stream_config.formats().pixelformats()) +
+                           ")");
 }
 
 // Allocates the stream's buffers, maps each into memory (read() finds a buffer's mapping by its
@@ -281,11 +338,20 @@ std::uint64_t LibcameraCamera::dropped_frames() const {
   return impl_->dropped;
 }
 
+std::uint32_t LibcameraCamera::driver_sequence() const {
+  return impl_->last_sequence.value_or(0);
+}
+
+std::string LibcameraCamera::pixel_format() const {
+  return impl_->format.toString();
+}
+
 const std::string& LibcameraCamera::camera_id() const {
   return impl_->camera->id();
 }
 
 std::vector<std::string> LibcameraCamera::list_cameras() {
+  const ManagerSlot slot;
   libcamera::CameraManager manager;
   if (const int error = manager.start(); error != 0) {
     throw std::runtime_error("libcamera: the camera manager did not start: " +
@@ -323,6 +389,10 @@ ReadStatus LibcameraCamera::read(Frame& frame, double timeout_s) {
       auto* data = const_cast<std::uint8_t*>(m.data);  // cv::Mat wants a mutable pointer
       if (c.format == libcamera::formats::RGB888) {
         cv::Mat(c.height_px, c.width_px, CV_8UC3, data, c.stride).copyTo(c.converted);
+      } else if (c.format == libcamera::formats::BGR888) {
+        // libcamera's BGR888 is R, G, B in memory.
+        cv::cvtColor(cv::Mat(c.height_px, c.width_px, CV_8UC3, data, c.stride), c.converted,
+                     cv::COLOR_RGB2BGR);
       } else if (c.format == libcamera::formats::XRGB8888) {
         cv::cvtColor(cv::Mat(c.height_px, c.width_px, CV_8UC4, data, c.stride), c.converted,
                      cv::COLOR_BGRA2BGR);

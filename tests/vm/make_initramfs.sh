@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Usage: make_initramfs.sh KERNEL_ROOT OUT.cpio.gz INIT [--modules "m1 m2"] [--binaries "b1 b2"]
-#                          [--files "f1 src=dest"]
+#                          [--files "/abs/f1 src=/dest"]
 # (a binary named without a slash is looked up on PATH)
 # Builds a busybox-static initramfs for the kernel unpacked at KERNEL_ROOT (fetch_kernel.sh):
 # INIT becomes /init, the named modules and everything they depend on go under /lib/modules
 # (depmod -b, so busybox's modprobe finds them), and each binary goes to /bin with the shared
-# libraries ldd names, at their own paths; each file goes to its own path (or to dest for
-# src=dest), a shared library among them (what a program dlopens) with the libraries it needs.
+# libraries ldd names, at their own paths. Each file goes to its own path (or, for src=dest, to
+# dest), with the libraries ldd names where it is a dynamic executable or library: what a
+# program loads at run time (plugins it dlopens, helpers it runs, their data), which ldd cannot
+# see.
 set -euo pipefail
 
 kroot=${1:?usage}; out=${2:?usage}; init=${3:?usage}; shift 3
@@ -54,9 +56,9 @@ copy_with_path() {
   mkdir -p "$stage/$(dirname "$1")"
   cp -L "$1" "$stage/$1"
 }
-# Lines look like "libc.so.6 => /lib/x86_64-linux-gnu/libc.so.6 (0x...)" or
-# "/lib64/ld-linux-x86-64.so.2 (0x...)".
-copy_libraries_of() {
+# The shared libraries ldd lists for $1, at their own paths. Lines look like
+# "libc.so.6 => /lib/x86_64-linux-gnu/libc.so.6 (0x...)" or "/lib64/ld-linux-x86-64.so.2 (0x...)".
+copy_libraries() {
   ldd "$1" | awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\// { print $1 }' |
     while read -r lib; do copy_with_path "$lib"; done
 }
@@ -69,15 +71,20 @@ for binary in $binaries; do
     }
   fi
   cp "$binary" "$stage/bin/"
-  copy_libraries_of "$binary"
+  copy_libraries "$binary"
 done
 for file in $files; do
   src=${file%%=*}
   dest=${file#*=}
+  [[ -f $src ]] || {
+    echo "make_initramfs: $src not found: scripts/setup installs what the VM tests need" >&2
+    exit 1
+  }
   mkdir -p "$stage/$(dirname "$dest")"
   cp -L "$src" "$stage/$dest"
-  if [[ $src == *.so* ]]; then
-    copy_libraries_of "$src"
+  # ldd fails on what is not a dynamic ELF file (data, scripts): those have no libraries.
+  if ldd "$src" > /dev/null 2>&1; then
+    copy_libraries "$src"
   fi
 done
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Usage: run_vm.sh KERNEL_CACHE WORK_DIR INIT TIMEOUT_S [--memory-mb N] [--cpus N]
-#                  [--modules "m1 m2"] [--binaries "b1 b2"] [--files "f1 src=dest"]
+#                  [--modules "m1 m2"] [--binaries "b1 b2"] [--files "/abs/f1 src=/dest"]
 # A test VM: fetches the kernel (cached under KERNEL_CACHE, which every VM test shares), builds
 # WORK_DIR/initramfs.cpio.gz with INIT as /init and the modules and binaries (a name without a
 # slash is looked up on PATH), boots it with N MB of memory (default 512) and N CPUs (default

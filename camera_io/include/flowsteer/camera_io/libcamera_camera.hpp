@@ -15,6 +15,9 @@ struct LibcameraOptions {
   std::string camera_id;
   int width_px = 640;
   int height_px = 480;
+  // libcamera's name of the pixel format to stream ("RGB888", "BGR888", "XRGB8888", "YUYV": the
+  // ones read() converts); empty: the first of them, in that order, that the camera offers.
+  std::string pixel_format;
   // 0 keeps the camera's default; otherwise asked for through FrameDurationLimits where the
   // camera has that control.
   double frame_rate_hz = 30.0;
@@ -27,8 +30,11 @@ struct LibcameraOptions {
 //
 // A camera through libcamera (Raspberry Pi cameras, UVC webcams and the other pipelines
 // libcamera handles), built only when pkg-config finds libcamera. The stream is asked for in
-// RGB888 (BGR in memory, OpenCV's order), else XRGB8888 or YUYV, and converted to BGR.
-// Construction starts the camera; errors throw std::runtime_error naming the camera.
+// RGB888 (BGR in memory, OpenCV's order), else BGR888, XRGB8888 or YUYV, and converted to BGR.
+// Construction starts the camera; errors throw std::runtime_error naming the camera, and
+// what it offers where it lacks the size or pixel format asked for. libcamera allows one
+// camera manager per process: a second LibcameraCamera, or list_cameras() while one exists,
+// throws std::logic_error (libcamera itself would abort the process).
 class LibcameraCamera final : public FrameSource {
  public:
   explicit LibcameraCamera(const LibcameraOptions& options);
@@ -42,7 +48,11 @@ class LibcameraCamera final : public FrameSource {
 
   // Frames the camera skipped, from gaps in its frame sequence numbers, and failed frames.
   std::uint64_t dropped_frames() const;
+  // libcamera's sequence number of the last frame read (gaps are dropped frames).
+  std::uint32_t driver_sequence() const;
   const std::string& camera_id() const;
+  // The pixel format the camera streams, by libcamera's name ("RGB888").
+  std::string pixel_format() const;
 
   // The ids of the cameras libcamera finds. libcamera allows one camera manager per process:
   // not while a LibcameraCamera exists.
