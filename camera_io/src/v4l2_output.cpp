@@ -6,6 +6,8 @@
 #include <sys/mman.h>
 
 #include <cerrno>
+#include <chrono>
+#include <condition_variable>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -116,7 +118,6 @@ struct V4l2Output::Impl {
     buffer.bytesused = size_image;
     buffer.field = V4L2_FIELD_NONE;
     checked_ioctl(fd.get(), VIDIOC_QBUF, &buffer, "VIDIOC_QBUF", device);
-    ++queued;
   }
 
   // The feeder thread: each buffer the driver has shown goes back with the latest image.
@@ -139,11 +140,17 @@ struct V4l2Output::Impl {
         buffer.memory = V4L2_MEMORY_MMAP;
         checked_ioctl(fd.get(), VIDIOC_DQBUF, &buffer, "VIDIOC_DQBUF", device);
         queue(buffer);
+        {
+          const std::lock_guard lock(mutex);
+          ++shown;
+        }
+        frame_shown.notify_all();
       }
     } catch (const std::exception& e) {
       const std::lock_guard lock(mutex);
       error = e.what();
     }
+    frame_shown.notify_all();
   }
 
   std::string device;
@@ -154,11 +161,12 @@ struct V4l2Output::Impl {
   std::uint32_t bytes_per_line = 0;
   std::uint32_t size_image = 0;
   std::vector<v4l2::Mapping> buffers;
-  std::mutex mutex;
-  cv::Mat latest;     // YUYV; guarded by mutex
-  std::string error;  // what ended the feeding; guarded by mutex
+  mutable std::mutex mutex;
+  mutable std::condition_variable frame_shown;
+  cv::Mat latest;           // YUYV; guarded by mutex
+  std::string error;        // what ended the feeding; guarded by mutex
+  std::uint64_t shown = 0;  // buffers the driver gave back; guarded by mutex
   std::atomic<bool> stop{false};
-  std::atomic<std::uint64_t> queued{0};
   std::thread feeder;
 };
 
@@ -178,8 +186,21 @@ void V4l2Output::show(const cv::Mat& bgr) {
   bgr_to_yuyv(bgr, impl_->latest);
 }
 
-std::uint64_t V4l2Output::buffers_queued() const {
-  return impl_->queued;
+std::uint64_t V4l2Output::frames_shown() const {
+  const std::lock_guard lock(impl_->mutex);
+  return impl_->shown;
+}
+
+bool V4l2Output::wait_for_frames(std::uint64_t count, double timeout_s) const {
+  std::unique_lock lock(impl_->mutex);
+  return impl_->frame_shown.wait_for(lock, std::chrono::duration<double>(timeout_s), [&] {
+    return impl_->shown >= count || !impl_->error.empty();
+  }) && impl_->shown >= count;
+}
+
+std::string V4l2Output::error() const {
+  const std::lock_guard lock(impl_->mutex);
+  return impl_->error;
 }
 
 const std::string& V4l2Output::driver() const {

@@ -123,8 +123,11 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   events << "\n";
   const RobotLoopResult result =
       run_robot_loop(*camera, robot_base.get(), brain, options, stop_requested, events);
-  events << "flowsteer run: " << result.frames << " frames (" << result.repeated_frames
-         << " repeated) in " << result.duration_s << " s (" << stop_reason_name(result.reason)
+  events << "flowsteer run: " << result.frames << " frames";
+  if (result.repeated_frames > 0) {
+    events << " (" << result.repeated_frames << " repeated)";
+  }
+  events << " in " << result.duration_s << " s (" << stop_reason_name(result.reason)
          << ")\n";
   events.flush();
   return result;

@@ -36,7 +36,7 @@ RobotInTheLoop::RobotInTheLoop(RobotLink link, std::ostream& log)
     : link_(std::move(link)), log_(log) {
   connect_vivid_loop(link_.capture_device, link_.output_device);
   output_.emplace(
-      camera_io::V4l2OutputOptions{link_.output_device, link_.width_px, link_.height_px, 3});
+      camera_io::V4l2OutputOptions{link_.output_device, link_.width_px, link_.height_px});
   try {
     odrive_.emplace(link_.odrive.interface, link_.odrive.left.node_id, link_.odrive.right.node_id);
   } catch (const drivers::DriveError& e) {
@@ -54,16 +54,16 @@ base::Command RobotInTheLoop::step(const sim_camera::World& world, sim_camera::R
     show();
     start_robot();
   }
-  const double due_s = start_s_ + static_cast<double>(steps_++) * dt;
-  const double behind_s = base::monotonic_now_s() - due_s;
+  const long k = steps_++;
+  const double behind_s = base::monotonic_now_s() - (start_s_ + static_cast<double>(k) * dt);
   report_.max_behind_ms = std::max(report_.max_behind_ms, 1e3 * behind_s);
-  // The world keeps to the wall clock, which the robot's odometry and watchdog run on: a step
-  // the renderer cannot show in time goes without its view, as a camera drops a frame.
+  // The world keeps to the clock, which the robot's odometry and watchdog run on: a step the
+  // renderer cannot show in time goes without its view, as a camera drops a frame.
   const bool view = behind_s < dt && report_.output_error.empty();
   if (view) {
     render(world, renderer);
   }
-  sleep_until(due_s);
+  wait_for_step(k, dt);
   if (view) {
     show();
   } else {
@@ -98,6 +98,20 @@ void RobotInTheLoop::show() {
   }
 }
 
+void RobotInTheLoop::wait_for_step(long k, double dt) {
+  sleep_until(start_s_ + static_cast<double>(k) * dt);
+  // The view goes out just after the output's next frame: each view then reaches the robot's
+  // capture the same number of frames after it is shown, and the time between two new pictures
+  // the robot sees is the time between their views to a frame, not to two.
+  if (report_.output_error.empty() && !output_->wait_for_frames(output_->frames_shown() + 1, 1.0)) {
+    report_.output_error = output_->error();
+    if (report_.output_error.empty()) {
+      report_.output_error = link_.output_device + ": the device showed no frame for 1 s";
+    }
+    log_ << "flowsteer sil: the views can no longer be shown: " << report_.output_error << "\n";
+  }
+}
+
 void RobotInTheLoop::start_robot() {
   log_ << "flowsteer sil: starting the robot:";
   for (const std::string& arg : link_.robot_argv) {
@@ -126,6 +140,7 @@ void RobotInTheLoop::start_robot() {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   start_s_ = base::monotonic_now_s();
+  first_frame_ = output_->frames_shown();
   report_.wait_for_robot_s = start_s_ - started_s;
   log_ << "flowsteer sil: the robot activated its drive after " << report_.wait_for_robot_s
        << " s; the world runs\n";
@@ -148,6 +163,10 @@ drivers::BodyVelocity RobotInTheLoop::wheel_motion(double now_s) {
 }
 
 void RobotInTheLoop::finish(eval::OutputDir* out) {
+  if (robot_) {
+    report_.output_frame_rate_hz = static_cast<double>(output_->frames_shown() - first_frame_) /
+                                   (base::monotonic_now_s() - start_s_);
+  }
   if (robot_ && !report_.robot_ended_itself) {
     report_.robot_exit_status = robot_->stop(5.0);
     report_.robot_end_time_s = world_ != nullptr ? world_->time_s() : 0.0;
@@ -198,7 +217,8 @@ void RobotInTheLoop::write_report(const std::filesystem::path& path) const {
        << ",\n  \"views_shown\": " << r.views_shown << ",\n  \"views_dropped\": " << r.views_dropped
        << ",\n  \"max_behind_ms\": " << eval::json_number(r.max_behind_ms)
        << ",\n  \"output_error\": " << eval::json_string(r.output_error)
-       << ",\n  \"wait_for_robot_s\": " << eval::json_number(r.wait_for_robot_s) << "\n}\n";
+       << ",\n  \"wait_for_robot_s\": " << eval::json_number(r.wait_for_robot_s)
+       << ",\n  \"output_frame_rate_hz\": " << eval::json_number(r.output_frame_rate_hz) << "\n}\n";
   eval::write_text(path, json.str());
 }
 

@@ -32,9 +32,9 @@ struct RobotLink {
   double startup_timeout_s = 30.0;
 };
 
-// The AgentDriver of `flowsteer sil`: shows the agent's view on the output device at each
-// step's time, and moves the agent by the simulated ODrive's wheel velocities. The robot process
-// starts at the first step, and the world waits until it has activated its drive.
+// The AgentDriver of `flowsteer sil`: shows the agent's view on the output device at each step's
+// time, and moves the agent by the simulated ODrive's wheel velocities. The robot process starts
+// at the first step, and the world waits until it has activated its drive.
 class RobotInTheLoop final : public eval::AgentDriver {
  public:
   // Connects vivid's loop and opens the output device and the CAN interface (the robot starts at
@@ -52,6 +52,8 @@ class RobotInTheLoop final : public eval::AgentDriver {
   void render(const sim_camera::World& world, sim_camera::Renderer& renderer);
   void show();
   void start_robot();
+  // Waits for step k's time, then for the output's next frame.
+  void wait_for_step(long k, double dt);
   // The agent's speed and turn rate from the axes' velocities; records new setpoints' delays.
   drivers::BodyVelocity wheel_motion(double now_s);
   void read_robot_log();
@@ -64,7 +66,8 @@ class RobotInTheLoop final : public eval::AgentDriver {
   std::unique_ptr<RobotProcess> robot_;
   const sim_camera::World* world_ = nullptr;
   sim_camera::RenderedView view_;
-  double start_s_ = 0.0;  // the monotonic time of step 0
+  std::uint64_t first_frame_ = 0;  // the output's frame count at step 0
+  double start_s_ = 0.0;           // the monotonic time of step 0
   long steps_ = 0;
   std::array<double, 2> last_setpoint_s_{-1.0, -1.0};
   SilReport report_;

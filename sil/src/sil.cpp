@@ -58,10 +58,11 @@ const drivers::OdriveCanConfig& odrive_drive(const config::RobotLaunch& launch,
   return *odrive;
 }
 
-// The agent as the robot is: the launch file's camera, and a speed limit the robot's own limits
-// decide.
+// The agent as the robot is: at rest at the start, the launch file's camera, and a speed limit
+// the robot's own limits decide.
 void become_robot(sim_camera::AgentSpec& agent, const config::RobotLaunch& launch,
                   const camera_io::V4l2Options& camera) {
+  agent.start_speed_mps = 0.0;
   const base::CameraMount& mount = *launch.perception.mount;
   agent.camera = {camera.width_px, camera.height_px, camera.lens.horizontal_fov_rad, mount.height_m,
                   mount.pitch_rad};

@@ -5,7 +5,6 @@
 // CLOCK_REALTIME of the fault (candump's clock), how and when flowsteer exited and what it said;
 // tests/launch/robot_vm_test.cpp checks those against candump's record of the bus.
 
-#include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -65,35 +64,11 @@ goal:
   distance_m: 50.0
 )";
 
-// `flowsteer run` with its stdout and stderr in `log_path`.
-pid_t start_flowsteer(const std::string& log_path) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int log = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(log, STDOUT_FILENO);
-    ::dup2(log, STDERR_FILENO);
-    ::execl("/bin/flowsteer", "flowsteer", "run", kLaunchPath, static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  return pid;
-}
-
-bool log_has(const std::string& log_path, const std::string& text) {
-  std::ifstream in(log_path);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.find(text) != std::string::npos) {
-      return true;
-    }
-  }
-  return false;
-}
-
 // Waits for the run to have started its loop with the drive (its first line names the drive),
 // then lets it drive for `drive_s`; false when it did not start within the time.
 bool wait_until_driving(const std::string& log_path, double drive_s) {
   const double start_s = monotonic_now_s();
-  while (!log_has(log_path, "drive odrive")) {
+  while (!flowsteer::vm_test::log_has(log_path, "drive odrive")) {
     if (monotonic_now_s() - start_s > 20.0) {
       return false;
     }
@@ -131,7 +106,8 @@ Exit wait_for_exit(pid_t pid, double limit_s) {
 void run_case(const std::string& name, const std::function<void(pid_t)>& fault) {
   const std::string log_path = "/tmp/" + name + ".log";
   std::printf("PROBE %s-start %.6f\n", name.c_str(), realtime_s());
-  const pid_t pid = start_flowsteer(log_path);
+  const pid_t pid =
+      flowsteer::vm_test::start_logged(log_path, {"/bin/flowsteer", "run", kLaunchPath});
   if (!wait_until_driving(log_path, 2.0)) {
     std::printf("PROBE %s-fault never: flowsteer did not start driving\n", name.c_str());
   } else {

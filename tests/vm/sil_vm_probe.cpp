@@ -5,9 +5,8 @@
 // which takes vivid's output node with it).
 // Prints for each run "PROBE <run>-start T", "PROBE <run>-fault T" (the second),
 // "PROBE <run>-exit STATUS", and what flowsteer sil printed and wrote as
-// "PROBE <run>-<file>-<k> LINE" (log, sil.json, trajectories.csv).
+// "PROBE <run>-<file>-<k> LINE" (log, sil.json, trajectories.csv, robot.log).
 
-#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,32 +25,6 @@ namespace {
 using flowsteer::base::monotonic_now_s;
 using flowsteer::vm_test::realtime_s;
 
-// `flowsteer sil` with its stdout and stderr in `log_path`.
-pid_t start_sil(const std::string& out_dir, const std::string& log_path) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int log = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(log, STDOUT_FILENO);
-    ::dup2(log, STDERR_FILENO);
-    ::execl("/bin/flowsteer", "flowsteer", "sil", "/sil/scenario.yaml", "/sil/launch.yaml",
-            "--robot", "robot", "--output", "/dev/video1", "--out", out_dir.c_str(),
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  return pid;
-}
-
-bool log_has(const std::string& log_path, const std::string& text) {
-  std::ifstream in(log_path);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.find(text) != std::string::npos) {
-      return true;
-    }
-  }
-  return false;
-}
-
 void print_file(const std::string& run, const std::string& name, const std::string& path) {
   std::ifstream in(path);
   std::string line;
@@ -66,7 +39,9 @@ void run_case(const std::string& run, double fault_after_s) {
   const std::string log_path = "/tmp/" + run + ".log";
   std::printf("PROBE %s-start %.6f\n", run.c_str(), realtime_s());
   std::fflush(stdout);
-  const pid_t pid = start_sil(out, log_path);
+  const pid_t pid = flowsteer::vm_test::start_logged(
+      log_path, {"/bin/flowsteer", "sil", "/sil/scenario.yaml", "/sil/launch.yaml", "--robot",
+                 "robot", "--output", "/dev/video1", "--out", out.c_str()});
   const double start_s = monotonic_now_s();
   bool faulted = fault_after_s <= 0.0;
   int raw = 0;
@@ -76,7 +51,7 @@ void run_case(const std::string& run, double fault_after_s) {
       ::waitpid(pid, &raw, 0);
       break;
     }
-    if (!faulted && log_has(log_path, "the world runs")) {
+    if (!faulted && flowsteer::vm_test::log_has(log_path, "the world runs")) {
       std::this_thread::sleep_for(std::chrono::duration<double>(fault_after_s));
       std::printf("PROBE %s-fault %.6f\n", run.c_str(), realtime_s());
       flowsteer::vm_test::set_vivid_control("/dev/video0", "Disconnect", 1);
@@ -89,6 +64,7 @@ void run_case(const std::string& run, double fault_after_s) {
   print_file(run, "log", log_path);
   print_file(run, "sil.json", out + "/sil.json");
   print_file(run, "trajectories.csv", out + "/trajectories.csv");
+  print_file(run, "robot.log", out + "/robot.log");
 }
 
 int run() {

@@ -14,7 +14,7 @@ struct V4l2OutputOptions {
   int width_px = 0;
   int height_px = 0;
   // Buffers kept queued. The driver shows the oldest, so more buffers ride out longer stalls
-  // of the caller at the cost of that many driver frame periods of delay.
+  // of the feeding thread at the cost of that many driver frame periods of delay.
   int buffer_count = 3;
 };
 
@@ -36,8 +36,13 @@ class V4l2Output {
   // The buffers refilled from now on show `bgr` (CV_8UC3, the configured size). Throws
   // std::runtime_error with the driver's error once streaming has failed.
   void show(const cv::Mat& bgr);
-  // Buffers handed to the driver since the start.
-  std::uint64_t buffers_queued() const;
+  // Frames the driver has shown since the start (buffers it gave back): the device's clock.
+  std::uint64_t frames_shown() const;
+  // Waits until the driver has shown `count` frames; false when it has not within timeout_s (a
+  // stalled or failed device).
+  bool wait_for_frames(std::uint64_t count, double timeout_s) const;
+  // What ended the streaming (the driver's error), empty while it goes on.
+  std::string error() const;
   // The driver's name, from VIDIOC_QUERYCAP.
   const std::string& driver() const;
 

@@ -54,6 +54,8 @@ struct SilReport {
   // while it works. The run goes on without views.
   std::string output_error;
   double wait_for_robot_s = 0.0;  // from its start until it activated its drive
+  // The rate the output device took frames at over the run (vivid's: 59.94 Hz).
+  double output_frame_rate_hz = 0.0;
 };
 
 struct SilResult {
