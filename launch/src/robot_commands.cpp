@@ -127,8 +127,7 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   if (result.repeated_frames > 0) {
     events << " (" << result.repeated_frames << " repeated)";
   }
-  events << " in " << result.duration_s << " s (" << stop_reason_name(result.reason)
-         << ")\n";
+  events << " in " << result.duration_s << " s (" << stop_reason_name(result.reason) << ")\n";
   events.flush();
   return result;
 }
