@@ -3,12 +3,14 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
 
 #include "flowsteer/base/clock.hpp"
+#include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "flowsteer/eval/output_files.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "vivid_loop.hpp"
@@ -16,6 +18,9 @@
 namespace flowsteer::sil {
 
 namespace {
+
+// The mean difference, in 8-bit levels, a test card may come back with: YUYV's rounding.
+constexpr double kLoopTolerance = 2.0;
 
 void sleep_until(double monotonic_s) {
   const double left_s = monotonic_s - base::monotonic_now_s();
@@ -37,12 +42,52 @@ RobotInTheLoop::RobotInTheLoop(RobotLink link, std::ostream& log)
   connect_vivid_loop(link_.capture_device, link_.output_device);
   output_.emplace(
       camera_io::V4l2OutputOptions{link_.output_device, link_.width_px, link_.height_px});
+  check_loop();
   try {
     odrive_.emplace(link_.odrive.interface, link_.odrive.left.node_id, link_.odrive.right.node_id);
   } catch (const drivers::DriveError& e) {
     throw std::runtime_error(
         std::string(e.what()) + " (a virtual bus: `modprobe vcan && ip link add dev " +
         link_.odrive.interface + " type vcan && ip link set " + link_.odrive.interface + " up`)");
+  }
+}
+
+// A test card through the loop and back: vivid scales between the frame size and its HDMI
+// timings on both sides, and a loop that moved, stretched or blurred the picture would give the
+// robot a camera other than the one its launch file describes.
+void RobotInTheLoop::check_loop() {
+  cv::Mat card(link_.height_px, link_.width_px, CV_8UC3);
+  for (int y = 0; y < card.rows; ++y) {
+    for (int x = 0; x < card.cols; ++x) {
+      card.at<cv::Vec3b>(y, x) =
+          cv::Vec3b::all(static_cast<std::uint8_t>(32 + (x * 7 + y * 13) % 192));
+    }
+  }
+  output_->show(card);
+  camera_io::V4l2Options options;
+  options.device = link_.capture_device;
+  options.width_px = link_.width_px;
+  options.height_px = link_.height_px;
+  options.frame_rate_hz = 0.0;
+  camera_io::V4l2Camera camera(options);
+  camera_io::Frame frame;
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 30 && best > kLoopTolerance; ++i) {
+    if (camera.read(frame, 1.0) == camera_io::ReadStatus::ok) {
+      cv::Mat diff;
+      cv::absdiff(frame.image, card, diff);
+      best = std::min(best, cv::mean(diff)[1]);
+    }
+  }
+  report_.loop_error_levels = best;
+  log_ << "flowsteer sil: the loop gives back a test card with a mean difference of " << best
+       << " levels\n";
+  if (!(best <= kLoopTolerance)) {
+    throw std::runtime_error(
+        "vivid loop: " + link_.output_device + " to " + link_.capture_device +
+        " gives back a test card changed by " + std::to_string(best) +
+        " levels on average (at most " + std::to_string(kLoopTolerance) +
+        " allowed): vivid's scaling or its loop is not what flowsteer sil set");
   }
 }
 
@@ -217,6 +262,7 @@ void RobotInTheLoop::write_report(const std::filesystem::path& path) const {
        << ",\n  \"views_shown\": " << r.views_shown << ",\n  \"views_dropped\": " << r.views_dropped
        << ",\n  \"max_behind_ms\": " << eval::json_number(r.max_behind_ms)
        << ",\n  \"output_error\": " << eval::json_string(r.output_error)
+       << ",\n  \"loop_error_levels\": " << eval::json_number(r.loop_error_levels)
        << ",\n  \"wait_for_robot_s\": " << eval::json_number(r.wait_for_robot_s)
        << ",\n  \"output_frame_rate_hz\": " << eval::json_number(r.output_frame_rate_hz) << "\n}\n";
   eval::write_text(path, json.str());

@@ -49,6 +49,7 @@ class RobotInTheLoop final : public eval::AgentDriver {
 
  private:
   // The agent's view; show() sends it to the output device.
+  void check_loop();
   void render(const sim_camera::World& world, sim_camera::Renderer& renderer);
   void show();
   void start_robot();

@@ -13,9 +13,10 @@ struct V4l2OutputOptions {
   std::string device;  // a V4L2 video output node
   int width_px = 0;
   int height_px = 0;
-  // Buffers kept queued. The driver shows the oldest, so more buffers ride out longer stalls
-  // of the feeding thread at the cost of that many driver frame periods of delay.
-  int buffer_count = 3;
+  // Buffers kept queued. The driver shows the oldest, so each buffer more is a frame period
+  // more of delay; a driver that keeps showing its last buffer when no other is queued (vivid)
+  // needs no more than 2.
+  int buffer_count = 2;
 };
 
 // A V4L2 video output device (an HDMI transmitter, vivid's output node looped back to its

@@ -54,6 +54,9 @@ struct SilReport {
   // while it works. The run goes on without views.
   std::string output_error;
   double wait_for_robot_s = 0.0;  // from its start until it activated its drive
+  // The mean difference, in 8-bit levels, of a test card sent through the loop and captured
+  // back before the run (at most 2: YUYV's rounding; more is refused).
+  double loop_error_levels = 0.0;
   // The rate the output device took frames at over the run (vivid's: 59.94 Hz).
   double output_frame_rate_hz = 0.0;
 };
@@ -75,8 +78,9 @@ struct SilResult {
 // the result records.
 //
 // Writes what `flowsteer sim` writes plus robot.log (the robot's log) and sil.json (the report).
-// Throws std::runtime_error saying what the machine lacks (vivid, its loop, the CAN interface) or
-// what in the launch file or scenario cannot run in the loop.
+// Throws std::runtime_error saying what the machine lacks (vivid, its loop, the CAN interface),
+// that the loop changes the picture (a test card sent through it before the run), or what in the
+// launch file or scenario cannot run in the loop.
 SilResult run_sil(const sim_camera::WorldSpec& world, const SilOptions& options, std::ostream& log);
 
 }  // namespace flowsteer::sil
