@@ -86,19 +86,6 @@ Opened opened(const std::string& value) {
   return o;
 }
 
-std::vector<std::array<double, 3>> bars(const std::string& text) {
-  std::vector<std::array<double, 3>> out;
-  std::istringstream in(text);
-  std::string item;
-  while (in >> item) {
-    std::array<double, 3> bgr{};
-    if (std::sscanf(item.c_str(), "%lf,%lf,%lf", &bgr[0], &bgr[1], &bgr[2]) == 3) {
-      out.push_back(bgr);
-    }
-  }
-  return out;
-}
-
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
@@ -214,7 +201,7 @@ TEST_F(VimcVm, ImagesShowTheColourBarsInBgr) {
       {191, 0, 191},   {0, 0, 191},   {191, 0, 0},   {0, 0, 0}};
   for (const char* key : {"default", "bgr", "rgb"}) {
     SCOPED_TRACE(key);
-    const auto measured = bars(run_.probe[std::string(key) + "-bars"]);
+    const auto measured = flowsteer::vm_test::colour_bars(run_.probe[std::string(key) + "-bars"]);
     ASSERT_EQ(measured.size(), expected.size()) << run_.console;
     for (std::size_t bar = 0; bar < expected.size(); ++bar) {
       for (int channel = 0; channel < 3; ++channel) {

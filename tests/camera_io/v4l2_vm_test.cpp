@@ -55,19 +55,6 @@ VmRun parse(const std::string& console) {
   return run;
 }
 
-std::vector<std::array<double, 3>> bars(const std::string& text) {
-  std::vector<std::array<double, 3>> out;
-  std::istringstream in(text);
-  std::string item;
-  while (in >> item) {
-    std::array<double, 3> bgr{};
-    if (std::sscanf(item.c_str(), "%lf,%lf,%lf", &bgr[0], &bgr[1], &bgr[2]) == 3) {
-      out.push_back(bgr);
-    }
-  }
-  return out;
-}
-
 class VividVm : public flowsteer::vm_test::VmTest<VmRun, parse> {
  protected:
   void SetUp() override {
@@ -140,7 +127,7 @@ TEST_F(VividVm, YuyvImageShowsTheSeventyFivePercentColourBars) {
   const std::vector<std::array<double, 3>> expected = {
       {191, 191, 191}, {0, 191, 191}, {191, 191, 0}, {0, 191, 0},
       {191, 0, 191},   {0, 0, 191},   {191, 0, 0},   {0, 0, 0}};
-  const auto got = bars(run_.probe["yuyv-bars"]);
+  const auto got = flowsteer::vm_test::colour_bars(run_.probe["yuyv-bars"]);
   ASSERT_EQ(got.size(), expected.size()) << run_.probe["yuyv-bars"];
   for (std::size_t bar = 0; bar < expected.size(); ++bar) {
     for (int c = 0; c < 3; ++c) {
@@ -156,7 +143,7 @@ TEST_F(VividVm, StopReleasesTheBuffersSoAnotherFormatCanStream) {
 }
 
 TEST_F(VividVm, GreyImageIsTheBarsLuminance) {
-  const auto got = bars(run_.probe["grey-bars"]);
+  const auto got = flowsteer::vm_test::colour_bars(run_.probe["grey-bars"]);
   ASSERT_EQ(got.size(), 8u) << run_.probe["grey-bars"];
   for (std::size_t bar = 0; bar < got.size(); ++bar) {
     EXPECT_EQ(got[bar][0], got[bar][1]) << "bar " << bar;

@@ -11,42 +11,21 @@
 
 #include <opencv2/core.hpp>
 
+#include "camera_probe_support.hpp"
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/camera_io/libcamera_camera.hpp"
 #include "probe_support.hpp"
 
 namespace {
 
+using flowsteer::vm_test::expect_error;
+using flowsteer::vm_test::print_bars;
+
 using flowsteer::base::monotonic_now_s;
 using flowsteer::camera_io::Frame;
 using flowsteer::camera_io::LibcameraCamera;
 using flowsteer::camera_io::LibcameraOptions;
 using flowsteer::camera_io::ReadStatus;
-
-// Mean BGR over a patch at the centre of each of the eight vertical colour bars of vimc's
-// sensor test pattern, seven eighths down: the upper part carries the text of vimc's "Show
-// Information" control over the bars.
-void print_bars(const std::string& key, const cv::Mat& bgr) {
-  std::printf("PROBE %s-bars", key.c_str());
-  const int half = bgr.cols / 64;
-  const int row = bgr.rows * 7 / 8;
-  for (int bar = 0; bar < 8; ++bar) {
-    const int col = (2 * bar + 1) * bgr.cols / 16;
-    const cv::Scalar mean = cv::mean(bgr(cv::Rect(col - half, row - half, 2 * half, 2 * half)));
-    std::printf(" %.0f,%.0f,%.0f", mean[0], mean[1], mean[2]);
-  }
-  std::printf("\n");
-}
-
-// Runs `open`, expecting it to throw; prints the message.
-void expect_error(const char* key, const std::function<void()>& open) {
-  try {
-    open();
-    std::printf("PROBE %s no error\n", key);
-  } catch (const std::exception& e) {
-    std::printf("PROBE %s %s\n", key, e.what());
-  }
-}
 
 // Opens the camera, reads `frames` frames and prints each with the probe's monotonic clock
 // just after read() returned, then the last image's colour bars and value range. The camera
@@ -70,7 +49,8 @@ void capture(const std::string& key, const LibcameraOptions& options, int frames
                 static_cast<unsigned long long>(frame.sequence), frame.timestamp_s, now_s,
                 camera.driver_sequence(), frame.image.cols, frame.image.rows);
   }
-  print_bars(key, frame.image);
+  // Seven eighths down: the upper part carries the text of vimc's "Show Information" control.
+  print_bars(key + "-bars", frame.image, frame.image.rows * 7 / 8, frame.image.cols / 64);
   double min_value = 0.0;
   double max_value = 0.0;
   cv::minMaxLoc(frame.image.reshape(1), &min_value, &max_value);

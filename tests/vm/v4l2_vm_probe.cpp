@@ -16,11 +16,15 @@
 
 #include <opencv2/core.hpp>
 
+#include "camera_probe_support.hpp"
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "vivid_control.hpp"
 
 namespace {
+
+using flowsteer::vm_test::expect_error;
+using flowsteer::vm_test::print_bars;
 
 using flowsteer::base::monotonic_now_s;
 using flowsteer::camera_io::Frame;
@@ -41,27 +45,6 @@ std::uint32_t device_caps(const std::string& path) {
   return ok ? cap.device_caps : 0;
 }
 
-// Mean BGR over a 16×16 patch at the centre of each of the eight colour bars, half-way down.
-void print_bars(const char* key, const cv::Mat& bgr) {
-  std::printf("PROBE %s", key);
-  for (int bar = 0; bar < 8; ++bar) {
-    const int col = (2 * bar + 1) * bgr.cols / 16;
-    const cv::Scalar mean = cv::mean(bgr(cv::Rect(col - 8, bgr.rows / 2 - 8, 16, 16)));
-    std::printf(" %.0f,%.0f,%.0f", mean[0], mean[1], mean[2]);
-  }
-  std::printf("\n");
-}
-
-// Runs `open`, expecting it to throw; prints the message.
-void expect_error(const char* key, const std::function<void()>& open) {
-  try {
-    open();
-    std::printf("PROBE %s no error\n", key);
-  } catch (const std::exception& e) {
-    std::printf("PROBE %s %s\n", key, e.what());
-  }
-}
-
 void capture(const char* key, const V4l2Options& options, int frames, bool bars) {
   V4l2Camera camera(options);
   std::printf("PROBE %s-open %s %s rate=%.3f\n", key, camera.driver().c_str(),
@@ -80,7 +63,8 @@ void capture(const char* key, const V4l2Options& options, int frames, bool bars)
                 camera.driver_timestamps() ? 1 : 0);
   }
   if (bars) {
-    print_bars((std::string(key) + "-bars").c_str(), frame.image);
+    // A 16×16 patch of each bar, half-way down.
+    print_bars(std::string(key) + "-bars", frame.image, frame.image.rows / 2, 8);
   }
   std::printf("PROBE %s-dropped %llu\n", key,
               static_cast<unsigned long long>(camera.dropped_frames()));

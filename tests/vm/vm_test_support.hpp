@@ -8,6 +8,7 @@
 
 #include <sys/wait.h>
 
+#include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -15,6 +16,7 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -49,6 +51,20 @@ void for_each_line(const std::string& console, OnLine on_line) {
     }
     on_line(line);
   }
+}
+
+// "b,g,r b,g,r ..." (a probe's colour bars, camera_probe_support.hpp) as numbers.
+inline std::vector<std::array<double, 3>> colour_bars(const std::string& text) {
+  std::vector<std::array<double, 3>> out;
+  std::istringstream in(text);
+  std::string item;
+  while (in >> item) {
+    std::array<double, 3> bgr{};
+    if (std::sscanf(item.c_str(), "%lf,%lf,%lf", &bgr[0], &bgr[1], &bgr[2]) == 3) {
+      out.push_back(bgr);
+    }
+  }
+  return out;
 }
 
 struct ProbeLine {
