@@ -109,7 +109,7 @@ base::Command RobotInTheLoop::step(const sim_camera::World& world, sim_camera::R
     render(world, renderer);
   }
   wait_for_step(k, dt);
-  if (view) {
+  if (view && report_.output_error.empty()) {
     show();
   } else {
     ++report_.views_dropped;
