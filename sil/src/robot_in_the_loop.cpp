@@ -39,7 +39,10 @@ void LatencyStats::add(double ms) {
 
 RobotInTheLoop::RobotInTheLoop(RobotLink link, std::ostream& log)
     : link_(std::move(link)), log_(log) {
-  connect_vivid_loop(link_.capture_device, link_.output_device);
+  // A view is shown just after an output frame, goes out on the next (the driver shows the
+  // buffer queued before it first) and is captured within a frame of that: the robot's camera
+  // stamps it about three frames after its step.
+  view_lead_s_ = 3.0 * connect_vivid_loop(link_.capture_device, link_.output_device);
   output_.emplace(
       camera_io::V4l2OutputOptions{link_.output_device, link_.width_px, link_.height_px});
   check_loop();
@@ -127,8 +130,13 @@ base::Command RobotInTheLoop::step(const sim_camera::World& world, sim_camera::R
 }
 
 void RobotInTheLoop::render(const sim_camera::World& world, sim_camera::Renderer& renderer) {
-  renderer.render(world, sim_camera::View::of_agent(world, link_.agent), view_,
-                  sim_camera::RenderChannels::all);
+  // The agent as it will be when the robot's camera stamps the view, moving as it moves now
+  // (the world's own integration): what a camera would show at that time.
+  sim_camera::View view = sim_camera::View::of_agent(world, link_.agent);
+  view.yaw_rad -= view_lead_s_ * view.turn_rate;
+  view.position_m += view_lead_s_ * view.speed_mps *
+                     Eigen::Vector2d(std::cos(view.yaw_rad), std::sin(view.yaw_rad));
+  renderer.render(world, view, view_, sim_camera::RenderChannels::all);
 }
 
 void RobotInTheLoop::show() {

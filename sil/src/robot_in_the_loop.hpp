@@ -48,7 +48,7 @@ class RobotInTheLoop final : public eval::AgentDriver {
   const SilReport& report() const { return report_; }
 
  private:
-  // The agent's view; show() sends it to the output device.
+  // The agent's view as the robot's camera will capture it; show() sends it to the output.
   void check_loop();
   void render(const sim_camera::World& world, sim_camera::Renderer& renderer);
   void show();
@@ -67,6 +67,7 @@ class RobotInTheLoop final : public eval::AgentDriver {
   std::unique_ptr<RobotProcess> robot_;
   const sim_camera::World* world_ = nullptr;
   sim_camera::RenderedView view_;
+  double view_lead_s_ = 0.0;       // from a view's step to its capture by the robot's camera
   std::uint64_t first_frame_ = 0;  // the output's frame count at step 0
   double start_s_ = 0.0;           // the monotonic time of step 0
   long steps_ = 0;

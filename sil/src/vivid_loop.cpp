@@ -97,7 +97,7 @@ void select_hdmi_output(const Node& output) {
 
 }  // namespace
 
-void connect_vivid_loop(const std::string& capture_device, const std::string& output_device) {
+double connect_vivid_loop(const std::string& capture_device, const std::string& output_device) {
   const Node capture(capture_device, V4L2_CAP_VIDEO_CAPTURE, "capture");
   const Node output(output_device, V4L2_CAP_VIDEO_OUTPUT, "output");
   select_hdmi_input(capture);
@@ -108,6 +108,9 @@ void connect_vivid_loop(const std::string& capture_device, const std::string& ou
   output.control(VIDIOC_S_DV_TIMINGS, &timings, "VIDIOC_S_DV_TIMINGS");
   capture.set_control("OSD Text Mode", 2);  // 2: none
   capture.set_control("Loop Video", 1);
+  const v4l2_bt_timings& bt = timings.bt;
+  return static_cast<double>(V4L2_DV_BT_FRAME_WIDTH(&bt)) * V4L2_DV_BT_FRAME_HEIGHT(&bt) /
+         static_cast<double>(bt.pixelclock);
 }
 
 }  // namespace flowsteer::sil

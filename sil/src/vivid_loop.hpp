@@ -12,7 +12,8 @@ namespace flowsteer::sil {
 //
 // Throws std::runtime_error saying what is missing (no such node, not vivid, no HDMI connector,
 // a control vivid lacks) with the modprobe line that gives a machine what the loop needs.
-void connect_vivid_loop(const std::string& capture_device, const std::string& output_device);
+// Returns the loop's frame period in seconds: both nodes show and take frames at this rate.
+double connect_vivid_loop(const std::string& capture_device, const std::string& output_device);
 
 // The modprobe line `connect_vivid_loop` needs, for error messages and the README.
 inline constexpr const char* kVividModprobe =
