@@ -46,7 +46,7 @@ struct V4l2Output::Impl {
     }
     v4l2_capability cap{};
     checked_ioctl(fd.get(), VIDIOC_QUERYCAP, &cap, "VIDIOC_QUERYCAP", device);
-    driver = v4l2::fixed_text(cap.driver);
+    const std::string driver = v4l2::fixed_text(cap.driver);
     const std::uint32_t caps =
         (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
     if ((caps & V4L2_CAP_VIDEO_OUTPUT) == 0 || (caps & V4L2_CAP_STREAMING) == 0) {
@@ -155,7 +155,6 @@ struct V4l2Output::Impl {
 
   std::string device;
   v4l2::DeviceFd fd;
-  std::string driver;
   int width = 0;
   int height = 0;
   std::uint32_t bytes_per_line = 0;
@@ -201,10 +200,6 @@ bool V4l2Output::wait_for_frames(std::uint64_t count, double timeout_s) const {
 std::string V4l2Output::error() const {
   const std::lock_guard lock(impl_->mutex);
   return impl_->error;
-}
-
-const std::string& V4l2Output::driver() const {
-  return impl_->driver;
 }
 
 void bgr_to_yuyv(const cv::Mat& bgr, cv::Mat& yuyv) {

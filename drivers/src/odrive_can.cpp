@@ -548,7 +548,6 @@ DriveState OdriveCanDrive::read() {
   drain(0.0);
   check_errors(active_);
   DriveState state;
-  const double rad_per_turn = 2.0 * std::numbers::pi / config_.motor_turns_per_wheel_turn;
   const double now_s = base::monotonic_now_s();
   double* speeds[2] = {&state.measured.left_radps, &state.measured.right_radps};
   double* positions[2] = {&state.odometry.left_rad, &state.odometry.right_rad};
@@ -557,9 +556,9 @@ DriveState OdriveCanDrive::read() {
     if (!axis.estimates_s || now_s - *axis.estimates_s > config_.timeout_s) {
       state.faults.push_back(axis_name(axis) + ": encoder estimates stale");
     }
-    *speeds[i] = axis.estimates.vel_turns_per_s * rad_per_turn * axis.config.direction;
-    *positions[i] =
-        (axis.estimates.pos_turns - axis.start_pos_turns) * rad_per_turn * axis.config.direction;
+    const double rad_per_turn = config_.wheel_rad_per_turn(axis.config);
+    *speeds[i] = axis.estimates.vel_turns_per_s * rad_per_turn;
+    *positions[i] = (axis.estimates.pos_turns - axis.start_pos_turns) * rad_per_turn;
   }
   return state;
 }

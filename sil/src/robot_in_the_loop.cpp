@@ -133,9 +133,10 @@ void RobotInTheLoop::render(const sim_camera::World& world, sim_camera::Renderer
   // The agent as it will be when the robot's camera stamps the view, moving as it moves now
   // (the world's own integration): what a camera would show at that time.
   sim_camera::View view = sim_camera::View::of_agent(world, link_.agent);
-  view.yaw_rad -= view_lead_s_ * view.turn_rate;
-  view.position_m += view_lead_s_ * view.speed_mps *
-                     Eigen::Vector2d(std::cos(view.yaw_rad), std::sin(view.yaw_rad));
+  sim_camera::AgentState ahead = world.agents()[link_.agent];
+  ahead.coast(view_lead_s_);
+  view.position_m = ahead.position_m;
+  view.yaw_rad = ahead.yaw_rad;
   renderer.render(world, view, view_, sim_camera::RenderChannels::all);
 }
 
@@ -144,11 +145,15 @@ void RobotInTheLoop::show() {
     output_->show(view_.image);
     ++report_.views_shown;
   } catch (const std::runtime_error& e) {
-    // vivid fails its output with its capture stream: the robot's camera is gone, and the run
-    // goes on to record what the robot does about it.
-    report_.output_error = e.what();
-    log_ << "flowsteer sil: the views can no longer be shown: " << e.what() << "\n";
+    stop_showing(e.what());
   }
+}
+
+void RobotInTheLoop::stop_showing(const std::string& why) {
+  // vivid fails its output with its capture stream: the robot's camera is gone, and the run goes
+  // on to record what the robot does about it.
+  report_.output_error = why;
+  log_ << "flowsteer sil: the views can no longer be shown: " << why << "\n";
 }
 
 void RobotInTheLoop::wait_for_step(long k, double dt) {
@@ -157,11 +162,9 @@ void RobotInTheLoop::wait_for_step(long k, double dt) {
   // capture the same number of frames after it is shown, and the time between two new pictures
   // the robot sees is the time between their views to a frame, not to two.
   if (report_.output_error.empty() && !output_->wait_for_frames(output_->frames_shown() + 1, 1.0)) {
-    report_.output_error = output_->error();
-    if (report_.output_error.empty()) {
-      report_.output_error = link_.output_device + ": the device showed no frame for 1 s";
-    }
-    log_ << "flowsteer sil: the views can no longer be shown: " << report_.output_error << "\n";
+    const std::string error = output_->error();
+    stop_showing(error.empty() ? link_.output_device + ": the device showed no frame for 1 s"
+                               : error);
   }
 }
 
@@ -205,8 +208,7 @@ drivers::BodyVelocity RobotInTheLoop::wheel_motion(double now_s) {
                                                                 &link_.odrive.right};
   std::array<double, 2> wheel_radps{};
   for (std::size_t i = 0; i < 2; ++i) {
-    wheel_radps[i] = axes[i].vel_turns_per_s * 2.0 * std::numbers::pi /
-                     link_.odrive.motor_turns_per_wheel_turn * configs[i]->direction;
+    wheel_radps[i] = axes[i].vel_turns_per_s * link_.odrive.wheel_rad_per_turn(*configs[i]);
     if (axes[i].setpoint_changed_s && *axes[i].setpoint_changed_s > last_setpoint_s_[i]) {
       last_setpoint_s_[i] = *axes[i].setpoint_changed_s;
       report_.command_to_motion.add(1e3 * (now_s - last_setpoint_s_[i]));

@@ -52,6 +52,8 @@ class RobotInTheLoop final : public eval::AgentDriver {
   void check_loop();
   void render(const sim_camera::World& world, sim_camera::Renderer& renderer);
   void show();
+  // Records why the output takes no more views; the run goes on without them.
+  void stop_showing(const std::string& why);
   void start_robot();
   // Waits for step k's time, then for the output's next frame.
   void wait_for_step(long k, double dt);

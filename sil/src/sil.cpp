@@ -102,7 +102,8 @@ SilResult run_sil(const sim_camera::WorldSpec& world, const SilOptions& options,
   link.geometry = launch.drive->stage.geometry;
   link.robot_log = std::filesystem::temp_directory_path() /
                    ("flowsteer-sil-robot-" + std::to_string(::getpid()) + ".log");
-  link.robot_argv = {options.flowsteer_binary.string(), "run", options.launch_file};
+  // This process's own binary: the robot runs the flowsteer that simulates it.
+  link.robot_argv = {"/proc/self/exe", "run", options.launch_file};
   for (std::string& arg : goal_arguments(spec.agents[agent])) {
     link.robot_argv.push_back(std::move(arg));
   }

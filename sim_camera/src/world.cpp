@@ -39,6 +39,11 @@ Eigen::Vector2d AgentState::velocity_mps() const {
   return speed_mps * Eigen::Vector2d(std::cos(yaw_rad), std::sin(yaw_rad));
 }
 
+void AgentState::coast(double dt_s) {
+  yaw_rad = std::remainder(yaw_rad - dt_s * turn_rate, 2.0 * 3.141592653589793);
+  position_m += dt_s * velocity_mps();
+}
+
 double footprint_distance(const Solid& solid, const Eigen::Vector2d& point) {
   const Eigen::Vector2d d = point - solid.centre_m;
   if (solid.shape == Solid::Shape::cylinder) {
@@ -167,8 +172,7 @@ void World::step(const std::vector<std::pair<double, double>>& accel_and_turn) {
     const auto [accel, turn] = accel_and_turn[i];
     s.turn_rate = turn;
     s.speed_mps = std::clamp(s.speed_mps + dt * accel, 0.0, a.max_speed_mps);
-    s.yaw_rad = std::remainder(s.yaw_rad - dt * turn, 2.0 * 3.141592653589793);
-    s.position_m += dt * s.velocity_mps();
+    s.coast(dt);
   }
   for (std::size_t k = 0; k < moving_.size(); ++k) {
     const MovingObstacle& m = spec_.moving[k];

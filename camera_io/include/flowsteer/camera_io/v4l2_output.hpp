@@ -44,8 +44,6 @@ class V4l2Output {
   bool wait_for_frames(std::uint64_t count, double timeout_s) const;
   // What ended the streaming (the driver's error), empty while it goes on.
   std::string error() const;
-  // The driver's name, from VIDIOC_QUERYCAP.
-  const std::string& driver() const;
 
  private:
   struct Impl;

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -101,6 +102,11 @@ struct OdriveCanConfig {
   OdriveAxisConfig left{0, 1.0};
   OdriveAxisConfig right{1, -1.0};
   double motor_turns_per_wheel_turn = 1.0;  // gear ratio
+  // Wheel radians per motor turn of `axis` (gear ratio and direction): an axis's turns or
+  // turns/s times this are its wheel's, positive rolling forward.
+  double wheel_rad_per_turn(const OdriveAxisConfig& axis) const {
+    return 2.0 * std::numbers::pi / motor_turns_per_wheel_turn * axis.direction;
+  }
   // Longest wait for a heartbeat, an answer or a state change; also how old the last
   // heartbeat may be before the link counts as lost.
   double timeout_s = 0.5;

@@ -17,9 +17,7 @@ struct SilOptions {
   std::string launch_file;    // the robot's launch file, as `flowsteer run` takes it
   std::string output_device;  // vivid's output node, looped to the launch file's camera
   std::filesystem::path out_dir = "flowsteer_sil_out";
-  std::optional<int> steps;  // stop after this many steps
-  // The robot binary: `flowsteer` itself unless a test names another.
-  std::filesystem::path flowsteer_binary = "/proc/self/exe";
+  std::optional<int> steps;         // stop after this many steps
   double startup_timeout_s = 30.0;  // for the robot process to activate its drive
 };
 

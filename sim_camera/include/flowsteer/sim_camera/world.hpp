@@ -23,6 +23,8 @@ struct AgentState {
   double time_to_goal_s = -1.0;
 
   Eigen::Vector2d velocity_mps() const;
+  // Moves on for dt_s at this speed and turn rate, as the world's step integrates them.
+  void coast(double dt_s);
 };
 
 struct MovingState {
