@@ -27,6 +27,8 @@ constexpr int kMaxBoardSide = 100;
 // Squares and markers smaller than a printer prints; OpenCV takes lengths as floats, in which
 // far smaller ones are 0.
 constexpr double kMinLength_m = 1e-4;
+// Larger than any board a camera sees whole; the bound keeps the lengths finite as floats.
+constexpr double kMaxLength_m = 10.0;
 
 struct Dictionary {
   const char* name;
@@ -112,6 +114,9 @@ double length(const std::string& text, const std::string& part, const char* what
   if (value < kMinLength_m) {
     bad(text, std::string(what) + " must be at least 0.0001 m, got " + part);
   }
+  if (value > kMaxLength_m) {
+    bad(text, std::string(what) + " must be at most 10 m, got " + part);
+  }
   return value;
 }
 
@@ -140,7 +145,8 @@ BoardSpec BoardSpec::parse(const std::string& text) {
   spec.square_m = length(text, parts[2], "SQUARE_M");
   if (spec.kind == Kind::charuco) {
     spec.marker_m = length(text, parts[3], "MARKER_M");
-    if (spec.marker_m >= spec.square_m) {
+    // Compared as the floats OpenCV's board is made of: 0.10000000001 is not smaller than 0.1.
+    if (static_cast<float>(spec.marker_m) >= static_cast<float>(spec.square_m)) {
       bad(text, "MARKER_M (" + parts[3] + ") must be smaller than SQUARE_M (" + parts[2] + ")");
     }
     spec.dictionary = parts[4];

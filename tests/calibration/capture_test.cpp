@@ -178,6 +178,9 @@ TEST(BoardSpec, ParsesAndExplainsBadSpecs) {
   EXPECT_NE(error("chessboard:9x6").find("takes 2 fields"), std::string::npos);
   EXPECT_NE(error("charuco:5x7:0.04:0.05:DICT_4X4_50").find("MARKER_M (0.05) must be smaller"),
             std::string::npos);
+  // Equal once made the floats OpenCV's board takes.
+  EXPECT_NE(error("charuco:5x7:0.10000000001:0.1:DICT_4X4_50").find("must be smaller"),
+            std::string::npos);
   EXPECT_NE(error("charuco:5x7:0.04:0.03:DICT_9X9").find("unknown dictionary 'DICT_9X9'"),
             std::string::npos);
 }
@@ -214,7 +217,7 @@ TEST(BoardSpec, ABoardOfMoreThanAHundredCornersASideIsRefused) {
 // Found by fuzz/board_spec (tests/fuzz/regressions/board_spec/tiny_marker.txt and
 // tiny_marker_fuzzed.txt): a marker of 2e-50 m is 0 as OpenCV's float, and its assertion escaped
 // as a cv::Exception.
-TEST(BoardSpec, LengthsBelowATenthOfAMillimetreAreRefused) {
+TEST(BoardSpec, LengthsBelowATenthOfAMillimetreOrAboveTenMetresAreRefused) {
   EXPECT_NE(board_error("charuco:9x6:0.04:2e-50:DICT_APRILTAG_16h5")
                 .find("MARKER_M must be at least 0.0001 m, got 2e-50"),
             std::string::npos);
@@ -225,6 +228,8 @@ TEST(BoardSpec, LengthsBelowATenthOfAMillimetreAreRefused) {
   EXPECT_NE(board_error("chessboard:9x6:0.00005").find("SQUARE_M must be at least 0.0001 m"),
             std::string::npos);
   EXPECT_EQ(board_error("charuco:9x6:0.0002:0.0001:DICT_4X4_50", true), "no error");
+  EXPECT_NE(board_error("chessboard:9x6:1e300").find("SQUARE_M must be at most 10 m, got 1e300"),
+            std::string::npos);
 }
 
 // A ChArUco board as OpenCV draws it (cv::aruco::CharucoBoard::draw), seen whole and with a
