@@ -59,11 +59,13 @@ std::string segmentation_method_names() {
 namespace {
 
 // Felzenszwalb–Huttenlocher segmentation (IJCV 2004) of the 4-connected grid of pixels of a
-// CV_32FC3 image, with the result of OpenCV's ximgproc GraphSegmentation with sigma 0 (the same
-// edge weights in the same order, merge test, small-segment merge, and segments numbered in order
-// of first appearance), but with its buffers kept from call to call: OpenCV allocates its graph
-// and its sets, and converts and copies the image, on every call, which with the full-resolution
-// features and their resized copy took as long as the DIS flow at 256².
+// CV_32FC3 image: OpenCV's ximgproc GraphSegmentation with sigma 0 (its edge weights, merge test,
+// small-segment merge, and segments numbered in order of first appearance), with three
+// differences. Its buffers are kept from call to call (OpenCV allocates its graph and its sets,
+// and converts and copies the image, on every call). Each edge is taken once, not once from each
+// end. And edges of equal weight go in a defined order, by pixel and direction, where OpenCV's
+// order is whatever std::sort leaves them in: a stable radix sort of the weights does it in
+// linear time. Where no two edges weigh the same the segments are OpenCV's to the pixel.
 class GridSegmentation {
  public:
   // Writes each pixel's segment to `labels` (CV_32S, the image's size) and returns how many.
@@ -119,38 +121,31 @@ class GridSegmentation {
 
  private:
   // An edge is its weight's bits (a non-negative float's bits order as the floats do) over its
-  // id, 4 p + the direction from pixel p (up, left, down, right: OpenCV's order).
+  // id, 2 p + the direction from pixel p to its neighbour (right, down).
   static float weight_of(std::uint64_t edge) {
     return std::bit_cast<float>(static_cast<std::uint32_t>(edge >> 32U));
   }
   static std::pair<std::int32_t, std::int32_t> ends(std::uint64_t edge, int width) {
     const auto id = static_cast<std::uint32_t>(edge);
-    const auto a = static_cast<std::int32_t>(id / 4U);
-    const std::array<std::int32_t, 4> step{-width, -1, width, 1};
-    return {a, a + step[id % 4U]};
+    const auto a = static_cast<std::int32_t>(id / 2U);
+    return {a, a + (id % 2U == 0U ? 1 : width)};
   }
 
-  // Every edge twice, once from each end, in OpenCV's order: sorted by the same std::sort, equal
-  // weights come out in OpenCV's order too, so that the segments are OpenCV's to the pixel (which
-  // of several equally light edges merges a small segment changes the regions it joins).
+  // Each edge once, in order of id: which of several equally light edges merges a small segment
+  // changes the regions it joins, so that order is part of the result.
   void build_edges(const cv::Mat& features) {
     edges_.clear();
     const int width = features.cols;
     const int height = features.rows;
     for (int row = 0; row < height; ++row) {
       const auto* f = features.ptr<cv::Vec3f>(row);
-      const auto* above = row > 0 ? features.ptr<cv::Vec3f>(row - 1) : nullptr;
       const auto* below = row + 1 < height ? features.ptr<cv::Vec3f>(row + 1) : nullptr;
       for (int col = 0; col < width; ++col) {
-        const auto id = 4U * static_cast<std::uint32_t>(row * width + col);
-        if (above != nullptr)
-          edges_.push_back(edge(f[col], above[col], id));
-        if (col > 0)
-          edges_.push_back(edge(f[col], f[col - 1], id + 1U));
-        if (below != nullptr)
-          edges_.push_back(edge(f[col], below[col], id + 2U));
+        const auto id = 2U * static_cast<std::uint32_t>(row * width + col);
         if (col + 1 < width)
-          edges_.push_back(edge(f[col], f[col + 1], id + 3U));
+          edges_.push_back(edge(f[col], f[col + 1], id));
+        if (below != nullptr)
+          edges_.push_back(edge(f[col], below[col], id + 1U));
       }
     }
   }
@@ -164,9 +159,25 @@ class GridSegmentation {
     return (static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(std::sqrt(sum))) << 32U) | id;
   }
 
+  // Least significant digit first, 11 bits a pass over the weight's 32: each pass is stable, so
+  // edges of equal weight keep the order build_edges made them in.
   void sort_edges() {
-    std::sort(edges_.begin(), edges_.end(),
-              [](std::uint64_t a, std::uint64_t b) { return (a >> 32U) < (b >> 32U); });
+    constexpr unsigned kDigitBits = 11U;
+    constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+    sorted_.resize(edges_.size());
+    for (unsigned shift = 32U; shift < 64U; shift += kDigitBits) {
+      bucket_starts_.assign(kBuckets + 1, 0);
+      for (const std::uint64_t edge : edges_) {
+        ++bucket_starts_[((edge >> shift) & (kBuckets - 1)) + 1];
+      }
+      for (std::size_t b = 1; b <= kBuckets; ++b) {
+        bucket_starts_[b] += bucket_starts_[b - 1];
+      }
+      for (const std::uint64_t edge : edges_) {
+        sorted_[bucket_starts_[(edge >> shift) & (kBuckets - 1)]++] = edge;
+      }
+      edges_.swap(sorted_);
+    }
   }
 
   std::int32_t find(std::int32_t p) {
@@ -188,6 +199,8 @@ class GridSegmentation {
   }
 
   std::vector<std::uint64_t> edges_;
+  std::vector<std::uint64_t> sorted_;
+  std::vector<std::size_t> bucket_starts_;
   std::vector<std::int32_t> parent_;
   std::vector<std::int32_t> size_;
   std::vector<float> threshold_;

@@ -292,29 +292,36 @@ TEST(FlowSegmenter, ScatteredIslandsOfFlowAreNoRegion) {
   }
 }
 
-// flow_graph_fast runs its own Felzenszwalb–Huttenlocher segmentation, flow_graph OpenCV's. On a
-// field no wider than fast_max_side_px neither reduces the flow, and they must agree to the pixel,
-// numbers and ids included. Noisy flow over four differently moving quarters, with pixels without
-// flow and excluded ones, exercises the merge test, the merge of small segments and the many
-// edges of equal weight between pixels with and without flow, whose order decides which segment
-// a small one joins.
-TEST(FlowSegmenter, FastGraphSegmentsAsOpenCvGraphSegmentationDoes) {
+// Noisy flow over four differently moving quarters. With `gaps`, one pixel in 40 has no flow
+// and the bottom rows are excluded: many edges between pixels with and without flow then weigh
+// the same, and their order decides which segment a small one joins.
+FlowField four_quarters(std::uint64_t seed, bool gaps, std::vector<std::uint8_t>& excluded) {
   const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(80, 60, 90.0 * kDeg);
   const Eigen::Vector2f motions[] = {{0.0F, 0.0F}, {3.0F, 0.0F}, {-2.0F, 1.0F}, {0.5F, -3.0F}};
-  for (const std::uint64_t seed : {1U, 2U, 3U}) {
-    FlowField field(intrinsics);
-    std::vector<std::uint8_t> excluded(field.size(), 0);
-    cv::RNG rng(seed);
-    for (int row = 0; row < field.height(); ++row) {
-      for (int col = 0; col < field.width(); ++col) {
-        const Eigen::Vector2f noise(rng.uniform(-0.6F, 0.6F), rng.uniform(-0.6F, 0.6F));
-        field.at(col, row) = motions[(col >= 40 ? 1 : 0) + (row >= 30 ? 2 : 0)] + noise;
-        if (rng.uniform(0, 40) == 0)
-          field.at(col, row) = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
-        if (row >= 54)
-          excluded[field.index(col, row)] = 1;
-      }
+  FlowField field(intrinsics);
+  excluded.assign(field.size(), 0);
+  cv::RNG rng(seed);
+  for (int row = 0; row < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      const Eigen::Vector2f noise(rng.uniform(-0.6F, 0.6F), rng.uniform(-0.6F, 0.6F));
+      field.at(col, row) = motions[(col >= 40 ? 1 : 0) + (row >= 30 ? 2 : 0)] + noise;
+      if (gaps && rng.uniform(0, 40) == 0)
+        field.at(col, row) = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
+      if (gaps && row >= 54)
+        excluded[field.index(col, row)] = 1;
     }
+  }
+  return field;
+}
+
+// flow_graph_fast runs its own Felzenszwalb–Huttenlocher segmentation, flow_graph OpenCV's. On a
+// field no wider than fast_max_side_px neither reduces the flow, and where no two edges weigh the
+// same they must agree to the pixel, numbers and ids included: the merge test and the merge of
+// small segments are OpenCV's.
+TEST(FlowSegmenter, FastGraphSegmentsAsOpenCvGraphSegmentationDoes) {
+  for (const std::uint64_t seed : {1U, 2U, 3U}) {
+    std::vector<std::uint8_t> excluded;
+    const FlowField field = four_quarters(seed, false, excluded);
     FlowSegmenter opencv(SegmentationMethod::flow_graph);
     FlowSegmenter own(SegmentationMethod::flow_graph_fast);
     Segmentation expected;
@@ -325,6 +332,44 @@ TEST(FlowSegmenter, FastGraphSegmentsAsOpenCvGraphSegmentationDoes) {
     EXPECT_EQ(out.labels, expected.labels) << seed;
     EXPECT_EQ(out.source_ids, expected.source_ids) << seed;
   }
+}
+
+// Edges of equal weight: flow_graph_fast takes them by pixel, OpenCV in whatever order its
+// std::sort leaves them. The regions are the same sets of pixels; where pixels without flow form
+// segments of their own differently, the regions may be numbered in another order.
+TEST(FlowSegmenter, FastGraphFindsOpenCvsRegionsWhereEdgesWeighTheSame) {
+  bool renumbered = false;
+  for (const std::uint64_t seed : {1U, 2U, 3U}) {
+    std::vector<std::uint8_t> excluded;
+    const FlowField field = four_quarters(seed, true, excluded);
+    FlowSegmenter opencv(SegmentationMethod::flow_graph);
+    FlowSegmenter own(SegmentationMethod::flow_graph_fast);
+    Segmentation expected;
+    Segmentation out;
+    opencv.segment(field, excluded, expected);
+    own.segment(field, excluded, out);
+    ASSERT_GE(expected.region_count(), 4) << seed;
+    ASSERT_EQ(out.region_count(), expected.region_count()) << seed;
+    // One to one: each of our regions is exactly one of OpenCV's.
+    std::vector<int> theirs(static_cast<std::size_t>(out.region_count()), -2);
+    std::vector<int> ours(static_cast<std::size_t>(expected.region_count()), -2);
+    for (std::size_t i = 0; i < out.labels.size(); ++i) {
+      const int a = out.labels[i];
+      const int b = expected.labels[i];
+      ASSERT_EQ(a == Segmentation::kNoRegion, b == Segmentation::kNoRegion) << seed << " " << i;
+      if (a == Segmentation::kNoRegion)
+        continue;
+      int& mapped = theirs[static_cast<std::size_t>(a)];
+      int& back = ours[static_cast<std::size_t>(b)];
+      ASSERT_TRUE(mapped == -2 || mapped == b) << seed << " pixel " << i;
+      ASSERT_TRUE(back == -2 || back == a) << seed << " pixel " << i;
+      mapped = b;
+      back = a;
+    }
+    renumbered = renumbered || out.labels != expected.labels;
+  }
+  // The field has equal edges that do matter: otherwise this test would not test the order.
+  EXPECT_TRUE(renumbered);
 }
 
 }  // namespace
