@@ -292,14 +292,15 @@ TEST(FlowSegmenter, ScatteredIslandsOfFlowAreNoRegion) {
   }
 }
 
-// Noisy flow over four differently moving quarters. With `gaps`, one pixel in 40 has no flow
-// and the bottom rows are excluded: many edges between pixels with and without flow then weigh
-// the same, and their order decides which segment a small one joins.
-FlowField four_quarters(std::uint64_t seed, bool gaps, std::vector<std::uint8_t>& excluded) {
+// Noisy flow over four differently moving quarters, segmented by OpenCV (flow_graph, into
+// `opencv`) and by our own graph (flow_graph_fast, into `own`). With `gaps`, one pixel in 40 has
+// no flow and the bottom rows are excluded: many edges between pixels with and without flow then
+// weigh the same, and their order decides which segment a small one joins.
+void segment_four_quarters(std::uint64_t seed, bool gaps, Segmentation& opencv, Segmentation& own) {
   const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(80, 60, 90.0 * kDeg);
   const Eigen::Vector2f motions[] = {{0.0F, 0.0F}, {3.0F, 0.0F}, {-2.0F, 1.0F}, {0.5F, -3.0F}};
   FlowField field(intrinsics);
-  excluded.assign(field.size(), 0);
+  std::vector<std::uint8_t> excluded(field.size(), 0);
   cv::RNG rng(seed);
   for (int row = 0; row < field.height(); ++row) {
     for (int col = 0; col < field.width(); ++col) {
@@ -311,7 +312,8 @@ FlowField four_quarters(std::uint64_t seed, bool gaps, std::vector<std::uint8_t>
         excluded[field.index(col, row)] = 1;
     }
   }
-  return field;
+  FlowSegmenter(SegmentationMethod::flow_graph).segment(field, excluded, opencv);
+  FlowSegmenter(SegmentationMethod::flow_graph_fast).segment(field, excluded, own);
 }
 
 // flow_graph_fast runs its own Felzenszwalb–Huttenlocher segmentation, flow_graph OpenCV's. On a
@@ -320,14 +322,9 @@ FlowField four_quarters(std::uint64_t seed, bool gaps, std::vector<std::uint8_t>
 // small segments are OpenCV's.
 TEST(FlowSegmenter, FastGraphSegmentsAsOpenCvGraphSegmentationDoes) {
   for (const std::uint64_t seed : {1U, 2U, 3U}) {
-    std::vector<std::uint8_t> excluded;
-    const FlowField field = four_quarters(seed, false, excluded);
-    FlowSegmenter opencv(SegmentationMethod::flow_graph);
-    FlowSegmenter own(SegmentationMethod::flow_graph_fast);
     Segmentation expected;
     Segmentation out;
-    opencv.segment(field, excluded, expected);
-    own.segment(field, excluded, out);
+    segment_four_quarters(seed, false, expected, out);
     EXPECT_GE(expected.region_count(), 4) << seed;
     EXPECT_EQ(out.labels, expected.labels) << seed;
     EXPECT_EQ(out.source_ids, expected.source_ids) << seed;
@@ -340,14 +337,9 @@ TEST(FlowSegmenter, FastGraphSegmentsAsOpenCvGraphSegmentationDoes) {
 TEST(FlowSegmenter, FastGraphFindsOpenCvsRegionsWhereEdgesWeighTheSame) {
   bool renumbered = false;
   for (const std::uint64_t seed : {1U, 2U, 3U}) {
-    std::vector<std::uint8_t> excluded;
-    const FlowField field = four_quarters(seed, true, excluded);
-    FlowSegmenter opencv(SegmentationMethod::flow_graph);
-    FlowSegmenter own(SegmentationMethod::flow_graph_fast);
     Segmentation expected;
     Segmentation out;
-    opencv.segment(field, excluded, expected);
-    own.segment(field, excluded, out);
+    segment_four_quarters(seed, true, expected, out);
     ASSERT_GE(expected.region_count(), 4) << seed;
     ASSERT_EQ(out.region_count(), expected.region_count()) << seed;
     // One to one: each of our regions is exactly one of OpenCV's.
