@@ -4,7 +4,6 @@
 #include <linux/videodev2.h>
 #include <poll.h>
 #include <sys/ioctl.h>
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include <libv4lconvert.h>
@@ -30,6 +29,7 @@ using v4l2::checked_ioctl;
 using v4l2::errno_message;
 using v4l2::fixed_text;
 using v4l2::fourcc_text;
+using v4l2::map_buffer;
 using v4l2::throw_errno;
 using v4l2::try_ioctl;
 
@@ -288,16 +288,8 @@ void V4l2Camera::map_buffers(int buffer_count) {
   buffers_.reserve(request.count);
   for (std::uint32_t index = 0; index < request.count; ++index) {
     v4l2_buffer buffer{};
-    buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    buffer.memory = V4L2_MEMORY_MMAP;
-    buffer.index = index;
-    checked_ioctl(fd_.get(), VIDIOC_QUERYBUF, &buffer, "VIDIOC_QUERYBUF", device_);
-    void* data = ::mmap(nullptr, buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(),
-                        buffer.m.offset);
-    if (data == MAP_FAILED) {
-      throw_errno(device_, "mmap of a capture buffer", errno);
-    }
-    buffers_.emplace_back(data, buffer.length);
+    map_buffer(fd_.get(), V4L2_BUF_TYPE_VIDEO_CAPTURE, index, device_, "mmap of a capture buffer",
+               buffer, buffers_);
     checked_ioctl(fd_.get(), VIDIOC_QBUF, &buffer, "VIDIOC_QBUF", device_);
   }
 }

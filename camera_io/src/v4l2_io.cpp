@@ -76,4 +76,19 @@ std::span<const std::uint8_t> Mapping::bytes(std::size_t bytes_used) const {
   return {static_cast<const std::uint8_t*>(data_), std::min(bytes_used, length_)};
 }
 
+void map_buffer(int fd, v4l2_buf_type type, std::uint32_t index, const std::string& device,
+                const char* what, v4l2_buffer& buffer, std::vector<Mapping>& mappings) {
+  buffer = v4l2_buffer{};
+  buffer.type = type;
+  buffer.memory = V4L2_MEMORY_MMAP;
+  buffer.index = index;
+  checked_ioctl(fd, VIDIOC_QUERYBUF, &buffer, "VIDIOC_QUERYBUF", device);
+  void* data =
+      ::mmap(nullptr, buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, buffer.m.offset);
+  if (data == MAP_FAILED) {
+    throw_errno(device, what, errno);
+  }
+  mappings.emplace_back(data, buffer.length);
+}
+
 }  // namespace flowsteer::camera_io::v4l2

@@ -3,9 +3,14 @@
 // What the V4L2 capture and output devices share: ioctls that name their failure, and the
 // driver's strings and fourccs as text.
 
+#include <linux/videodev2.h>
+
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <vector>
+
+#include "flowsteer/camera_io/v4l2_device.hpp"
 
 namespace flowsteer::camera_io::v4l2 {
 
@@ -29,5 +34,11 @@ bool try_ioctl(int fd, unsigned long request, void* arg);
 // The same, throwing std::runtime_error (errno_message) on failure.
 void checked_ioctl(int fd, unsigned long request, void* arg, const char* name,
                    const std::string& device);
+
+// The driver's MMAP buffer `index` of `type` (VIDIOC_QUERYBUF), mapped: `buffer` is filled in,
+// ready to queue, and the mapping is appended to `mappings`. `what` names it in a failed mmap's
+// message ("mmap of a capture buffer").
+void map_buffer(int fd, v4l2_buf_type type, std::uint32_t index, const std::string& device,
+                const char* what, v4l2_buffer& buffer, std::vector<Mapping>& mappings);
 
 }  // namespace flowsteer::camera_io::v4l2

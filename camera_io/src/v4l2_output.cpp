@@ -3,7 +3,6 @@
 #include <fcntl.h>
 #include <linux/videodev2.h>
 #include <poll.h>
-#include <sys/mman.h>
 
 #include <cerrno>
 #include <chrono>
@@ -19,6 +18,7 @@
 namespace flowsteer::camera_io {
 
 using v4l2::checked_ioctl;
+using v4l2::map_buffer;
 using v4l2::throw_errno;
 using v4l2::try_ioctl;
 
@@ -91,16 +91,8 @@ struct V4l2Output::Impl {
     checked_ioctl(fd.get(), VIDIOC_REQBUFS, &request, "VIDIOC_REQBUFS", device);
     for (std::uint32_t index = 0; index < request.count; ++index) {
       v4l2_buffer buffer{};
-      buffer.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
-      buffer.memory = V4L2_MEMORY_MMAP;
-      buffer.index = index;
-      checked_ioctl(fd.get(), VIDIOC_QUERYBUF, &buffer, "VIDIOC_QUERYBUF", device);
-      void* data = ::mmap(nullptr, buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd.get(),
-                          buffer.m.offset);
-      if (data == MAP_FAILED) {
-        throw_errno(device, "mmap of an output buffer", errno);
-      }
-      buffers.emplace_back(data, buffer.length);
+      map_buffer(fd.get(), V4L2_BUF_TYPE_VIDEO_OUTPUT, index, device, "mmap of an output buffer",
+                 buffer, buffers);
       queue(buffer);
     }
   }
