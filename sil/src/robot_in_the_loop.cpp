@@ -229,12 +229,9 @@ void RobotInTheLoop::finish(eval::OutputDir* out) {
   if (world_ != nullptr) {
     report_.robot_stop_position_m = world_->agents()[link_.agent].position_m;
   }
-  read_robot_log();
+  const std::string robot_log = read_robot_log();
   if (out != nullptr) {
-    std::ifstream robot_log(link_.robot_log);
-    std::ostringstream text;
-    text << robot_log.rdbuf();
-    eval::write_text(out->staging_path("robot.log"), text.str());
+    eval::write_text(out->staging_path("robot.log"), robot_log);
     write_report(out->staging_path("sil.json"));
   }
   std::error_code ignored;
@@ -242,9 +239,12 @@ void RobotInTheLoop::finish(eval::OutputDir* out) {
 }
 
 // The robot's frame log has a line per frame with "latency_ms X", the delay from the frame's
-// capture to its command (launch/src/robot_brain.cpp).
-void RobotInTheLoop::read_robot_log() {
-  std::ifstream in(link_.robot_log);
+// capture to its command (launch/src/robot_brain.cpp). Returns the log's text; none when the
+// robot never started.
+std::string RobotInTheLoop::read_robot_log() {
+  std::ostringstream text;
+  text << std::ifstream(link_.robot_log).rdbuf();
+  std::istringstream in(text.str());
   std::string line;
   while (std::getline(in, line)) {
     const std::size_t at = line.find(" latency_ms ");
@@ -252,6 +252,7 @@ void RobotInTheLoop::read_robot_log() {
       report_.capture_to_command.add(std::stod(line.substr(at + 12)));
     }
   }
+  return text.str();
 }
 
 void RobotInTheLoop::write_report(const std::filesystem::path& path) const {

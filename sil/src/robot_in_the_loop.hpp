@@ -59,7 +59,7 @@ class RobotInTheLoop final : public eval::AgentDriver {
   void wait_for_step(long k, double dt);
   // The agent's speed and turn rate from the axes' velocities; records new setpoints' delays.
   drivers::BodyVelocity wheel_motion(double now_s);
-  void read_robot_log();
+  std::string read_robot_log();
   void write_report(const std::filesystem::path& path) const;
 
   RobotLink link_;
