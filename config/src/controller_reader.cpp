@@ -65,13 +65,14 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
       node, field, "law", {"flowsteer", "cgf2019", "mig2019"}, to_c_str(servo::to_string(c.law))));
   for (auto [key, weight] :
        {std::pair{"alpha", &c.alpha}, std::pair{"beta", &c.beta}, std::pair{"gamma", &c.gamma},
-        std::pair{"delta", &c.delta}, std::pair{"braking", &c.braking}}) {
+        std::pair{"delta", &c.delta}, std::pair{"braking", &c.braking},
+        std::pair{"anticipation", &c.anticipation}}) {
     if (node[key]) {
       *weight = r.non_negative(node, field, key, 0.0);
     }
   }
   if (c.law != servo::NavigationLaw::flowsteer) {
-    for (const char* key : {"braking", "follow_gap_m"}) {
+    for (const char* key : {"braking", "anticipation", "follow_gap_m"}) {
       if (node[key]) {
         r.fail(node[key], base::YamlReader::join(field, key),
                "only for law: flowsteer (this controller's law is " +

@@ -82,7 +82,7 @@ servo::SceneObject read_object(const base::YamlReader& r, const YAML::Node& node
 void read_controller(const base::YamlReader& r, const YAML::Node& node, DemoScene& d) {
   r.only_keys(
       node, "controller",
-      {"kind", "law", "alpha", "beta", "gamma", "delta", "braking", "follow_gap_m",
+      {"kind", "law", "alpha", "beta", "gamma", "delta", "braking", "anticipation", "follow_gap_m",
        "preferred_speed_mps", "lambda", "max_accel_mps2", "max_turn_rate", "use_depth", "leader"});
   const bool following = r.word(node, "controller", "kind", {"goal_reaching", "following"},
                                 "goal_reaching") == "following";

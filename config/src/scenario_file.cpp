@@ -140,6 +140,7 @@ servo::ControllerConfig read_scenario_controller(const base::YamlReader& r, cons
                  "gamma",
                  "delta",
                  "braking",
+                 "anticipation",
                  "follow_gap_m",
                  "lambda",
                  "max_accel_mps2",
@@ -272,9 +273,8 @@ struct AgentDefaults {
 
 // The agent's leader, agents[index] of `agent_count`. Unless its controller names its kind, an
 // agent with a leader follows it.
-void read_leader(const base::YamlReader& r, const YAML::Node& node,
-                 const std::string& field, std::size_t agent_count, std::size_t self,
-                 AgentSpec& a) {
+void read_leader(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
+                 std::size_t agent_count, std::size_t self, AgentSpec& a) {
   const YAML::Node leader = node["leader"];
   const int index = r.integer(leader, field + ".leader", 0);
   if (static_cast<std::size_t>(index) >= agent_count || static_cast<std::size_t>(index) == self) {
@@ -314,8 +314,8 @@ sim_camera::PointLight read_carried_light(const base::YamlReader& r, const YAML:
 }
 
 // agents[i], with `agents` for the leader's index.
-AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& agents,
-                     std::size_t i, const AgentDefaults& defaults) {
+AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& agents, std::size_t i,
+                     const AgentDefaults& defaults) {
   const std::string field = "agents[" + std::to_string(i) + "]";
   const YAML::Node node = agents[i];
   r.only_keys(node, field,

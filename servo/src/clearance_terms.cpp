@@ -419,6 +419,7 @@ NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& w,
   detail::require_weight(w.gamma, "gamma");
   detail::require_weight(w.delta, "delta");
   detail::require_weight(w.braking, "braking");
+  detail::require_weight(w.anticipation, "anticipation");
   if (w.delta > w.gamma) {
     throw std::invalid_argument("navigation weights: delta (" + std::to_string(w.delta) +
                                 ") must not exceed gamma (" + std::to_string(w.gamma) + ")");
@@ -428,7 +429,8 @@ NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& w,
       .add(w.beta,
            approach_speed_term(w.preferred_speed_mps, w.max_turn_rate, w.arrival_decel_mps2))
       .add(w.gamma, clearance_term(avoidance))
-      .add(w.braking, braking_term(avoidance));
+      .add(w.braking, braking_term(avoidance))
+      .add(w.anticipation, anticipation_term(avoidance));
   if (w.delta > 0.0) {
     f.add(w.delta, dark_term(avoidance));
   }

@@ -95,6 +95,7 @@ NavigationWeights navigation_weights(const ControllerConfig& c) {
   NavigationWeights w;  // flowsteer's
   if (c.law == NavigationLaw::flowsteer) {
     w.braking = 2.0;
+    w.anticipation = 1.0;
   } else if (c.law == NavigationLaw::mig2019) {
     w.delta = 1.0;
   } else if (c.kind == NavigationKind::goal_reaching) {
@@ -105,6 +106,7 @@ NavigationWeights navigation_weights(const ControllerConfig& c) {
   w.gamma = c.gamma.value_or(w.gamma);
   w.delta = c.delta.value_or(w.delta);
   w.braking = c.braking.value_or(w.braking);
+  w.anticipation = c.anticipation.value_or(w.anticipation);
   return w;
 }
 
@@ -126,6 +128,7 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
     weights.gamma = w.gamma;
     weights.delta = w.delta;
     weights.braking = w.braking;
+    weights.anticipation = w.anticipation;
     weights.preferred_speed_mps = preferred_speed_mps;
     weights.max_turn_rate = c.max_turn_rate;
     weights.follow_gap_m = c.follow_gap_m;

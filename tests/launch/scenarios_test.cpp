@@ -242,6 +242,19 @@ TEST(ScenarioFile, FollowersFollowWithBetaOneUnlessToldOtherwise) {
   EXPECT_DOUBLE_EQ(*w.agents[2].controller.beta, 0.3);
 }
 
+TEST(ScenarioFile, AnticipationIsTheFlowsteerLawsOnly) {
+  const auto w = parse_scenario(
+      "controller: {law: flowsteer}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n"
+      "  - {start: [0, 2], goal: [9, 2], controller: {law: flowsteer, anticipation: 0}}\n",
+      "scenario.yaml");
+  EXPECT_DOUBLE_EQ(servo::navigation_weights(w.agents[0].controller).anticipation, 1.0);
+  EXPECT_DOUBLE_EQ(servo::navigation_weights(w.agents[1].controller).anticipation, 0.0);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
+                     "controller: {law: cgf2019, anticipation: 1}}\n")
+                .find("anticipation: only for law: flowsteer"),
+            std::string::npos);
+}
+
 TEST(SteerSuite, TestCaseBecomesAWorld) {
   const sim_camera::WorldSpec w = load_steersuite(FLOWSTEER_TEST_DATA "/corridor.xml").world;
   EXPECT_EQ(w.name, "corridor");

@@ -213,6 +213,7 @@ TEST(BrakingBehaviour, AWallMetHeadOnStopsTheAgentShortOfIt) {
   const std::vector<ObjectFeatures> objects = {wall};
   FlowsteerWeights at_preferred_speed;
   at_preferred_speed.preferred_speed_mps = 1.3;
+  at_preferred_speed.anticipation = 0.0;  // which brakes for the wall too, by its own measure
   Controller c(flowsteer_goal_reaching(at_preferred_speed, options_without_convention(1.0)), 1.0,
                {1.0, 1.0});
   // From 1.3 m/s it stops 1 m on at 0.5 m/s² only from 1 m/s: brake by ε (1.3 − 1.0).

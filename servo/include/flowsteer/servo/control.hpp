@@ -86,6 +86,8 @@ struct AvoidanceOptions {
   double passing_band = 1.0;
   // The braking term only: the deceleration it plans to stop with, short of an object ahead.
   double stop_decel_mps2 = 0.5;
+  // The anticipation term only: τ0 of its energy, how far ahead in time contacts matter.
+  double anticipation_s = 3.0;
 };
 
 // L_t = ½ t_x² (CGF Eq. 7). Needs the goal's bearing; zero without one.
@@ -128,6 +130,14 @@ std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options = {});
 // term does for a static obstacle met head-on (its FOE is straight ahead, f = 0, and CGF Eq. 10's
 // f a_c term vanishes).
 std::unique_ptr<CostTerm> braking_term(const AvoidanceOptions& options = {});
+// L_a = Σ_i E(τ_i), E(τ) = k e^(−τ/τ0) / τ² (k = 1.5, τ0 = anticipation_s): Karamouzas et al.'s
+// time-to-collision energy (PRL 2014), τ_i the time until object i, moving at the velocity its
+// flow shows (V_z = −Z/τ, V_x = f V_z), first comes within half the kept width of the agent, the
+// object taken as the segment between its ends on the ground. Its gradient turns or slows the
+// agent for what will touch it, whatever its FOE says (a neighbour closing in sideways has no
+// expansion, its FOE at infinity), and costs nothing for what will not (a wall along the path).
+// Contacts later than the agent takes to reach its goal are left out. See anticipation_term.cpp.
+std::unique_ptr<CostTerm> anticipation_term(const AvoidanceOptions& options = {});
 // L_g = ½ (v_z + (Z − G)/T)² of the leader: close the gap to G metres with time constant T,
 // then match its speed (CGF Eq. 13's L_τ is the case G = 0, T → ∞). Needs the leader's depth.
 std::unique_ptr<CostTerm> leader_gap_term(double gap_m, double gap_time_s,
@@ -164,11 +174,12 @@ struct GoalReachingWeights {  // CGF Eq. 16, MIG Eq. 4
 };
 // The flowsteer law's weights; the papers' α..δ keep their roles.
 struct FlowsteerWeights {
-  double alpha = 1.0;    // heading
-  double beta = 1.0;     // approach speed (a walker reaches its speed in about a second)
-  double gamma = 1.0;    // clearance
-  double delta = 0.0;    // dark regions (MIG Eq. 3), at most gamma
-  double braking = 2.0;  // braking
+  double alpha = 1.0;         // heading
+  double beta = 1.0;          // approach speed (a walker reaches its speed in about a second)
+  double gamma = 1.0;         // clearance
+  double delta = 0.0;         // dark regions (MIG Eq. 3), at most gamma
+  double braking = 2.0;       // braking
+  double anticipation = 1.0;  // anticipation (time-to-collision energy)
   double preferred_speed_mps = 1.0;
   double max_turn_rate = 1.0;       // the controller's limit, for the approach speed
   double arrival_decel_mps2 = 0.5;  // the approach speed's braking to stop at the goal
@@ -188,8 +199,9 @@ NavigationFunction goal_reaching(const GoalReachingWeights& weights,
 NavigationFunction following(const FollowingWeights& weights,
                              const AvoidanceOptions& avoidance = {});
 
-// The flowsteer law: L = α L_θ + β L_v + γ L_c + ε L_b (+ δ L_dark), and for following
-// L = α L_min + β L_g + γ L_c + ε L_b. Throws std::invalid_argument like goal_reaching.
+// The flowsteer law: L = α L_θ + β L_v + γ L_c + ε L_b + ζ L_a (+ δ L_dark), ζ the anticipation
+// weight, and for following L = α L_min + β L_g + γ L_c + ε L_b. Throws std::invalid_argument like
+// goal_reaching.
 NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& weights,
                                            const AvoidanceOptions& avoidance = {});
 NavigationFunction flowsteer_following(const FlowsteerWeights& weights,

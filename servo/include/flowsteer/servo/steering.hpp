@@ -46,12 +46,14 @@ struct ControllerConfig {
   NavigationLaw law = NavigationLaw::cgf2019;
   // The weights of the law's terms; each one not set is the law's own (navigation_weights).
   // Dark regions (MIG 2019): with delta > 0 the agent looks for them and avoids them; with 0 it
-  // ignores them, as MIG's agents without dark-region awareness do. braking: law flowsteer only.
+  // ignores them, as MIG's agents without dark-region awareness do. braking and anticipation: law
+  // flowsteer only.
   std::optional<double> alpha;
   std::optional<double> beta;
   std::optional<double> gamma;
   std::optional<double> delta;
   std::optional<double> braking;
+  std::optional<double> anticipation;
   // Law flowsteer, following: the gap kept behind the leader.
   double follow_gap_m = 2.0;
   double lambda = 1.0;
@@ -76,13 +78,14 @@ struct PerceptionConfig {
 // A config's weights, the law's own where it sets none:
 //   cgf2019  goal reaching α 1, β 0.1, γ 1, δ 0 (CGF Eq. 16); following α = β = γ = 1 (§8.2)
 //   mig2019  α = β = γ = δ = 1 (MIG §7)
-//   flowsteer α 1, β 1, γ 1, δ 0, braking 2, for both kinds
+//   flowsteer α 1, β 1, γ 1, δ 0, braking 2, for both kinds; anticipation 1, goal reaching only
 struct NavigationWeights {
   double alpha = 1.0;
   double beta = 1.0;
   double gamma = 1.0;
   double delta = 0.0;
   double braking = 0.0;
+  double anticipation = 0.0;
 };
 NavigationWeights navigation_weights(const ControllerConfig& config);
 
