@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -13,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include "contact_time.hpp"
 #include "cost_term_helpers.hpp"
 #include "flowsteer/servo/control.hpp"
 #include "flowsteer/servo/dynamics.hpp"
@@ -149,7 +151,8 @@ class ThreatCones {
         continue;
       }
       const Cone cone = cone_of(object, agent, options, kept_width_m);
-      if (!beyond_goal(cone, percept, kept_width_m)) {
+      if (!beyond_goal(cone, percept, kept_width_m) &&
+          !passed_clear(object, agent, options, kept_width_m)) {
         entries_.push_back({&object, cone, time_to_contact(object, cone, kept_width_m), -1});
       }
     }
@@ -191,6 +194,29 @@ class ThreatCones {
   static bool beyond_goal(const Cone& cone, const Percept& percept, double kept_width_m) {
     return percept.goal_distance_m &&
            cone.nearest_m() > *percept.goal_distance_m + 0.5 * kept_width_m;
+  }
+
+  // A static object (by the fit) whose ends, taken as a segment on the ground, stay further than
+  // half the kept width plus static_clearance_m from the agent for the whole horizon if it goes
+  // straight on: a wall along the path, people standing beside the course. Their clearance cost
+  // would still pull: its importance is that of their nearer end, small in time for anything
+  // beside the agent, so a corridor's walls pulled agents to its middle and people standing at
+  // their goals made an agent circle its own goal among them. Moving objects keep it, as they
+  // may turn into the path: circles and crossings need the early avoidance of the cost's tail.
+  static bool passed_clear(const ObjectFeatures& object, const AgentState& agent,
+                           const AvoidanceOptions& options, double kept_width_m) {
+    const std::optional<Eigen::Vector2d> velocity =
+        detail::relative_velocity(object, agent, options);
+    if (!object.fit.static_foe || !velocity) {
+      return false;
+    }
+    Eigen::Vector2d ends[2];
+    detail::ends_of(object, agent, options, ends);
+    const double radius_m = 0.5 * kept_width_m + options.static_clearance_m;
+    detail::Contact contact;
+    detail::segment_contact(ends[0], ends[1], *velocity, radius_m, contact);
+    return !(contact.time_s <= options.horizon_s) &&
+           detail::distance_to_segment(ends[0], ends[1]) > radius_m;
   }
 
   std::vector<Entry> entries_;

@@ -237,6 +237,10 @@ void validate(const AvoidanceOptions& o) {
           "passing_band must be >= 0, got " + std::to_string(o.passing_band));
   require(std::isfinite(o.stop_decel_mps2) && o.stop_decel_mps2 > 0.0,
           "stop_decel_mps2 must be positive, got " + std::to_string(o.stop_decel_mps2));
+  require(std::isfinite(o.anticipation_s) && o.anticipation_s > 0.0,
+          "anticipation_s must be positive, got " + std::to_string(o.anticipation_s));
+  require(o.static_clearance_m >= 0.0,
+          "static_clearance_m must be >= 0, got " + std::to_string(o.static_clearance_m));
 }
 
 void require_weight(double value, const char* name) {

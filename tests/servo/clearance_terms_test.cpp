@@ -181,6 +181,37 @@ TEST(ClearanceBehaviour, ASlowAgentKeepsLessRoom) {
   EXPECT_EQ(term->evaluate({objects, {}, {}, {}}, {2.0}).cost, walking);  // full from 1 m/s
 }
 
+// A wall along the path 1.5 m to the right, from 1 m to 10 m ahead: the straight course passes it
+// by more than half the kept width (0.5 m) and static_clearance_m (0.25 m). Static, it is left
+// out; were it moving it could turn into the path, and its cost's tail would still push.
+TEST(ClearanceBehaviour, AStaticObjectTheCoursePassesClearOfIsLeftOut) {
+  ObjectFeatures wall;
+  wall.source_id = 4;
+  wall.pixel_count = 1000;
+  wall.min_x = 1.5 / 10.0;
+  wall.max_x = 1.5 / 1.0;
+  wall.centre = {0.5 * (wall.min_x + wall.max_x), 0.0};
+  wall.min_x_depth_m = 10.0;
+  wall.max_x_depth_m = 1.0;
+  wall.depth_m = 3.0;
+  wall.status = MotionStatus::approaching;
+  wall.foe = {0.0, 0.0};
+  wall.ttc_s = 3.0;  // at 1 m/s
+  wall.fit.static_foe = true;
+  const AvoidanceOptions options = options_without_convention(1.0);
+  auto cost = [&](const ObjectFeatures& object) {
+    const std::vector<ObjectFeatures> objects = {object};
+    return clearance_term(options)->evaluate({objects, {}, {}, {}}, {1.0}).cost;
+  };
+  EXPECT_EQ(cost(wall), 0.0);
+  wall.fit.static_foe = false;
+  EXPECT_GT(cost(wall), 0.0);
+  wall.fit.static_foe = true;
+  wall.min_x = 0.7 / 10.0;  // 0.7 m to the right: within the margin
+  wall.max_x = 0.7;
+  EXPECT_GT(cost(wall), 0.0);
+}
+
 TEST(BrakingGradient, MatchesSimulation) {
   test::TwoBody s;  // a static obstacle 2 m ahead on course, the agent at 1.3 m/s
   s.point = {2.0, 0.0};

@@ -88,6 +88,10 @@ struct AvoidanceOptions {
   double stop_decel_mps2 = 0.5;
   // The anticipation term only: τ0 of its energy, how far ahead in time contacts matter.
   double anticipation_s = 3.0;
+  // The clearance and braking terms of the flowsteer law: a static object the agent's straight
+  // course passes further than half its kept width plus this from, within the horizon, is left
+  // out (infinity: none is).
+  double static_clearance_m = 0.25;
 };
 
 // L_t = ½ t_x² (CGF Eq. 7). Needs the goal's bearing; zero without one.
@@ -121,7 +125,9 @@ std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double
 // the speed's share of margin_m) at that end's depth, on the side the agent passes it on; φ(u) =
 // exp(−u) outside (u ≥ 0), 1 − u inside. Its extent, unlike CGF Eq. 9's centre, makes a wall along
 // the path cost nothing and one across it cost everything. An object further than the goal by half
-// the kept width is left out: the agent stops at the goal short of it. See clearance_terms.cpp.
+// the kept width is left out: the agent stops at the goal short of it. So is a static object that
+// the agent's straight course passes by more than half the kept width and static_clearance_m.
+// See clearance_terms.cpp.
 std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options = {});
 // L_b = Σ_i ψ_i ½ max(0, v_c − v_i)², v_i = √(2 a_b (Z_i − w/2)) the speed from which the agent
 // stops at a_b (stop_decel_mps2) half its width w short of object i, Z_i the object's depth where

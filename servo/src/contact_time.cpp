@@ -1,0 +1,88 @@
+#include "contact_time.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "cost_term_helpers.hpp"
+
+namespace flowsteer::servo::detail {
+
+namespace {
+
+// A point p of the object: |p + V t| = R at the smaller root.
+void point_contact(const Eigen::Vector2d& p, const Eigen::Vector2d& v, double radius,
+                   Contact& first) {
+  const double a = v.squaredNorm();
+  const double b = p.dot(v);
+  const double c = p.squaredNorm() - radius * radius;
+  const double discriminant = b * b - a * c;
+  if (b >= 0.0 || a <= 0.0 || discriminant < 0.0) {
+    return;
+  }
+  const double t = std::max(0.0, c / (-b + std::sqrt(discriminant)));
+  if (t < first.time_s) {
+    first.time_s = t;
+    first.normal = (p + v * t).normalized();
+  }
+}
+
+}  // namespace
+
+void segment_contact(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& v,
+                     double radius_m, Contact& first) {
+  point_contact(a, v, radius_m, first);
+  point_contact(b, v, radius_m, first);
+  const double length = (b - a).norm();
+  if (!(length > 0.0)) {
+    return;
+  }
+  const Eigen::Vector2d along = (b - a) / length;
+  Eigen::Vector2d m{-along.y(), along.x()};
+  if (m.dot(a) < 0.0) {
+    m = -m;
+  }
+  const double closing_mps = -m.dot(v);
+  const double distance_m = m.dot(a);
+  if (closing_mps <= 0.0 || distance_m < radius_m) {
+    return;
+  }
+  const double t = (distance_m - radius_m) / closing_mps;
+  const double foot = -along.dot(a + v * t);
+  if (foot >= 0.0 && foot <= length && t < first.time_s) {
+    first.time_s = t;
+    first.normal = m;
+  }
+}
+
+double distance_to_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double length2 = ab.squaredNorm();
+  const double t = length2 > 0.0 ? std::clamp(-a.dot(ab) / length2, 0.0, 1.0) : 0.0;
+  return (a + t * ab).norm();
+}
+
+std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
+                                                 const AgentState& agent,
+                                                 const AvoidanceOptions& options) {
+  if (object.has_foe() && std::isfinite(object.ttc_s) && std::isfinite(object.foe.x())) {
+    const double vz = -depth_scale(object, agent, options).depth_m / object.ttc_s;
+    return Eigen::Vector2d{object.foe.x() * vz, vz};
+  }
+  if (object.status == MotionStatus::lateral && object.moments.mean_inv_depth &&
+      *object.moments.mean_inv_depth > 0.0) {
+    return Eigen::Vector2d{object.moments.mean_u / *object.moments.mean_inv_depth, 0.0};
+  }
+  return std::nullopt;
+}
+
+void ends_of(const ObjectFeatures& object, const AgentState& agent, const AvoidanceOptions& options,
+             Eigen::Vector2d ends[2]) {
+  const double depth = depth_scale(object, agent, options).depth_m;
+  const bool depths = options.use_depth && object.min_x_depth_m && object.max_x_depth_m;
+  const double left_m = depths ? *object.min_x_depth_m : depth;
+  const double right_m = depths ? *object.max_x_depth_m : depth;
+  ends[0] = {object.min_x * left_m, left_m};
+  ends[1] = {object.max_x * right_m, right_m};
+}
+
+}  // namespace flowsteer::servo::detail

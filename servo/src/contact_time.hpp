@@ -1,0 +1,45 @@
+#pragma once
+
+// When an object will touch the agent if both go straight on, from the object's visual features:
+// its two ends on the ground and the relative velocity its flow shows. The anticipation term
+// (anticipation_term.cpp) weighs what will touch the agent by this; the clearance term
+// (clearance_terms.cpp) leaves out what will not come near.
+
+#include <limits>
+#include <optional>
+
+#include <Eigen/Core>
+
+#include "flowsteer/servo/control.hpp"
+
+namespace flowsteer::servo::detail {
+
+// When an object moving at relative velocity V first comes within R of the agent (at the
+// origin), and the unit normal n from the agent to where it touches.
+struct Contact {
+  double time_s = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d normal = Eigen::Vector2d::Zero();
+};
+
+// The segment [a, b] moving at V (agent frame: x right, z forward, m): its ends as points, and
+// its inside, whose line comes within R when m·(a + V t) = R, m its unit normal towards the line,
+// if the foot of the perpendicular from the agent then lies between the ends. Keeps `first` if
+// it is earlier.
+void segment_contact(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& v,
+                     double radius_m, Contact& first);
+
+// The distance from the agent to the segment [a, b].
+double distance_to_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b);
+
+// The object's velocity relative to the agent (x right, z forward, m/s) from its flow: V_z =
+// −Z/τ and V_x = f V_z at the depth the fit used (CGF Eq. 2–3); for lateral motion, the derotated
+// flow u = V_x / Z gives V_x = mean(u) / mean(1/Z). Nothing for an object without a usable fit.
+std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
+                                                 const AgentState& agent,
+                                                 const AvoidanceOptions& options);
+
+// The object's two ends on the ground in the agent's frame, (x Z, Z) at each end's depth.
+void ends_of(const ObjectFeatures& object, const AgentState& agent, const AvoidanceOptions& options,
+             Eigen::Vector2d ends[2]);
+
+}  // namespace flowsteer::servo::detail
