@@ -33,6 +33,7 @@ struct GeometricBody {
 //                 the depths of the corners at min_x and max_x;
 //   v             relative velocity (body − agent) in the camera frame, FOE f = (v_x, v_y)/v_z
 //                 (CGF Eq. 3), τ = −Z/v_z, status from the sign of τ like the flow fit's;
+//   fit.static_foe whether the body stands still, which the flow fit tells from its flow;
 //   moments       those of the flow u = (v_x − x v_z)/Z (CGF Eq. 2) at the centre, standing for
 //                 every pixel of the body (enough for the leader's alignment term).
 // Keeps its output storage between calls; one instance per thread.
