@@ -126,7 +126,7 @@ std::span<const ObjectFeatures> GeometricFeatures::compute(std::span<const Geome
       f.ttc_s = 1.0 / inverse_ttc;
     }
     f.ttc_eq5_s = f.ttc_s;
-    f.fit.static_foe = body.velocity_mps.isZero();  // what the flow fit tells from its flow
+    f.fit.static_foe = body.velocity_mps.isZero();        // what the flow fit tells from its flow
     const double u = (v.x() - centre_x * v.z()) / depth;  // CGF Eq. 2 at the centre
     f.moments = {u, centre_x * u, 1.0 / depth, centre_x / depth};
     features_.push_back(f);
