@@ -66,11 +66,8 @@ struct Cone {
     if (cut) {
       return std::min(depth[0], depth[1]);
     }
-    const Eigen::Vector2d a{end_x[0] * depth[0], depth[0]};
-    const Eigen::Vector2d ab = Eigen::Vector2d{end_x[1] * depth[1], depth[1]} - a;
-    const double length2 = ab.squaredNorm();
-    const double t = length2 > 0.0 ? std::clamp(-a.dot(ab) / length2, 0.0, 1.0) : 0.0;
-    return (a + t * ab).norm();
+    return detail::distance_to_segment({end_x[0] * depth[0], depth[0]},
+                                       {end_x[1] * depth[1], depth[1]});
   }
 
   // The depth of the object along image column x, taken as a vertical plane through its two
