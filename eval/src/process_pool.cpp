@@ -1,6 +1,7 @@
 #include "process_pool.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -91,12 +92,37 @@ class InterruptGuard {
   struct sigaction previous_term_ {};
 };
 
+// SIGINT and SIGTERM held back while a worker is forked: a worker stopped before it has put
+// back their default actions would otherwise run the parent's handler and go on.
+class InterruptsHeld {
+ public:
+  InterruptsHeld() {
+    sigset_t interrupts;
+    sigemptyset(&interrupts);
+    sigaddset(&interrupts, SIGINT);
+    sigaddset(&interrupts, SIGTERM);
+    ::pthread_sigmask(SIG_BLOCK, &interrupts, &previous_);
+  }
+  ~InterruptsHeld() { ::pthread_sigmask(SIG_SETMASK, &previous_, nullptr); }
+  InterruptsHeld(const InterruptsHeld&) = delete;
+  InterruptsHeld& operator=(const InterruptsHeld&) = delete;
+
+  // The mask from before, for the worker to put back.
+  const sigset_t& previous() const { return previous_; }
+
+ private:
+  sigset_t previous_{};
+};
+
 // The worker: runs the task, writes its record and ends without running this process's exit
-// handlers (they belong to the parent: its buffers, its GL state). Ctrl-C and SIGTERM end it.
+// handlers (they belong to the parent: its buffers, its GL state). Ctrl-C and SIGTERM end it,
+// also one sent while it was being forked (held until here).
 [[noreturn]] void run_worker(int fd, std::size_t index, int jobs,
-                             const std::function<std::string(std::size_t)>& task) {
+                             const std::function<std::string(std::size_t)>& task,
+                             const sigset_t& mask) {
   ::signal(SIGINT, SIG_DFL);
   ::signal(SIGTERM, SIG_DFL);
+  ::pthread_sigmask(SIG_SETMASK, &mask, nullptr);
   if (jobs > 1) {
     cv::setNumThreads(1);
   }
@@ -158,6 +184,7 @@ class Workers {
     }
     std::cout.flush();
     std::cerr.flush();
+    const InterruptsHeld held;
     const pid_t pid = ::fork();
     if (pid < 0) {
       const int error = errno;
@@ -167,7 +194,7 @@ class Workers {
     }
     if (pid == 0) {
       ::close(fds[0]);
-      run_worker(fds[1], index, jobs, task);
+      run_worker(fds[1], index, jobs, task, held.previous());
     }
     ::close(fds[1]);
     running_[pid] = {index, fds[0]};
