@@ -60,7 +60,7 @@ void SimulatedOdrive::serve() {
   {
     const std::lock_guard lock(mutex_);
     for (AxisModel& model : axes_) {
-      model.pos_turns += model.axis.vel_turns_per_s * (now_s - last_s_);
+      model.axis.pos_turns += model.axis.vel_turns_per_s * (now_s - last_s_);
     }
     last_s_ = now_s;
     if (now_s - last_heartbeat_s_ >= kHeartbeatPeriod_s) {
@@ -110,7 +110,7 @@ void SimulatedOdrive::obey(AxisModel& model, const ReceivedCanFrame& received) {
     model.setpoint_turns_per_s = setpoint;
   } else if (cmd == odrive::kGetEncoderEstimates && (frame.can_id & CAN_RTR_FLAG) != 0) {
     socket_.send(
-        odrive::encoder_estimates_frame(axis.node, {static_cast<float>(model.pos_turns),
+        odrive::encoder_estimates_frame(axis.node, {static_cast<float>(axis.pos_turns),
                                                     static_cast<float>(axis.vel_turns_per_s)}),
         0.1);
   }

@@ -51,6 +51,16 @@ class BaseStopper {
   int exceptions_;
 };
 
+// The mean motion between two odometry readings dt_s apart. The wheels' angles, not their speeds
+// at the readings: a command that changed between them would turn the tracked heading away from
+// the robot's, most in the quick back-and-forth of avoidance.
+drivers::BodyVelocity travelled(const drivers::WheelOdometry& from,
+                                const drivers::WheelOdometry& to, double dt_s,
+                                const drivers::WheelGeometry& geometry) {
+  return drivers::from_wheels(
+      {(to.left_rad - from.left_rad) / dt_s, (to.right_rad - from.right_rad) / dt_s}, geometry);
+}
+
 }  // namespace
 
 GoalTracker::GoalTracker(const config::GoalSection& goal)
@@ -105,6 +115,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ro
   drivers::BodyVelocity measured;
   double last_frame_s = base::monotonic_now_s();
   double last_update_s = last_frame_s;
+  drivers::WheelOdometry last_odometry;  // since configure(): zero
   camera_io::Frame frame;
   cv::Mat last_picture;  // the last frame the brain saw
   const auto stop = [&](StopReason reason, const std::string& why) {
@@ -171,10 +182,13 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* ro
       const drivers::BaseState state = robot_base->update(update_s);
       measured = state.measured;
       result.max_measured_speed_mps = std::max(result.max_measured_speed_mps, measured.speed_mps);
-      if (goal) {
-        goal->advance(measured, update_s - last_update_s);
+      if (goal && update_s > last_update_s) {
+        goal->advance(travelled(last_odometry, state.drive.odometry, update_s - last_update_s,
+                                robot_base->stage().config().geometry),
+                      update_s - last_update_s);
       }
       last_update_s = update_s;
+      last_odometry = state.drive.odometry;
     }
     if (options.max_frames > 0 && result.frames >= options.max_frames) {
       stop(StopReason::frame_limit, "frame limit reached");

@@ -123,7 +123,7 @@ base::Command RobotInTheLoop::step(const sim_camera::World& world, sim_camera::R
     report_.robot_exit_status = *status;
     report_.robot_end_time_s = world.time_s();
   }
-  const drivers::BodyVelocity motion = wheel_motion(now_s);
+  const drivers::BodyVelocity motion = wheel_motion(now_s, dt);
   const sim_camera::AgentState& agent = world.agents()[link_.agent];
   // The world integrates (a_c, ω) over the step: this a_c gives the wheels' speed at once.
   return {(motion.speed_mps - agent.speed_mps) / dt, motion.turn_rate};
@@ -197,18 +197,25 @@ void RobotInTheLoop::start_robot() {
   }
   start_s_ = base::monotonic_now_s();
   first_frame_ = output_->frames_shown();
+  const auto axes = odrive_->axes();
+  last_pos_turns_ = {axes[0].pos_turns, axes[1].pos_turns};
   report_.wait_for_robot_s = start_s_ - started_s;
   log_ << "flowsteer sil: the robot activated its drive after " << report_.wait_for_robot_s
        << " s; the world runs\n";
 }
 
-drivers::BodyVelocity RobotInTheLoop::wheel_motion(double now_s) {
+drivers::BodyVelocity RobotInTheLoop::wheel_motion(double now_s, double dt) {
   const auto axes = odrive_->axes();
   const std::array<const drivers::OdriveAxisConfig*, 2> configs{&link_.odrive.left,
                                                                 &link_.odrive.right};
   std::array<double, 2> wheel_radps{};
   for (std::size_t i = 0; i < 2; ++i) {
-    wheel_radps[i] = axes[i].vel_turns_per_s * link_.odrive.wheel_rad_per_turn(*configs[i]);
+    // Sampling the velocity once a step would turn the agent by other angles than the encoders
+    // report when the robot changes its command between steps: its odometry would drift from
+    // the world by the loop, not by the robot.
+    const double turned = axes[i].pos_turns - last_pos_turns_[i];
+    last_pos_turns_[i] = axes[i].pos_turns;
+    wheel_radps[i] = turned / dt * link_.odrive.wheel_rad_per_turn(*configs[i]);
     if (axes[i].setpoint_changed_s && *axes[i].setpoint_changed_s > last_setpoint_s_[i]) {
       last_setpoint_s_[i] = *axes[i].setpoint_changed_s;
       report_.command_to_motion.add(1e3 * (now_s - last_setpoint_s_[i]));

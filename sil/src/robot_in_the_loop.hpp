@@ -57,8 +57,10 @@ class RobotInTheLoop final : public eval::AgentDriver {
   void start_robot();
   // Waits for step k's time, then for the output's next frame.
   void wait_for_step(long k, double dt);
-  // The agent's speed and turn rate from the axes' velocities; records new setpoints' delays.
-  drivers::BodyVelocity wheel_motion(double now_s);
+  // The agent's speed and turn rate over a step of dt: what the wheels turned since the last
+  // step, so that the world moves as the robot's encoders say it did. Records new setpoints'
+  // delays.
+  drivers::BodyVelocity wheel_motion(double now_s, double dt);
   std::string read_robot_log();
   void write_report(const std::filesystem::path& path) const;
 
@@ -74,6 +76,7 @@ class RobotInTheLoop final : public eval::AgentDriver {
   double start_s_ = 0.0;           // the monotonic time of step 0
   long steps_ = 0;
   std::array<double, 2> last_setpoint_s_{-1.0, -1.0};
+  std::array<double, 2> last_pos_turns_{};  // the axes' positions at the last step
   SilReport report_;
 };
 

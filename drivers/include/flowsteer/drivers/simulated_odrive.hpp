@@ -31,6 +31,8 @@ class SimulatedOdrive {
     std::uint8_t state = odrive::kAxisStateIdle;
     // The velocity the motor turns at: the last Set_Input_Vel in closed-loop control, else 0.
     double vel_turns_per_s = 0.0;
+    // The position the velocity integrates to, as encoder estimates report it.
+    double pos_turns = 0.0;
     // When the last Set_Input_Vel that changed the setpoint arrived (the kernel's receive time
     // on base::monotonic_now_s()'s clock); none before the first.
     std::optional<double> setpoint_changed_s;
@@ -48,7 +50,6 @@ class SimulatedOdrive {
   struct AxisModel {
     Axis axis;
     double setpoint_turns_per_s = 0.0;
-    double pos_turns = 0.0;
   };
   void run();
   void serve();

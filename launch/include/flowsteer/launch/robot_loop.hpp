@@ -14,11 +14,11 @@
 namespace flowsteer::launch {
 
 // Where the goal lies now, tracked from its bearing and distance at the start by integrating
-// the base's measured motion (a unicycle; wheel slip accumulates, as with any odometry).
+// the base's wheel odometry (a unicycle; wheel slip accumulates, as with any odometry).
 class GoalTracker {
  public:
   explicit GoalTracker(const config::GoalSection& goal);
-  // Moves the robot by its measured speed and turn rate (positive right) over dt_s.
+  // Moves the robot by its mean speed and turn rate (positive right) over dt_s.
   void advance(const drivers::BodyVelocity& measured, double dt_s);
   // Bearing from the robot's heading, positive to the right, in (-π, π].
   double bearing_rad() const;
