@@ -143,10 +143,17 @@ class ThreatCones {
     entries_.clear();
     groups_.clear();
     const double kept_width_m = detail::kept_width(agent, options);
-    for (const ObjectFeatures& object : percept.objects) {
-      if (!detail::is_threat(object, options)) {
-        continue;
+    still_.clear();
+    still_.reserve(percept.objects.size());  // no reallocation: entries point into it
+    for (const ObjectFeatures& seen : percept.objects) {
+      const ObjectFeatures* threat = &seen;
+      if (!detail::is_threat(seen, options)) {
+        threat = as_walked_towards(seen, agent, options);
+        if (threat == nullptr) {
+          continue;
+        }
       }
+      const ObjectFeatures& object = *threat;
       const Cone cone = cone_of(object, agent, options, kept_width_m);
       if (!beyond_goal(cone, percept, kept_width_m) &&
           !passed_clear(object, agent, options, kept_width_m)) {
@@ -193,6 +200,35 @@ class ThreatCones {
            cone.nearest_m() > *percept.goal_distance_m + 0.5 * kept_width_m;
   }
 
+  // An agent at rest, or almost, sees no flow from what stands still around it: no expansion, no
+  // τ, nothing to avoid, and it set off into the wall or the neighbour it stood against, or
+  // stood facing someone who stood facing it, each waiting for the other. An object that shows
+  // no motion of its own, with depth, is then taken as the agent will see it once it walks at
+  // its preferred speed (margin_full_speed_mps): static, its FOE where the agent heads, τ its
+  // nearer end's depth over that speed. Null where the object is not such.
+  const ObjectFeatures* as_walked_towards(const ObjectFeatures& seen, const AgentState& agent,
+                                          const AvoidanceOptions& options) {
+    if (!(std::abs(agent.speed_mps) < options.min_speed_mps) || seen.kind != RegionKind::visible ||
+        !options.use_depth || !seen.min_x_depth_m || !seen.max_x_depth_m) {
+      return nullptr;
+    }
+    const std::optional<Eigen::Vector2d> motion = detail::relative_velocity(seen, agent, options);
+    if (motion && motion->norm() > options.min_speed_mps) {
+      return nullptr;
+    }
+    const double ttc_s =
+        std::min(*seen.min_x_depth_m, *seen.max_x_depth_m) / options.margin_full_speed_mps;
+    if (!(ttc_s <= options.horizon_s)) {
+      return nullptr;
+    }
+    ObjectFeatures& still = still_.emplace_back(seen);
+    still.status = MotionStatus::approaching;
+    still.foe = {0.0, std::isfinite(seen.foe.y()) ? seen.foe.y() : 0.0};
+    still.ttc_s = ttc_s;
+    still.fit.static_foe = true;
+    return &still;
+  }
+
   // A static object (by the fit) whose ends, taken as a segment on the ground, stay further than
   // half the kept width plus static_clearance_m from the agent for the whole horizon if it goes
   // straight on: a wall along the path, people standing beside the course. Their clearance cost
@@ -216,6 +252,7 @@ class ThreatCones {
            detail::distance_to_segment(ends[0], ends[1]) > radius_m;
   }
 
+  std::vector<ObjectFeatures> still_;  // as_walked_towards's objects of this step
   std::vector<Entry> entries_;
   std::vector<Group> groups_;
   std::vector<std::size_t> order_;
@@ -333,10 +370,12 @@ class HeadingTerm final : public CostTerm {
 
 class ApproachSpeedTerm final : public CostTerm {
  public:
-  ApproachSpeedTerm(double preferred_speed_mps, double max_turn_rate, double arrival_decel_mps2)
+  ApproachSpeedTerm(double preferred_speed_mps, double max_turn_rate, double arrival_decel_mps2,
+                    const AvoidanceOptions& options)
       : preferred_(preferred_speed_mps),
         turn_rate_(0.5 * max_turn_rate),
-        arrival_decel_(arrival_decel_mps2) {}
+        arrival_decel_(arrival_decel_mps2),
+        options_(options) {}
   std::string_view name() const override { return "approach_speed"; }
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     double target = preferred_;
@@ -350,14 +389,37 @@ class ApproachSpeedTerm final : public CostTerm {
       }
       target = std::min(target, std::sqrt(2.0 * arrival_decel_ * *percept.goal_distance_m));
     }
+    target =
+        std::min(target, std::sqrt(2.0 * options_.stop_decel_mps2 * course_room_m(percept, agent)));
     // v̇_c = a_c.
     return half_square(agent.speed_mps - target, FeatureRate{0.0, 1.0, 0.0});
   }
 
  private:
+  // How far the agent walks straight on before it comes within half its kept width of an object
+  // that is not approaching, taken as standing (with depth only). The braking term weighs what
+  // approaches against the speed to walk at, a cost beside this one's; for what stands, a target
+  // of zero is what keeps an agent that has stopped against a wall from setting off into it
+  // again, a step at a time.
+  double course_room_m(const Percept& percept, const AgentState& agent) const {
+    double room_m = std::numeric_limits<double>::infinity();
+    if (!options_.use_depth) {
+      return room_m;
+    }
+    const double radius_m = 0.5 * detail::kept_width(agent, options_);
+    for (const ObjectFeatures& object : percept.objects) {
+      if (object.kind == RegionKind::visible && object.min_x_depth_m && object.max_x_depth_m &&
+          !detail::is_threat(object, options_)) {
+        room_m = std::min(room_m, detail::course_room_m(object, agent, options_, radius_m));
+      }
+    }
+    return room_m;
+  }
+
   double preferred_;
   double turn_rate_;
   double arrival_decel_;
+  AvoidanceOptions options_;
 };
 
 class LeaderGapTerm final : public CostTerm {
@@ -405,14 +467,16 @@ std::unique_ptr<CostTerm> heading_term() {
 }
 
 std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate,
-                                              double arrival_decel_mps2) {
+                                              double arrival_decel_mps2,
+                                              const AvoidanceOptions& options) {
   if (!std::isfinite(preferred_speed_mps)) {
     throw std::invalid_argument("preferred speed must be finite");
   }
   require_positive(max_turn_rate, "approach speed: max_turn_rate");
   require_positive(arrival_decel_mps2, "approach speed: arrival_decel_mps2");
-  return std::make_unique<ApproachSpeedTerm>(preferred_speed_mps, max_turn_rate,
-                                             arrival_decel_mps2);
+  detail::validate(options);
+  return std::make_unique<ApproachSpeedTerm>(preferred_speed_mps, max_turn_rate, arrival_decel_mps2,
+                                             options);
 }
 
 std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options) {
@@ -449,8 +513,8 @@ NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& w,
   }
   NavigationFunction f;
   f.add(w.alpha, heading_term())
-      .add(w.beta,
-           approach_speed_term(w.preferred_speed_mps, w.max_turn_rate, w.arrival_decel_mps2))
+      .add(w.beta, approach_speed_term(w.preferred_speed_mps, w.max_turn_rate, w.arrival_decel_mps2,
+                                       avoidance))
       .add(w.gamma, clearance_term(avoidance))
       .add(w.braking, braking_term(avoidance))
       .add(w.anticipation, anticipation_term(avoidance));

@@ -85,4 +85,23 @@ void ends_of(const ObjectFeatures& object, const AgentState& agent, const Avoida
   ends[1] = {object.max_x * right_m, right_m};
 }
 
+double course_room_m(const ObjectFeatures& object, const AgentState& agent,
+                     const AvoidanceOptions& options, double radius_m) {
+  // Further than the agent stops from at any speed it walks at.
+  constexpr double kHiddenLength_m = 10.0;
+  Eigen::Vector2d ends[2];
+  ends_of(object, agent, options, ends);
+  const Eigen::Vector2d along = ends[1] - ends[0];
+  if (along.norm() > 1e-6) {
+    const Eigen::Vector2d hidden = kHiddenLength_m * along.normalized();
+    ends[0] -= object.cut_left ? hidden : Eigen::Vector2d::Zero();
+    ends[1] += object.cut_right ? hidden : Eigen::Vector2d::Zero();
+  }
+  const double now_m = distance_to_segment(ends[0], ends[1]);
+  Contact contact;
+  // Walking at 1 m/s towards a standing object: the contact's time is its distance.
+  segment_contact(ends[0], ends[1], {0.0, -1.0}, std::min(radius_m, 0.99 * now_m), contact);
+  return contact.time_s;
+}
+
 }  // namespace flowsteer::servo::detail

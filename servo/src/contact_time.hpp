@@ -42,4 +42,11 @@ std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
 void ends_of(const ObjectFeatures& object, const AgentState& agent, const AvoidanceOptions& options,
              Eigen::Vector2d ends[2]);
 
+// How far the agent can walk straight on before it comes within R of the object, taken as
+// standing still; infinity if it never does. An end the image cuts is taken to go on along the
+// object's line (a wall beside the agent, of which only the part ahead is in view). Within R
+// already, the distance until it comes nearer still (R taken at 0.99 of the distance now).
+double course_room_m(const ObjectFeatures& object, const AgentState& agent,
+                     const AvoidanceOptions& options, double radius_m);
+
 }  // namespace flowsteer::servo::detail

@@ -227,6 +227,8 @@ void validate(const AvoidanceOptions& o) {
           "min_speed_mps must be positive, got " + std::to_string(o.min_speed_mps));
   require(std::isfinite(o.margin_m) && o.margin_m >= 0.0,
           "margin_m must be >= 0, got " + std::to_string(o.margin_m));
+  require(std::isfinite(o.standing_margin_m) && o.standing_margin_m >= 0.0,
+          "standing_margin_m must be >= 0, got " + std::to_string(o.standing_margin_m));
   require(std::isfinite(o.margin_full_speed_mps) && o.margin_full_speed_mps > 0.0,
           "margin_full_speed_mps must be positive, got " + std::to_string(o.margin_full_speed_mps));
   require(std::isfinite(o.importance_slope) && std::isfinite(o.importance_intercept),

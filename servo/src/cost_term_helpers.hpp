@@ -51,10 +51,11 @@ inline double floored_speed(const AgentState& agent, const AvoidanceOptions& opt
 }
 
 // The width the flowsteer law's terms keep clear: the agent's own and its speed's share of the
-// margin.
+// margin, at least its standing part.
 inline double kept_width(const AgentState& agent, const AvoidanceOptions& options) {
   const double share = std::min(1.0, std::abs(agent.speed_mps) / options.margin_full_speed_mps);
-  return options.agent_width_m + options.margin_m * share;
+  return options.agent_width_m +
+         std::max(std::min(options.standing_margin_m, options.margin_m), options.margin_m * share);
 }
 
 // τ/Z of an approaching object and its depth: from the object's depth where the options use it

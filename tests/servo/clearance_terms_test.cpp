@@ -300,6 +300,87 @@ TEST(ApproachSpeedBehaviour, SlowsToStopAtTheGoal) {
   EXPECT_NEAR(term->evaluate({{}, 0.0, 0.25, {}}, {1.3}).per_accel, 1.3 - 0.5, 1e-12);
 }
 
+// A still object as an agent standing still sees it: no flow, so no fit; its ends' depths only.
+// Ends given on the ground in the agent's frame (x right, z forward).
+ObjectFeatures standing_object(Eigen::Vector2d left, Eigen::Vector2d right) {
+  ObjectFeatures o;
+  o.source_id = 7;
+  o.pixel_count = 500;
+  o.min_x = left.x() / left.y();
+  o.max_x = right.x() / right.y();
+  o.centre = {0.5 * (o.min_x + o.max_x), 0.0};
+  o.width = o.max_x - o.min_x;
+  o.min_x_depth_m = left.y();
+  o.max_x_depth_m = right.y();
+  o.depth_m = 0.5 * (left.y() + right.y());
+  return o;
+}
+
+// The agent 0.6 m wide with a margin of 0.5 m, of which 0.1 m kept at rest: it keeps 0.35 m
+// from its centre while it stands.
+AvoidanceOptions walker_options() {
+  AvoidanceOptions options = options_without_convention(0.6);
+  options.margin_m = 0.5;
+  options.margin_full_speed_mps = 1.3;
+  return options;
+}
+
+// At rest and facing a wall 0.5 m ahead, it may only set off at the speed it stops from within
+// the 0.15 m left: a target of 0 against the wall would hold it there.
+TEST(ApproachSpeedBehaviour, SetsOffNoFasterThanItStopsShortOfAStandingWall) {
+  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_options());
+  ObjectFeatures wall = standing_object({-0.5, 0.5}, {0.5, 0.5});
+  wall.cut_left = wall.cut_right = true;
+  const std::vector<ObjectFeatures> objects = {wall};
+  EXPECT_NEAR(term->evaluate({objects, 0.0, 10.0, {}}, {0.0}).per_accel, -std::sqrt(0.15), 1e-9);
+  EXPECT_NEAR(term->evaluate({{}, 0.0, 10.0, {}}, {0.0}).per_accel, -1.3, 1e-12);
+}
+
+TEST(ApproachSpeedBehaviour, AStandingWallAlongTheCourseDoesNotSlowIt) {
+  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_options());
+  const std::vector<ObjectFeatures> objects = {standing_object({1.0, 10.0}, {1.0, 1.0})};
+  EXPECT_NEAR(term->evaluate({objects, 0.0, 10.0, {}}, {0.0}).per_accel, -1.3, 1e-12);
+}
+
+// Heading 10° into a wall on its right that it stands 1 cm clear of: only the wall's part ahead is
+// in view, cut by the image's right edge. The hidden part, taken to go on along the wall's line,
+// is what its disc touches first, after 0.01 / sin 10° of walking.
+TEST(ApproachSpeedBehaviour, AWallCutByTheImageGoesOnBesideTheAgent) {
+  const double angle = 10.0 * std::numbers::pi / 180.0;
+  const Eigen::Vector2d normal{std::cos(angle), std::sin(angle)};  // towards the wall
+  const double distance = 0.35 + 0.01;
+  auto on_wall = [&](double z) {
+    return Eigen::Vector2d{(distance - z * normal.y()) / normal.x(), z};
+  };
+  ObjectFeatures wall = standing_object(on_wall(5.0), on_wall(1.0));
+  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_options());
+  auto target = [&](const ObjectFeatures& object) {
+    const std::vector<ObjectFeatures> objects = {object};
+    return -term->evaluate({objects, 0.0, 10.0, {}}, {0.0}).per_accel;
+  };
+  const double uncut = target(wall);
+  wall.cut_right = true;
+  EXPECT_NEAR(target(wall), std::sqrt(0.01 / std::sin(angle)), 1e-9);
+  EXPECT_GT(uncut, 2.0 * target(wall));
+}
+
+// Someone standing 1 m ahead, a little left of the agent's heading, both at rest: no flow, so
+// nothing to avoid by the fit, and each would wait for the other. The agent takes them as it
+// will see them once it walks, and turns to pass them on their right, the nearer way round.
+TEST(ClearanceBehaviour, AnAgentAtRestTurnsToPassSomeoneStandingInItsWay) {
+  const std::vector<ObjectFeatures> objects = {standing_object({-0.35, 1.0}, {0.15, 1.0})};
+  const auto term = clearance_term(walker_options());
+  const TermGradient at_rest = term->evaluate({objects, 0.0, 10.0, {}}, {0.0});
+  EXPECT_GT(at_rest.cost, 0.0);
+  Controller c(flowsteer_goal_reaching({}, walker_options()), 1.0, {1.0, 1.0});
+  EXPECT_GT(c.step({objects, 0.0, 10.0, {}}, {0.0}).command.turn_rate, 0.0);
+  // Walking, an object that shows no flow is not in the way; at rest, one beyond the horizon at
+  // the preferred speed is not either.
+  EXPECT_EQ(term->evaluate({objects, 0.0, 10.0, {}}, {0.5}).cost, 0.0);
+  const std::vector<ObjectFeatures> far = {standing_object({-3.5, 10.0}, {1.5, 10.0})};
+  EXPECT_EQ(term->evaluate({far, 0.0, 20.0, {}}, {0.0}).cost, 0.0);
+}
+
 TEST(LeaderGapGradient, MatchesSimulation) {
   test::TwoBody s;
   s.point = {5.0, 0.7};

@@ -66,6 +66,9 @@ struct AvoidanceOptions {
   // stepping slowly up to a goal beside someone.
   double margin_m = 0.0;
   double margin_full_speed_mps = 1.0;
+  // Of margin_m, what is kept at any speed, even at rest: without it an agent stepping slowly
+  // along a wall or up to a neighbour keeps exactly its own width and touches at the first error.
+  double standing_margin_m = 0.1;
   // I(τ) = slope·τ + intercept for 0 ≤ τ ≤ horizon, zero outside (CGF Eq. 9: −2, 10, 5 s).
   double importance_slope = -2.0;
   double importance_intercept = 10.0;
@@ -113,13 +116,16 @@ std::unique_ptr<CostTerm> leader_speed_term(const AvoidanceOptions& options = {}
 // L_θ = ½ θ², θ = atan t_x the goal's bearing: ω = λ α θ stays bounded for a goal beside or behind
 // the agent, where L_t's t_x (1 + t_x²) grows without bound and outweighs any avoidance.
 std::unique_ptr<CostTerm> heading_term();
-// L_v = ½ (v_c − v_t)² with v_t = min(v*, ω_t d / (2 sin|θ|), √(2 a_g d)): no faster than lets
-// the agent turn onto a goal d away at bearing θ at turn rate ω_t (half the controller's limit),
-// so that it does not circle a goal inside its turning circle (sin|θ| taken as 1 beyond 90°), and
-// no faster than it stops from at the goal at a_g (arrival_decel_mps2), as a walker slows to step
-// up to a goal beside others.
+// L_v = ½ (v_c − v_t)² with v_t = min(v*, ω_t d / (2 sin|θ|), √(2 a_g d), √(2 a_b s)): no faster
+// than lets the agent turn onto a goal d away at bearing θ at turn rate ω_t (half the controller's
+// limit), so that it does not circle a goal inside its turning circle (sin|θ| taken as 1 beyond
+// 90°), no faster than it stops from at the goal at a_g (arrival_decel_mps2), as a walker slows to
+// step up to a goal beside others, and no faster than it stops from at a_b (stop_decel_mps2)
+// within s, how far it walks straight on before it comes within half its kept width of a visible
+// object that is not approaching, taken as standing (objects with depth only).
 std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate,
-                                              double arrival_decel_mps2 = 0.5);
+                                              double arrival_decel_mps2 = 0.5,
+                                              const AvoidanceOptions& options = {});
 // L_c = Σ_i I(τ_i) φ(c_i / σ_i) over approaching visible objects: c_i is the FOE's clearance from
 // the object's extent [min_x, max_x] widened at each end by half the kept width (agent_width_m and
 // the speed's share of margin_m) at that end's depth, on the side the agent passes it on; φ(u) =
