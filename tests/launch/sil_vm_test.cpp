@@ -29,7 +29,7 @@ using flowsteer::vm_test::stamp;
 constexpr unsigned kNodes[] = {3, 5};
 // The loop's robot sees its world through an emulated CPU, a few views a second, a view late by
 // its rendering and the robot's perception, where `flowsteer sim` sees every step at once: its
-// path may stray this far from the simulation's (measured: 1-4 cm; 0.64 m when the world moved
+// path may stray this far from the simulation's (measured: 1-3 cm; 0.64 m when the world moved
 // by the wheels' speeds at each step instead of their angles, as did the robot's goal tracker).
 constexpr double kMaxDeviationM = 0.25;
 constexpr double kStopWithinS = 0.5;  // from the camera's loss to a zero on the bus
