@@ -54,13 +54,11 @@ class AnticipationTerm final : public CostTerm {
       if (!velocity) {
         continue;
       }
-      Eigen::Vector2d ends[2];
-      detail::ends_of(object, agent, options_, ends);
-      const double now_m = detail::distance_to_segment(ends[0], ends[1]);
+      detail::outline_of(object, agent, options_, outline_);
+      const double now_m = detail::distance_to_outline(outline_);
       // Already nearer than R (which holds a margin): the contact is its coming nearer still.
       Contact contact;
-      detail::segment_contact(ends[0], ends[1], *velocity, std::min(radius_m, 0.99 * now_m),
-                              contact);
+      detail::outline_contact(outline_, *velocity, std::min(radius_m, 0.99 * now_m), contact);
       if (contact.time_s <= options_.horizon_s && !beyond_goal(percept, agent, contact)) {
         detail::accumulate(sum, gradient(contact, *velocity, agent));
       }
@@ -95,6 +93,7 @@ class AnticipationTerm final : public CostTerm {
   }
 
   AvoidanceOptions options_;
+  detail::Outline outline_;
 };
 
 }  // namespace

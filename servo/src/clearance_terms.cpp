@@ -243,13 +243,13 @@ class ThreatCones {
     if (!object.fit.static_foe || !velocity) {
       return false;
     }
-    Eigen::Vector2d ends[2];
-    detail::ends_of(object, agent, options, ends);
+    detail::Outline outline;
+    detail::outline_of(object, agent, options, outline);
     const double radius_m = 0.5 * kept_width_m + options.static_clearance_m;
     detail::Contact contact;
-    detail::segment_contact(ends[0], ends[1], *velocity, radius_m, contact);
+    detail::outline_contact(outline, *velocity, radius_m, contact);
     return !(contact.time_s <= options.horizon_s) &&
-           detail::distance_to_segment(ends[0], ends[1]) > radius_m;
+           detail::distance_to_outline(outline) > radius_m;
   }
 
   std::vector<ObjectFeatures> still_;  // as_walked_towards's objects of this step

@@ -54,11 +54,31 @@ void segment_contact(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const E
   }
 }
 
-double distance_to_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+Eigen::Vector2d nearest_on_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   const Eigen::Vector2d ab = b - a;
   const double length2 = ab.squaredNorm();
   const double t = length2 > 0.0 ? std::clamp(-a.dot(ab) / length2, 0.0, 1.0) : 0.0;
-  return (a + t * ab).norm();
+  return a + t * ab;
+}
+
+double distance_to_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return nearest_on_segment(a, b).norm();
+}
+
+void outline_contact(const Outline& outline, const Eigen::Vector2d& v, double radius_m,
+                     Contact& first) {
+  for (int i = 0; i + 1 < outline.count; ++i) {
+    segment_contact(outline.points[i], outline.points[i + 1], v, radius_m, first);
+  }
+}
+
+double distance_to_outline(const Outline& outline) {
+  double distance_m = std::numeric_limits<double>::infinity();
+  for (int i = 0; i + 1 < outline.count; ++i) {
+    distance_m =
+        std::min(distance_m, distance_to_segment(outline.points[i], outline.points[i + 1]));
+  }
+  return distance_m;
 }
 
 std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
@@ -75,32 +95,41 @@ std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
   return std::nullopt;
 }
 
-void ends_of(const ObjectFeatures& object, const AgentState& agent, const AvoidanceOptions& options,
-             Eigen::Vector2d ends[2]) {
+void outline_of(const ObjectFeatures& object, const AgentState& agent,
+                const AvoidanceOptions& options, Outline& outline) {
   const double depth = depth_scale(object, agent, options).depth_m;
   const bool depths = options.use_depth && object.min_x_depth_m && object.max_x_depth_m;
   const double left_m = depths ? *object.min_x_depth_m : depth;
   const double right_m = depths ? *object.max_x_depth_m : depth;
-  ends[0] = {object.min_x * left_m, left_m};
-  ends[1] = {object.max_x * right_m, right_m};
+  outline.count = 0;
+  outline.points[outline.count++] = {object.min_x * left_m, left_m};
+  if (depths && object.nearest_depth_m && object.nearest_x > object.min_x &&
+      object.nearest_x < object.max_x) {
+    outline.points[outline.count++] = {object.nearest_x * *object.nearest_depth_m,
+                                       *object.nearest_depth_m};
+  }
+  outline.points[outline.count++] = {object.max_x * right_m, right_m};
 }
 
 double course_room_m(const ObjectFeatures& object, const AgentState& agent,
                      const AvoidanceOptions& options, double radius_m) {
   // Further than the agent stops from at any speed it walks at.
   constexpr double kHiddenLength_m = 10.0;
-  Eigen::Vector2d ends[2];
-  ends_of(object, agent, options, ends);
-  const Eigen::Vector2d along = ends[1] - ends[0];
-  if (along.norm() > 1e-6) {
-    const Eigen::Vector2d hidden = kHiddenLength_m * along.normalized();
-    ends[0] -= object.cut_left ? hidden : Eigen::Vector2d::Zero();
-    ends[1] += object.cut_right ? hidden : Eigen::Vector2d::Zero();
-  }
-  const double now_m = distance_to_segment(ends[0], ends[1]);
+  Outline outline;
+  outline_of(object, agent, options, outline);
+  // A cut end goes on along its segment's line.
+  const auto extend = [&](bool cut, int end, int inner) {
+    const Eigen::Vector2d out = outline.points[end] - outline.points[inner];
+    if (cut && out.norm() > 1e-6) {
+      outline.points[end] += kHiddenLength_m * out.normalized();
+    }
+  };
+  extend(object.cut_left, 0, 1);
+  extend(object.cut_right, outline.count - 1, outline.count - 2);
+  const double now_m = distance_to_outline(outline);
   Contact contact;
   // Walking at 1 m/s towards a standing object: the contact's time is its distance.
-  segment_contact(ends[0], ends[1], {0.0, -1.0}, std::min(radius_m, 0.99 * now_m), contact);
+  outline_contact(outline, {0.0, -1.0}, std::min(radius_m, 0.99 * now_m), contact);
   return contact.time_s;
 }
 

@@ -1,10 +1,11 @@
 #pragma once
 
 // When an object will touch the agent if both go straight on, from the object's visual features:
-// its two ends on the ground and the relative velocity its flow shows. The anticipation term
+// its outline on the ground and the relative velocity its flow shows. The anticipation term
 // (anticipation_term.cpp) weighs what will touch the agent by this; the clearance term
 // (clearance_terms.cpp) leaves out what will not come near.
 
+#include <array>
 #include <limits>
 #include <optional>
 
@@ -28,8 +29,21 @@ struct Contact {
 void segment_contact(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& v,
                      double radius_m, Contact& first);
 
-// The distance from the agent to the segment [a, b].
+// The point of the segment [a, b] nearest the agent, and its distance.
+Eigen::Vector2d nearest_on_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b);
 double distance_to_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b);
+
+// An object on the ground in the agent's frame (x right, z forward, m): a polyline through its
+// left end, its nearest point where the features have one between the ends, and its right end.
+struct Outline {
+  std::array<Eigen::Vector2d, 3> points;
+  int count = 0;
+};
+
+// segment_contact over each of the outline's segments.
+void outline_contact(const Outline& outline, const Eigen::Vector2d& v, double radius_m,
+                     Contact& first);
+double distance_to_outline(const Outline& outline);
 
 // The object's velocity relative to the agent (x right, z forward, m/s) from its flow: V_z =
 // −Z/τ and V_x = f V_z at the depth the fit used (CGF Eq. 2–3); for lateral motion, the derotated
@@ -38,13 +52,14 @@ std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
                                                  const AgentState& agent,
                                                  const AvoidanceOptions& options);
 
-// The object's two ends on the ground in the agent's frame, (x Z, Z) at each end's depth.
-void ends_of(const ObjectFeatures& object, const AgentState& agent, const AvoidanceOptions& options,
-             Eigen::Vector2d ends[2]);
+// The object's outline, (x Z, Z) at each point's depth; without depths, its two ends at the depth
+// its τ gives (depth_scale).
+void outline_of(const ObjectFeatures& object, const AgentState& agent,
+                const AvoidanceOptions& options, Outline& outline);
 
 // How far the agent can walk straight on before it comes within R of the object, taken as
-// standing still; infinity if it never does. An end the image cuts is taken to go on along the
-// object's line (a wall beside the agent, of which only the part ahead is in view). Within R
+// standing still; infinity if it never does. An end the image cuts is taken to go on along its
+// segment's line (a wall beside the agent, of which only the part ahead is in view). Within R
 // already, the distance until it comes nearer still (R taken at 0.99 of the distance now).
 double course_room_m(const ObjectFeatures& object, const AgentState& agent,
                      const AvoidanceOptions& options, double radius_m);

@@ -458,6 +458,9 @@ struct FeatureExtractor::Accumulator {
   double max_x = -std::numeric_limits<double>::infinity();
   double min_x_depth = std::numeric_limits<double>::infinity();  // nearest in that column
   double max_x_depth = std::numeric_limits<double>::infinity();
+  double nearest_range2 = std::numeric_limits<double>::infinity();  // Z² (1 + x²)
+  double nearest_x = 0.0;
+  double nearest_depth = 0.0;
   double sum_u = 0.0;
   double sum_xu = 0.0;
   int depth_count = 0;  // over all pixels: the region's depth
@@ -499,6 +502,12 @@ struct FeatureExtractor::Accumulator {
     if (has_depth) {
       ++depth_count;
       sum_depth += depth;
+      if (const double range2 = column_depth * column_depth * (1.0 + x * x);
+          range2 < nearest_range2) {
+        nearest_range2 = range2;
+        nearest_x = x;
+        nearest_depth = column_depth;
+      }
     }
     if (!flow.allFinite()) {
       ++invalid;
@@ -530,6 +539,8 @@ struct FeatureExtractor::Accumulator {
     f.cut_right = max_x >= field.x(field.width() - 1);
     if (depth_count > 0) {
       f.depth_m = sum_depth / depth_count;
+      f.nearest_x = nearest_x;
+      f.nearest_depth_m = nearest_depth;
       if (std::isfinite(min_x_depth) && std::isfinite(max_x_depth)) {
         f.min_x_depth_m = min_x_depth;
         f.max_x_depth_m = max_x_depth;

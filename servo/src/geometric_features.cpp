@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include "contact_time.hpp"
+
 namespace flowsteer::servo {
 
 namespace {
@@ -33,6 +35,20 @@ bool clip(const std::vector<Eigen::Vector2d>& in, double a, double b, double c,
     }
   }
   return cut;
+}
+
+// The polygon's point nearest the camera (its boundary's: the camera is outside every body).
+void set_nearest_point(const std::vector<Eigen::Vector2d>& polygon, ObjectFeatures& f) {
+  Eigen::Vector2d nearest = polygon.front();
+  for (std::size_t i = 0; i < polygon.size(); ++i) {
+    const Eigen::Vector2d p =
+        detail::nearest_on_segment(polygon[i], polygon[(i + 1) % polygon.size()]);
+    if (p.squaredNorm() < nearest.squaredNorm()) {
+      nearest = p;
+    }
+  }
+  f.nearest_x = nearest.x() / nearest.y();
+  f.nearest_depth_m = nearest.y();
 }
 
 }  // namespace
@@ -99,6 +115,7 @@ std::span<const ObjectFeatures> GeometricFeatures::compute(std::span<const Geome
       }
       depth = std::min(depth, p.y());
     }
+    set_nearest_point(clip_in_, f);
     f.cut_left = cut_left;
     f.cut_right = cut_right;
     f.width = f.max_x - f.min_x;

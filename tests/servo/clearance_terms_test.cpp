@@ -364,6 +364,24 @@ TEST(ApproachSpeedBehaviour, AWallCutByTheImageGoesOnBesideTheAgent) {
   EXPECT_GT(uncut, 2.0 * target(wall));
 }
 
+// A building seen at its corner, 0.2 m right of the agent's course and 1.2 m ahead: one face runs
+// from the corner along the course to 8 m, the other to the right. The line between the region's
+// ends passes 0.2 m from the course only 8 m ahead; the corner, its nearest point, is what the
+// agent's disc (0.35 m at rest) touches first.
+TEST(ApproachSpeedBehaviour, ABuildingSeenAtItsCornerIsTouchedAtTheCorner) {
+  ObjectFeatures building = standing_object({0.2, 8.0}, {3.0, 1.2});
+  building.nearest_x = 0.2 / 1.2;
+  building.nearest_depth_m = 1.2;
+  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_options());
+  auto target = [&](const ObjectFeatures& object) {
+    const std::vector<ObjectFeatures> objects = {object};
+    return -term->evaluate({objects, 0.0, 10.0, {}}, {0.0}).per_accel;
+  };
+  EXPECT_NEAR(target(building), std::sqrt(1.2 - std::sqrt(0.35 * 0.35 - 0.2 * 0.2)), 1e-9);
+  building.nearest_depth_m.reset();
+  EXPECT_NEAR(target(building), 1.3, 1e-12);
+}
+
 // Someone standing 1 m ahead, a little left of the agent's heading, both at rest: no flow, so
 // nothing to avoid by the fit, and each would wait for the other. The agent takes them as it
 // will see them once it walks, and turns to pass them on their right, the nearer way round.

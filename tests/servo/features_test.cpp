@@ -381,6 +381,20 @@ TEST(FeatureExtractor, EmptyAndOnePixelRegionsAreReportedWithoutAFit) {
   EXPECT_GT(objects[1].width, 0.0);
 }
 
+// A box ahead and to the right, seen at its corner (4, -1): the region's nearest point on the
+// ground is there, within a pixel, and not at either end of the region.
+TEST(FeatureExtractor, ABoxSeenAtItsCornerIsNearestThere) {
+  SceneObject box = panel(8, 5.0, -2.0, 2.0, {0.0, 0.0});
+  box.length_m = 2.0;
+  const Extracted e = extract({"box at its corner", 0.0, box});
+  ASSERT_TRUE(e.features.nearest_depth_m.has_value());
+  const double pixel = 1.0 / base_scene().intrinsics.fx_px;
+  EXPECT_NEAR(e.features.nearest_x, 0.25, pixel);
+  EXPECT_NEAR(*e.features.nearest_depth_m, 4.0, 4.0 * pixel);
+  EXPECT_NEAR(*e.features.min_x_depth_m, 6.0, 0.1);
+  EXPECT_NEAR(*e.features.max_x_depth_m, 4.0, 0.1);
+}
+
 TEST(FeatureExtractor, RegionsReachingTheImageEdgeAreMarkedCut) {
   const base::CameraIntrinsics k = base::CameraIntrinsics::from_horizontal_fov(8, 6, 90.0 * kDeg);
   FlowField field(k);

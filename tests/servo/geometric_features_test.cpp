@@ -64,6 +64,21 @@ TEST(GeometricFeatures, SidesBehindAndEdgesOfTheView) {
   EXPECT_NEAR(*out[1].depth_m, 1.9 / right_edge, 1e-9);
 }
 
+// A box ahead and to the right, seen at its corner: its nearest point is the corner, not an end.
+TEST(GeometricFeatures, ABoxSeenAtItsCornerIsNearestThere) {
+  const auto box = square(5.0, -2.0, 1.0);  // corners at x 4..6, y -3..-1
+  const GeometricBody body{7, box, 1.8, {0.0, 0.0}};
+  GeometricFeatures features;
+  const auto out = features.compute({&body, 1}, kCamera, kMount, 1.0);
+  ASSERT_EQ(out.size(), 1U);
+  const ObjectFeatures& f = out[0];
+  EXPECT_NEAR(f.min_x, 1.0 / 6.0, 1e-12);  // the far corner of the face along the course
+  EXPECT_NEAR(f.max_x, 3.0 / 4.0, 1e-12);  // the far corner of the face towards the agent
+  ASSERT_TRUE(f.nearest_depth_m.has_value());
+  EXPECT_NEAR(f.nearest_x, 1.0 / 4.0, 1e-12);
+  EXPECT_NEAR(*f.nearest_depth_m, 4.0, 1e-12);
+}
+
 TEST(GeometricFeatures, MovingBodyHasTheAnalyticFoe) {
   AnalyticScene scene;
   scene.intrinsics = kCamera;

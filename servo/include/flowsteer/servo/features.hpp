@@ -64,6 +64,11 @@ struct ObjectFeatures {
   // two ends of a wall along the path are at very different depths.
   std::optional<double> min_x_depth_m;
   std::optional<double> max_x_depth_m;
+  // The region's point nearest the camera on the ground, Z √(1 + x²) smallest, at image column
+  // nearest_x and depth nearest_depth_m, when the field has depth: a building seen at its corner is
+  // nearest there, and the line between its ends passes behind the corner.
+  double nearest_x = 0.0;
+  std::optional<double> nearest_depth_m;
 
   MotionStatus status = MotionStatus::no_flow;
   Eigen::Vector2d foe = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
