@@ -381,6 +381,7 @@ class SimulationRun {
               .norm();
     }
     r.straight_line_m = straight_line_m(spec);
+    r.preferred_speed_mps = spec.preferred_speed_mps;
     const Effort effort =
         steersuite_effort(std::span(paths_[i]).first(r.turn_rates.size() + 1), spec_.step_s);
     r.active_time_s = effort.active_time_s;
@@ -462,6 +463,7 @@ RunSummary summarize(const SimResult& result) {
   double time_sum = 0.0;
   double path_sum = 0.0;
   double ratio_sum = 0.0;
+  double time_ratio_sum = 0.0;
   int ratios = 0;
   double score_sum = 0.0;
   for (const AgentResult& a : result.agents) {
@@ -471,6 +473,7 @@ RunSummary summarize(const SimResult& result) {
       // An agent whose goal is its start (one standing still) has no ratio.
       if (a.straight_line_m > 0.0) {
         ratio_sum += a.path_length_m / a.straight_line_m;
+        time_ratio_sum += a.time_to_goal_s * a.preferred_speed_mps / a.straight_line_m;
         ++ratios;
       }
     }
@@ -485,6 +488,7 @@ RunSummary summarize(const SimResult& result) {
   summary.mean_time_to_goal_s = summary.goals_reached > 0 ? time_sum / summary.goals_reached : nan;
   summary.mean_path_length_m = summary.agents > 0 ? path_sum / summary.agents : nan;
   summary.mean_path_length_ratio = ratios > 0 ? ratio_sum / ratios : nan;
+  summary.mean_time_ratio = ratios > 0 ? time_ratio_sum / ratios : nan;
   summary.composite01 = summary.agents > 0 ? score_sum / summary.agents : nan;
   return summary;
 }

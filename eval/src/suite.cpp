@@ -375,7 +375,8 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
   table << std::left << w(case_width) << "case" << w(configuration_width) << "configuration"
         << std::setw(11) << "status" << std::right << std::setw(10) << "collisions" << std::setw(8)
         << "goals" << std::setw(15) << "min_clearance" << std::setw(14) << "time_to_goal"
-        << std::setw(11) << "path_ratio" << std::setw(12) << "composite01"
+        << std::setw(11) << "path_ratio" << std::setw(11) << "time_ratio" << std::setw(12)
+        << "composite01"
         << "\n";
   for (const SuiteRun& run : runs) {
     table << std::left << w(case_width) << run.case_name << w(configuration_width)
@@ -393,8 +394,8 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
           << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents_with_goal()))
           << std::setw(15) << measure(s.min_clearance_m, " m") << std::setw(14)
           << measure(s.mean_time_to_goal_s, " s") << std::setw(11)
-          << measure(s.mean_path_length_ratio, "") << std::setw(12) << measure(s.composite01, "")
-          << "\n";
+          << measure(s.mean_path_length_ratio, "") << std::setw(11)
+          << measure(s.mean_time_ratio, "") << std::setw(12) << measure(s.composite01, "") << "\n";
   }
   print_configuration_totals(runs, table);
   out << table.str();

@@ -20,10 +20,10 @@ namespace {
 const char* const kHeader =
     "run,case,flow,segmentation,controller,law,resolution,status,agents,goals_reached,"
     "agents_with_goal,collisions,min_clearance_m,mean_time_to_goal_s,mean_path_length_m,"
-    "mean_path_length_ratio,"
+    "mean_path_length_ratio,mean_time_ratio,"
     "composite01,error";
-constexpr std::size_t kLabelColumns = 8;  // run ... status
-constexpr std::size_t kScoreColumns = 9;  // agents ... composite01
+constexpr std::size_t kLabelColumns = 8;   // run ... status
+constexpr std::size_t kScoreColumns = 10;  // agents ... composite01
 
 std::vector<std::string> split(const std::string& line, char separator) {
   std::vector<std::string> cells;
@@ -194,6 +194,7 @@ std::string summary_fields(const RunSummary& s) {
                                         s.mean_time_to_goal_s,
                                         s.mean_path_length_m,
                                         s.mean_path_length_ratio,
+                                        s.mean_time_ratio,
                                         s.composite01};
   std::string fields;
   for (std::size_t k = 0; k < kScoreColumns; ++k) {
@@ -222,7 +223,8 @@ RunSummary parse_summary_fields(const std::string& text, const std::string& sour
   s.mean_time_to_goal_s = real(5);
   s.mean_path_length_m = real(6);
   s.mean_path_length_ratio = real(7);
-  s.composite01 = real(8);
+  s.mean_time_ratio = real(8);
+  s.composite01 = real(9);
   return s;
 }
 

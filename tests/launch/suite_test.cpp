@@ -58,6 +58,7 @@ TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
   straight.time_to_goal_s = 10.0;
   straight.path_length_m = 12.0;
   straight.straight_line_m = 10.0;
+  straight.preferred_speed_mps = 1.25;
   straight.active_time_s = 10.0;
   straight.kinetic_energy_sum = 20.0;
   straight.min_clearance_m = 0.4;
@@ -75,6 +76,7 @@ TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
   EXPECT_EQ(s.goals_reached, 1);
   EXPECT_FALSE(s.clean());
   EXPECT_DOUBLE_EQ(s.mean_path_length_ratio, 1.2);  // only agents that arrived
+  EXPECT_DOUBLE_EQ(s.mean_time_ratio, 1.25);        // 10 s for what takes 8 s at 1.25 m/s
   EXPECT_DOUBLE_EQ(s.min_clearance_m, -0.1);
   EXPECT_DOUBLE_EQ(s.composite01, ((0 + 10 + 20) + (100 + 30 + 4)) / 2.0);
 }
@@ -100,7 +102,12 @@ TEST(SuiteScore, AnAgentsEffortStopsWhenItReachesItsGoal) {
   const RunSummary s = summarize(result);
   EXPECT_GE(s.mean_path_length_ratio, 1.0);
   EXPECT_LT(s.mean_path_length_ratio, 1.1);  // straight, overshooting the circle by a step
-  const AgentResult& b = result.agents[1];   // walks the whole run
+  // It walks at its preferred speed from the start: its time is the straight line's, and a step.
+  EXPECT_DOUBLE_EQ(s.mean_time_ratio,
+                   a.time_to_goal_s * world.agents[0].preferred_speed_mps / a.straight_line_m);
+  EXPECT_GE(s.mean_time_ratio, 1.0);
+  EXPECT_LT(s.mean_time_ratio, 1.1);
+  const AgentResult& b = result.agents[1];  // walks the whole run
   EXPECT_NEAR(b.active_time_s, result.duration_s, 1e-9);
   EXPECT_NEAR(s.composite01,
               (a.active_time_s + a.kinetic_energy_sum + b.active_time_s + b.kinetic_energy_sum) / 2,

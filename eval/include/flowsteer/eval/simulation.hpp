@@ -62,6 +62,7 @@ struct AgentResult {
   // From its start through its goals in order to its last goal's circle, where it arrives; NaN
   // for followers.
   double straight_line_m = std::numeric_limits<double>::quiet_NaN();
+  double preferred_speed_mps = std::numeric_limits<double>::quiet_NaN();
   // SteerSuite's effort over the steps the agent steered (see steersuite_effort).
   double active_time_s = 0.0;
   double kinetic_energy_sum = 0.0;
@@ -112,6 +113,9 @@ struct RunSummary {
   // Path length over straight line (start through the goals), over the agents that reached
   // a goal away from their start (NaN if none).
   double mean_path_length_ratio = 0.0;
+  // Time to goal over the straight line's time at the agent's preferred speed, over the same
+  // agents (NaN if none): how much its start, its detours and its waits cost it.
+  double mean_time_ratio = 0.0;
   double composite01 = 0.0;  // the mean of the agents' composite01 (NaN without agents)
   int agents_with_goal() const { return agents - followers; }
   // No collision, and every agent that has a goal reached it.
