@@ -382,21 +382,44 @@ TEST(ApproachSpeedBehaviour, ABuildingSeenAtItsCornerIsTouchedAtTheCorner) {
   EXPECT_NEAR(target(building), 1.3, 1e-12);
 }
 
-// Someone standing 1 m ahead, a little left of the agent's heading, both at rest: no flow, so
+// Someone standing 0.5 m ahead, a little left of the agent's heading, both at rest: no flow, so
 // nothing to avoid by the fit, and each would wait for the other. The agent takes them as it
 // will see them once it walks, and turns to pass them on their right, the nearer way round.
 TEST(ClearanceBehaviour, AnAgentAtRestTurnsToPassSomeoneStandingInItsWay) {
-  const std::vector<ObjectFeatures> objects = {standing_object({-0.35, 1.0}, {0.15, 1.0})};
+  const std::vector<ObjectFeatures> objects = {standing_object({-0.35, 0.5}, {0.15, 0.5})};
   const auto term = clearance_term(walker_options());
   const TermGradient at_rest = term->evaluate({objects, 0.0, 10.0, {}}, {0.0});
   EXPECT_GT(at_rest.cost, 0.0);
   Controller c(flowsteer_goal_reaching({}, walker_options()), 1.0, {1.0, 1.0});
   EXPECT_GT(c.step({objects, 0.0, 10.0, {}}, {0.0}).command.turn_rate, 0.0);
-  // Walking, an object that shows no flow is not in the way; at rest, one beyond the horizon at
-  // the preferred speed is not either.
+  // Walking, an object that shows no flow is not in the way. At rest, one further than half the
+  // kept width and static_clearance_m is not either: nothing touches an agent that stands (the
+  // approach speed holds it short of them, and the fit sees them once it walks).
   EXPECT_EQ(term->evaluate({objects, 0.0, 10.0, {}}, {0.5}).cost, 0.0);
-  const std::vector<ObjectFeatures> far = {standing_object({-3.5, 10.0}, {1.5, 10.0})};
-  EXPECT_EQ(term->evaluate({far, 0.0, 20.0, {}}, {0.0}).cost, 0.0);
+  const std::vector<ObjectFeatures> metre = {standing_object({-0.35, 1.0}, {0.15, 1.0})};
+  EXPECT_EQ(term->evaluate({metre, 0.0, 10.0, {}}, {0.0}).cost, 0.0);
+}
+
+// A wall on the right that the agent's heading meets 9.4 m ahead, its far end 8 m ahead and
+// 0.235 m right of the course, its near end cut by the image beside the agent. Its fit, pulled
+// towards the near pixels, gives τ = 0.8 s for a mean depth of 2.5 m. At 1 m/s the agent's disc
+// (0.3 m and static_clearance_m) reaches the far end in 7.5 s, beyond the horizon: the wall is
+// passed clear and costs nothing. Its velocity taken as Z/τ, 3.1 m/s, put that within 2.4 s. At
+// 2 m/s it is 3.75 s away and in the way.
+TEST(ClearanceBehaviour, AStaticWallIsApproachedAtTheAgentsOwnSpeed) {
+  const double slope = std::tan(0.18);
+  auto on_wall = [&](double z) { return Eigen::Vector2d{1.69 - z * slope, z}; };
+  ObjectFeatures wall = standing_object(on_wall(8.0), on_wall(0.44));
+  wall.cut_right = true;
+  wall.status = MotionStatus::approaching;
+  wall.foe = {0.0, 0.0};
+  wall.ttc_s = 0.8;
+  wall.depth_m = 2.5;
+  wall.fit.static_foe = true;
+  const std::vector<ObjectFeatures> objects = {wall};
+  const auto term = clearance_term(options_without_convention(0.6));
+  EXPECT_EQ(term->evaluate({objects, 0.0, 20.0, {}}, {1.0}).cost, 0.0);
+  EXPECT_GT(term->evaluate({objects, 0.0, 20.0, {}}, {2.0}).cost, 0.0);
 }
 
 TEST(LeaderGapGradient, MatchesSimulation) {
