@@ -54,11 +54,12 @@ class AnticipationTerm final : public CostTerm {
       if (!velocity) {
         continue;
       }
-      detail::outline_of(object, agent, options_, outline_);
-      const double now_m = detail::distance_to_outline(outline_);
+      detail::Outline outline;
+      detail::outline_of(object, agent, options_, outline);
+      const double now_m = detail::distance_to_outline(outline);
       // Already nearer than R (which holds a margin): the contact is its coming nearer still.
       Contact contact;
-      detail::outline_contact(outline_, *velocity, std::min(radius_m, 0.99 * now_m), contact);
+      detail::outline_contact(outline, *velocity, std::min(radius_m, 0.99 * now_m), contact);
       if (contact.time_s <= options_.horizon_s && !beyond_goal(percept, agent, contact)) {
         detail::accumulate(sum, gradient(contact, *velocity, agent));
       }
@@ -93,7 +94,6 @@ class AnticipationTerm final : public CostTerm {
   }
 
   AvoidanceOptions options_;
-  detail::Outline outline_;
 };
 
 }  // namespace

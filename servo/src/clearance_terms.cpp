@@ -61,7 +61,9 @@ struct Cone {
 
   // The distance to the object's nearest point, the object taken as the plane through its ends
   // (on the ground, a segment). Where the image cuts it, its hidden part may be nearer than what
-  // is seen, and the nearer end's depth is taken instead.
+  // is seen, and the nearer end's depth is taken instead. Not the outline (contact_time.hpp): for
+  // the goal's rule a person standing at the next goal, nearer by the front of their body, is
+  // not in the way of the last step to the agent's own (NAVIGATION.md, session 28).
   double nearest_m() const {
     if (cut) {
       return std::min(depth[0], depth[1]);
