@@ -187,6 +187,7 @@ class ThreatCones {
   }
 
   std::span<Entry> entries() { return entries_; }
+  std::span<const Entry> entries() const { return entries_; }
   std::span<const Group> groups() const { return groups_; }
 
  private:
@@ -269,7 +270,8 @@ class ClearanceTerm final : public CostTerm {
     cones_.build(percept, agent, options_);
     group_ends_.clear();
     for (std::size_t g = 0; g < cones_.groups().size(); ++g) {
-      group_ends_.push_back(passing_end(static_cast<int>(g)));
+      const int yielding = yield_end(static_cast<int>(g), agent);
+      group_ends_.push_back(yielding >= 0 ? yielding : passing_end(static_cast<int>(g)));
     }
     TermGradient sum;
     for (const ThreatCones::Entry& entry : cones_.entries()) {
@@ -318,6 +320,45 @@ class ClearanceTerm final : public CostTerm {
       score[previous > 0.0 ? 0 : 1] += options_.commit_band;
     }
     return score[0] >= score[1] ? 0 : 1;
+  }
+
+  // The end a group is passed by to give way to a member crossing the agent's path faster than
+  // the agent walks (a car): the end the object leaves behind, −1 where the group has no such
+  // member or the agent can no longer stop short of the band the member sweeps (it is on that
+  // band or nearly; then it passes as it would anything else). The ends' image gaps say nothing
+  // of which way is safe here: stopping always lets a crossing object pass (the FOE goes out by
+  // its rear end as v_c falls), passing in front means outrunning it, and the gradient's way to
+  // pass in front of a car coming from the left (speed up, turn right) turned the car out of a
+  // 150° view, after which the agent walked into its side (`street`). Objects with depth only:
+  // without it the speed over the ground is the depth-free guess's (MIG's τ v_c / Z), not a
+  // measurement.
+  int yield_end(int group, const AgentState& agent) const {
+    const double fast_mps = options_.yield_speed_ratio * options_.margin_full_speed_mps;
+    const double stop_m = agent.speed_mps * agent.speed_mps / (2.0 * options_.stop_decel_mps2);
+    const double half_width_m = 0.5 * detail::kept_width(agent, options_);
+    double across = 0.0;  // the yielded-to members' velocities across the course
+    for (const ThreatCones::Entry& entry : cones_.entries()) {
+      const ObjectFeatures& object = *entry.object;
+      const bool measured = options_.use_depth && object.min_x_depth_m && object.max_x_depth_m;
+      const std::optional<Eigen::Vector2d> relative =
+          entry.group == group && measured && !object.fit.static_foe
+              ? detail::relative_velocity(object, agent, options_)
+              : std::nullopt;
+      if (!relative) {
+        continue;
+      }
+      const Eigen::Vector2d ground = *relative + Eigen::Vector2d{0.0, agent.speed_mps};
+      if (!(ground.norm() > fast_mps && std::abs(ground.x()) > std::abs(ground.y()))) {
+        continue;
+      }
+      detail::Outline outline;
+      detail::outline_of(object, agent, options_, outline);
+      if (detail::distance_to_path_m(outline, ground, half_width_m) > stop_m) {
+        across += ground.x();
+      }
+    }
+    // Moving right, an object's rear is its left end: passed by end 0.
+    return across > 0.0 ? 0 : across < 0.0 ? 1 : -1;
   }
 
   AvoidanceOptions options_;

@@ -81,6 +81,18 @@ double distance_to_outline(const Outline& outline) {
   return distance_m;
 }
 
+double distance_to_path_m(const Outline& outline, const Eigen::Vector2d& v, double half_width_m) {
+  if (v.x() == 0.0) {
+    return std::numeric_limits<double>::infinity();
+  }
+  double distance_m = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < outline.count; ++i) {
+    const Eigen::Vector2d& p = outline.points[i];
+    distance_m = std::min(distance_m, p.y() - p.x() * v.y() / v.x());
+  }
+  return distance_m - half_width_m * v.norm() / std::abs(v.x());
+}
+
 std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
                                                  const AgentState& agent,
                                                  const AvoidanceOptions& options) {

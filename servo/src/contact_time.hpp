@@ -45,6 +45,12 @@ void outline_contact(const Outline& outline, const Eigen::Vector2d& v, double ra
                      Contact& first);
 double distance_to_outline(const Outline& outline);
 
+// How far along the agent's course (its z axis) the band that the outline sweeps, moving over
+// the ground at velocity v (agent frame), begins: the nearest point where a point of the outline
+// crosses the course, less half_width_m measured along the course. Negative where the agent is
+// on the band already; infinity for v along the course.
+double distance_to_path_m(const Outline& outline, const Eigen::Vector2d& v, double half_width_m);
+
 // The object's velocity relative to the agent (x right, z forward, m/s) from its flow: V_z =
 // −Z/τ and V_x = f V_z at the depth the fit used (CGF Eq. 2–3), V_z = −v_c for an object the fit
 // finds static; for lateral motion, the derotated flow u = V_x / Z gives V_x = mean(u) /

@@ -237,6 +237,8 @@ void validate(const AvoidanceOptions& o) {
           "commit_band must be >= 0, got " + std::to_string(o.commit_band));
   require(std::isfinite(o.passing_band) && o.passing_band >= 0.0,
           "passing_band must be >= 0, got " + std::to_string(o.passing_band));
+  require(o.yield_speed_ratio > 0.0,
+          "yield_speed_ratio must be positive, got " + std::to_string(o.yield_speed_ratio));
   require(std::isfinite(o.stop_decel_mps2) && o.stop_decel_mps2 > 0.0,
           "stop_decel_mps2 must be positive, got " + std::to_string(o.stop_decel_mps2));
   require(std::isfinite(o.anticipation_s) && o.anticipation_s > 0.0,

@@ -212,6 +212,54 @@ TEST(ClearanceBehaviour, AStaticObjectTheCoursePassesClearOfIsLeftOut) {
   EXPECT_GT(cost(wall), 0.0);
 }
 
+// A car 1.8 m wide and 4.2 m long crossing from the left at 2.5 m/s on a collision course with
+// an agent walking at 1 m/s (CGF's street): its near side 4.1 m ahead, its front corner where the
+// agent's course and its path meet after 5 s. Seen by the agent at 68° to the left, the FOE lies
+// nearer its front end than its rear in the image, and the clearance term, left to the image
+// gaps, passes in front: it speeds the agent up. A car is passed behind: the term brakes.
+ObjectFeatures crossing_car(double near_side_m, double agent_speed_mps) {
+  test::TwoBody front;  // x forward, y left: the car moves to the agent's right
+  front.agent_speed = agent_speed_mps;
+  front.point = {near_side_m, 2.5 * (near_side_m + 0.9)};
+  front.point_velocity = {0.0, -2.5};
+  test::TwoBody rear = front;
+  rear.point.y() += 4.2;
+  ObjectFeatures car = point_object(front, 3);
+  car.min_x = rear.image_x();
+  car.min_x_depth_m = rear.depth();
+  car.centre = {0.5 * (car.min_x + car.max_x), 0.0};
+  car.width = car.max_x - car.min_x;
+  return car;
+}
+
+TEST(ClearanceBehaviour, ACarCrossingThePathIsPassedBehind) {
+  const std::vector<ObjectFeatures> objects = {crossing_car(4.1, 1.0)};
+  AvoidanceOptions options = options_without_convention(0.6);
+  const TermGradient yielding = clearance_term(options)->evaluate({objects, {}, {}, {}}, {1.0});
+  options.yield_speed_ratio = std::numeric_limits<double>::infinity();
+  const TermGradient by_the_gaps = clearance_term(options)->evaluate({objects, {}, {}, {}}, {1.0});
+  EXPECT_GT(yielding.per_accel, 0.0);  // a_c = −λ ∂L̇/∂a_c < 0: it slows and lets the car pass
+  EXPECT_LT(by_the_gaps.per_accel, 0.0);
+}
+
+// The same car with its near side 1.2 m ahead (its path 0.9 m ahead for the agent's disc), the
+// agent at 1.5 m/s: it stops in 2.25 m at stop_decel_mps2, inside the car's path. Braking would
+// leave it standing in the lane: it passes as it would anything else, here in front. At 0.5 m/s
+// it stops in 0.25 m and gives way.
+TEST(ClearanceBehaviour, ACarIsNotYieldedToWhereTheAgentCannotStopShortOfItsPath) {
+  AvoidanceOptions options = options_without_convention(0.6);
+  const auto yielding = clearance_term(options);
+  options.yield_speed_ratio = std::numeric_limits<double>::infinity();
+  const auto by_the_gaps = clearance_term(options);
+  const std::vector<ObjectFeatures> fast = {crossing_car(1.2, 1.5)};
+  const TermGradient in_front = yielding->evaluate({fast, {}, {}, {}}, {1.5});
+  EXPECT_LT(in_front.per_accel, 0.0);
+  EXPECT_EQ(in_front.per_accel, by_the_gaps->evaluate({fast, {}, {}, {}}, {1.5}).per_accel);
+  const std::vector<ObjectFeatures> slow = {crossing_car(1.2, 0.5)};
+  EXPECT_GT(yielding->evaluate({slow, {}, {}, {}}, {0.5}).per_accel, 0.0);
+  EXPECT_LT(by_the_gaps->evaluate({slow, {}, {}, {}}, {0.5}).per_accel, 0.0);
+}
+
 TEST(BrakingGradient, MatchesSimulation) {
   test::TwoBody s;  // a static obstacle 2 m ahead on course, the agent at 1.3 m/s
   s.point = {2.0, 0.0};

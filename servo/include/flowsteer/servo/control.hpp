@@ -87,6 +87,11 @@ struct AvoidanceOptions {
   // whose two ways round differ by less than this is passed on the convention's side).
   PassingSide passing_side = PassingSide::keep_right;
   double passing_band = 1.0;
+  // The clearance term only: an object crossing the agent's path (its velocity over the ground
+  // more across the agent's course than along it) faster than this many times
+  // margin_full_speed_mps, a car, is passed behind where the agent can still stop short of its
+  // path at stop_decel_mps2 (infinity: never).
+  double yield_speed_ratio = 1.5;
   // The braking term only: the deceleration it plans to stop with, short of an object ahead.
   double stop_decel_mps2 = 0.5;
   // The anticipation term only: τ0 of its energy, how far ahead in time contacts matter.
