@@ -74,7 +74,7 @@ TEST(Demo, DefaultSceneSeesEveryObjectAndSteers) {
   run_demo(default_demo_scene(), out);
   const std::string text = out.str();
   EXPECT_NE(text.find("command: a_c = "), std::string::npos) << text;
-  for (const char* term : {"goal", "speed", "avoidance"}) {
+  for (const char* term : {"heading", "approach_speed", "clearance", "braking", "anticipation"}) {
     EXPECT_NE(text.find(term), std::string::npos) << term;
   }
   // The post stands right of the heading, close: the agent turns left around it.

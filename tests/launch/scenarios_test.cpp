@@ -104,8 +104,10 @@ INSTANTIATE_TEST_SUITE_P(Papers, NumericalFlowScenario,
 
 TEST(Scenarios, StreetCarsHitAgentsThatDoNotAvoid) {
   sim_camera::WorldSpec street = builtin_scenario("street");
-  for (auto& a : street.agents) {
+  for (auto& a : street.agents) {  // no term that avoids: clearance, braking, anticipation
     a.controller.gamma = 0.0;
+    a.controller.braking = 0.0;
+    a.controller.anticipation = 0.0;
   }
   SimOptions options;
   options.resolution = 48;
@@ -329,7 +331,7 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
   EXPECT_EQ(rows, 10 * 6);
   std::ifstream costs(dir / "costs.csv");
   std::getline(costs, header);
-  EXPECT_EQ(header, "t,agent,goal,speed,avoidance,total");
+  EXPECT_EQ(header, "t,agent,heading,approach_speed,clearance,braking,anticipation,total");
   std::stringstream summary;
   summary << std::ifstream(dir / "summary.json").rdbuf();
   for (const char* key : {"\"reached_goal\"", "\"time_to_goal_s\"", "\"path_length_m\"",

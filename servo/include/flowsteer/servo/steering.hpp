@@ -19,8 +19,8 @@ enum class SteeringModel { vision, geometric, motion_energy };
 enum class NavigationKind { goal_reaching, following };
 // The navigation function that models vision and geometric descend: the papers' as published
 // (with DESIGN.md's sign corrections), kept exactly so that comparisons with the papers stay
-// honest, or the project's own law (docs/NAVIGATION.md). cgf2019 is the default until flowsteer
-// holds on the whole suite; mig2019 is cgf2019 with MIG 2019's weights, dark regions included.
+// honest, or the project's own law (docs/NAVIGATION.md), the default; mig2019 is cgf2019 with
+// MIG 2019's weights, dark regions included.
 enum class NavigationLaw { flowsteer, cgf2019, mig2019 };
 // Where motion energy's "mass" and "floor" pixels come from: the renderer's object ids, or the
 // flat-ground test on the flow, as a real camera would give them.
@@ -43,7 +43,7 @@ std::string navigation_law_names();
 struct ControllerConfig {
   SteeringModel model = SteeringModel::vision;
   NavigationKind kind = NavigationKind::goal_reaching;
-  NavigationLaw law = NavigationLaw::cgf2019;
+  NavigationLaw law = NavigationLaw::flowsteer;
   // The weights of the law's terms; each one not set is the law's own (navigation_weights).
   // Dark regions (MIG 2019): with delta > 0 the agent looks for them and avoids them; with 0 it
   // ignores them, as MIG's agents without dark-region awareness do. braking and anticipation: law
