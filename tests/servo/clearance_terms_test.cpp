@@ -213,10 +213,10 @@ TEST(ClearanceBehaviour, AStaticObjectTheCoursePassesClearOfIsLeftOut) {
 }
 
 // A car 1.8 m wide and 4.2 m long crossing from the left at 2.5 m/s on a collision course with
-// an agent walking at 1 m/s (CGF's street): its near side 4.1 m ahead, its front corner where the
-// agent's course and its path meet after 5 s. Seen by the agent at 68° to the left, the FOE lies
-// nearer its front end than its rear in the image, and the clearance term, left to the image
-// gaps, passes in front: it speeds the agent up. A car is passed behind: the term brakes.
+// an agent walking at 1 m/s (CGF's street): its near side 4.1 m ahead, its front corner 12.5 m to
+// the left, so that both reach the point 5 m ahead after 5 s. Seen by the agent 72° to the left,
+// the FOE lies nearer its front end than its rear in the image, and the clearance term, left to
+// the image gaps, passes in front: it speeds the agent up. A car is passed behind: the term brakes.
 ObjectFeatures crossing_car(double near_side_m, double agent_speed_mps) {
   test::TwoBody front;  // x forward, y left: the car moves to the agent's right
   front.agent_speed = agent_speed_mps;
