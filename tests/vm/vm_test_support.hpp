@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <optional>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -38,6 +39,14 @@ inline std::string run_command(const std::string& command, int& status) {
   const int raw = ::pclose(pipe);
   status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
   return out;
+}
+
+// Whether a run's log says the camera `device` went away while streaming. The kernel fails the
+// next buffer ioctl with ENODEV: VIDIOC_DQBUF when the run was waiting for a frame, VIDIOC_QBUF
+// when it had just dequeued the last one; which comes first depends on timing alone.
+inline bool says_camera_gone(const std::string& log, const std::string& device) {
+  return std::regex_search(log,
+                           std::regex("VIDIOC_D?QBUF on " + device + " failed: No such device"));
 }
 
 // Calls on_line(line) for each line of the console, without the '\r' the serial port adds.
