@@ -277,7 +277,9 @@ class ClearanceTerm final : public CostTerm {
     for (const ThreatCones::Entry& entry : cones_.entries()) {
       const Cone& cone = entry.cone;
       const int end = group_ends_[static_cast<std::size_t>(entry.group)];
-      sides_.remember(entry.object->source_id, end == 0 ? 1.0 : -1.0);
+      const double side = end == 0 ? 1.0 : -1.0;
+      sides_.remember(entry.object->source_id, side,
+                      held_for(entry.object->source_id, side, agent));
       // The widened end is a point of the object (same τ/Z, its own depth): its separation from
       // the FOE moves by CGF Eq. 10. The clearance is that separation, signed to be positive
       // outside, over σ.
@@ -298,10 +300,11 @@ class ClearanceTerm final : public CostTerm {
   // The end a group is passed by: the one with more clearance, except that the end its members
   // were passed by at the previous step keeps commit_band σ of advantage (no chatter between
   // both ways round) and the passing convention's end passing_band σ (two agents meeting
-  // head-on pass each other on the same side instead of mirroring each other). The ends are
-  // compared by their image gaps over the smaller σ, the far end's: over the near end's σ,
-  // which grows without bound as the agent closes in, the bands would outweigh any difference
-  // between the ways round, and an agent at a wall's near corner would be sent along the wall.
+  // head-on pass each other on the same side instead of mirroring each other), and that a
+  // member's held end (held_for) is kept outright. The ends are compared by their image gaps
+  // over the smaller σ, the far end's: over the near end's σ, which grows without bound as the
+  // agent closes in, the bands would outweigh any difference between the ways round, and an
+  // agent at a wall's near corner would be sent along the wall.
   int passing_end(int group) {
     const ThreatCones::Group& g = cones_.groups()[static_cast<std::size_t>(group)];
     const double sigma = std::min(g.sigma[0], g.sigma[1]);
@@ -312,14 +315,34 @@ class ClearanceTerm final : public CostTerm {
     }
     double previous = 0.0;  // the members' votes: +1 passed by end 0, -1 by end 1
     for (const ThreatCones::Entry& entry : cones_.entries()) {
-      const double* side =
-          entry.group == group ? sides_.previous_side(entry.object->source_id) : nullptr;
-      previous += side != nullptr ? *side : 0.0;
+      const detail::SideMemory::Taken* taken =
+          entry.group == group ? sides_.previous(entry.object->source_id) : nullptr;
+      if (taken != nullptr && taken->held_s > 0.0) {
+        return taken->side > 0.0 ? 0 : 1;
+      }
+      previous += taken != nullptr ? taken->side : 0.0;
     }
     if (previous != 0.0) {
       score[previous > 0.0 ? 0 : 1] += options_.commit_band;
     }
     return score[0] >= score[1] ? 0 : 1;
+  }
+
+  // How much longer the side taken for `id` is held: rest_commit_s from a change of side made at
+  // rest, less the time since. An agent at rest turns in place, and what it turns to or from
+  // enters or leaves its view while nothing moves: in hallway_two_way a wall coming into view
+  // joined the agent ahead into one group, passed by its other end; turning back took the wall
+  // out of view and the end back, and the agent turned at ±max_turn_rate every other step, face
+  // to face with the other one, until the run ended.
+  double held_for(std::int32_t id, double side, const AgentState& agent) const {
+    const detail::SideMemory::Taken* taken = sides_.previous(id);
+    if (taken == nullptr) {
+      return 0.0;
+    }
+    if (taken->side != side) {
+      return std::abs(agent.speed_mps) < options_.min_speed_mps ? options_.rest_commit_s : 0.0;
+    }
+    return std::max(0.0, taken->held_s - agent.period_s);
   }
 
   // The end a group is passed by to give way to a member crossing the agent's path faster than

@@ -235,6 +235,8 @@ void validate(const AvoidanceOptions& o) {
           "importance slope and intercept must be finite");
   require(std::isfinite(o.commit_band) && o.commit_band >= 0.0,
           "commit_band must be >= 0, got " + std::to_string(o.commit_band));
+  require(std::isfinite(o.rest_commit_s) && o.rest_commit_s >= 0.0,
+          "rest_commit_s must be >= 0, got " + std::to_string(o.rest_commit_s));
   require(std::isfinite(o.passing_band) && o.passing_band >= 0.0,
           "passing_band must be >= 0, got " + std::to_string(o.passing_band));
   require(o.yield_speed_ratio > 0.0,

@@ -99,26 +99,34 @@ void require_weight(double value, const char* name);
 // does. Objects are recognised by source id; those without one (-1) get no memory.
 class SideMemory {
  public:
+  // What is remembered of an object: the side taken (+1 or −1) and how much longer it is held
+  // whatever the object's features say (0: not held; ClearanceTerm's rest_commit_s).
+  struct Taken {
+    std::int32_t id;
+    double side;
+    double held_s;
+  };
+
   double side(std::int32_t id, double s, double sigma, double band) {
     double side = s >= 0.0 ? 1.0 : -1.0;
-    if (const double* previous = previous_side(id); previous && std::abs(s) < band * sigma) {
-      side = *previous;
+    if (const Taken* taken = previous(id); taken && std::abs(s) < band * sigma) {
+      side = taken->side;
     }
     remember(id, side);
     return side;
   }
-  // The side `id` had at the previous step, if it was seen then.
-  const double* previous_side(std::int32_t id) const {
-    for (const auto& [previous_id, previous_side] : previous_) {
-      if (previous_id == id && id >= 0) {
-        return &previous_side;
+  // What `id` had at the previous step, if it was seen then.
+  const Taken* previous(std::int32_t id) const {
+    for (const Taken& taken : previous_) {
+      if (taken.id == id && id >= 0) {
+        return &taken;
       }
     }
     return nullptr;
   }
-  void remember(std::int32_t id, double side) {
+  void remember(std::int32_t id, double side, double held_s = 0.0) {
     if (id >= 0) {
-      current_.emplace_back(id, side);
+      current_.push_back({id, side, held_s});
     }
   }
   // Call once per step, after every object: forgets the objects no longer seen.
@@ -128,8 +136,8 @@ class SideMemory {
   }
 
  private:
-  std::vector<std::pair<std::int32_t, double>> previous_;
-  std::vector<std::pair<std::int32_t, double>> current_;
+  std::vector<Taken> previous_;
+  std::vector<Taken> current_;
 };
 
 }  // namespace flowsteer::servo::detail

@@ -448,6 +448,38 @@ TEST(ClearanceBehaviour, AnAgentAtRestTurnsToPassSomeoneStandingInItsWay) {
   EXPECT_EQ(term->evaluate({metre, 0.0, 10.0, {}}, {0.0}).cost, 0.0);
 }
 
+// At rest with someone standing 0.5 m ahead, a little left: passed by their right end, nearer.
+// Turning right brings a wall into view whose extent, widened, meets theirs: the pair is passed
+// by its left end. Turning back takes the wall out of view, but the agent keeps the left end for
+// rest_commit_s (it turned at ±max_turn_rate every other step, face to face with the other);
+// after that, or with the hold off, the end follows what is in view.
+TEST(ClearanceBehaviour, AnAgentAtRestKeepsTheEndItChoseWhenTurningTakesAWallOutOfView) {
+  const ObjectFeatures person = standing_object({-0.45, 0.5}, {0.05, 0.5});
+  ObjectFeatures wall = standing_object({0.25, 0.45}, {1.0, 0.3});
+  wall.source_id = 8;
+  const std::vector<ObjectFeatures> alone = {person};
+  const std::vector<ObjectFeatures> with_wall = {person, wall};
+  const AgentState at_rest{0.0, 0.05};
+  auto turns = [&](CostTerm& term, const std::vector<ObjectFeatures>& objects) {
+    return -term.evaluate({objects, 0.0, 10.0, {}}, at_rest).per_turn;  // ω's sign
+  };
+  AvoidanceOptions options = walker_options();
+  const auto term = clearance_term(options);
+  EXPECT_GT(turns(*term, alone), 0.0);
+  EXPECT_LT(turns(*term, with_wall), 0.0);
+  int held_steps = 0;
+  while (turns(*term, alone) < 0.0 && held_steps < 100) {
+    ++held_steps;
+  }
+  EXPECT_NEAR(held_steps, 20, 1);  // 1 s of 0.05 s steps, counted down in floating point
+
+  options.rest_commit_s = 0.0;
+  const auto unheld = clearance_term(options);
+  EXPECT_GT(turns(*unheld, alone), 0.0);
+  EXPECT_LT(turns(*unheld, with_wall), 0.0);
+  EXPECT_GT(turns(*unheld, alone), 0.0);
+}
+
 // A wall on the right that the agent's heading meets 9.4 m ahead, its far end 8 m ahead and
 // 0.235 m right of the course, its near end cut by the image beside the agent. Its fit, pulled
 // towards the near pixels, gives τ = 0.8 s for a mean depth of 2.5 m. At 1 m/s the agent's disc
