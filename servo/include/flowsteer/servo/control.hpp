@@ -84,9 +84,10 @@ struct AvoidanceOptions {
   // (0 turns this off). Needs objects with a source id.
   double commit_band = 1.0;
   // The clearance term only: an agent at rest (below min_speed_mps) that changes the end it
-  // passes a group of objects by keeps the new end this long (0 turns this off). Turning in place
-  // takes objects in and out of view while nothing moves, and a decision made with an object in
-  // view is not undone by turning away from it.
+  // passes a group of objects by keeps the new end this long, while a member it was taken for
+  // stays in view (0 turns this off). Turning in place takes objects in and out of view while
+  // nothing moves, and a decision made with an object in view is not undone by turning away from
+  // it.
   double rest_commit_s = 1.0;
   // The clearance term only: the passing convention, and how strongly it leans (in σ: an object
   // whose two ways round differ by less than this is passed on the convention's side).
