@@ -2,16 +2,22 @@
 // with vivid's capture node as the camera and two simulated ODrive axes on vcan0 as the drive,
 // ended four ways while it drives: SIGINT, SIGTERM, the camera unplugged (vivid's "Disconnect")
 // and the CAN interface taken down. For each it prints, as "PROBE key value" lines, the
-// CLOCK_REALTIME of the fault (candump's clock), how and when flowsteer exited and what it said;
-// tests/launch/robot_vm_test.cpp checks those against candump's record of the bus.
+// CLOCK_REALTIME of the fault (candump's clock), how and when flowsteer exited and what it said,
+// and for the CAN interface when flowsteer reported the dead bus; tests/launch/robot_vm_test.cpp
+// checks those against candump's record of the bus.
 
+#include <net/if.h>
 #include <signal.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <string>
@@ -29,6 +35,7 @@ using flowsteer::vm_test::realtime_s;
 
 constexpr char kLaunchPath[] = "/tmp/robot.yaml";
 constexpr char kCamera[] = "/dev/video0";
+constexpr char kCanInterface[] = "vcan0";
 
 // vivid's webcam input at its smallest size, so the emulated CPU keeps up; the goal far away,
 // so the robot is still driving when the fault comes.
@@ -78,6 +85,42 @@ bool wait_until_driving(const std::string& log_path, double drive_s) {
   return true;
 }
 
+// Takes the interface down with one ioctl, as a cable pulled out or a bus-off would, at the
+// moment it is called: `ip link set ... down` would first fork and exec two programs, which on
+// the emulated CPU takes some 50 ms of the time measured. An empty string when done, else why not.
+std::string take_link_down(const char* interface) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) {
+    return std::string("socket: ") + std::strerror(errno);
+  }
+  ifreq request{};
+  std::strncpy(request.ifr_name, interface, IFNAMSIZ - 1);
+  std::string error;
+  if (::ioctl(fd, SIOCGIFFLAGS, &request) != 0) {
+    error = std::string("SIOCGIFFLAGS: ") + std::strerror(errno);
+  } else {
+    request.ifr_flags = static_cast<short>(request.ifr_flags & ~IFF_UP);
+    if (::ioctl(fd, SIOCSIFFLAGS, &request) != 0) {
+      error = std::string("SIOCSIFFLAGS: ") + std::strerror(errno);
+    }
+  }
+  ::close(fd);
+  return error;
+}
+
+// CLOCK_REALTIME when a line of the log first holds `text`, looked for every 5 ms (as
+// wait_for_exit looks for the exit); NaN when it has not within `limit_s`.
+double when_logged(const std::string& log_path, const std::string& text, double limit_s) {
+  const double start_s = monotonic_now_s();
+  while (!flowsteer::vm_test::log_has(log_path, text)) {
+    if (monotonic_now_s() - start_s > limit_s) {
+      return NAN;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return realtime_s();
+}
+
 struct Exit {
   int status = -1;        // exit status; 128 + signal when killed
   double exited_s = 0.0;  // CLOCK_REALTIME
@@ -101,9 +144,11 @@ Exit wait_for_exit(pid_t pid, double limit_s) {
   return result;
 }
 
-// One run ended by `fault`: prints "PROBE <name>-start T", "PROBE <name>-fault T",
-// "PROBE <name>-exit STATUS T" and each line flowsteer wrote as "PROBE <name>-log-<k> LINE".
-void run_case(const std::string& name, const std::function<void(pid_t)>& fault) {
+// One run ended by `fault`, called with flowsteer's pid and log: prints "PROBE <name>-start T",
+// "PROBE <name>-fault T", "PROBE <name>-exit STATUS T" and each line flowsteer wrote as "PROBE
+// <name>-log-<k> LINE".
+void run_case(const std::string& name,
+              const std::function<void(pid_t, const std::string&)>& fault) {
   const std::string log_path = "/tmp/" + name + ".log";
   std::printf("PROBE %s-start %.6f\n", name.c_str(), realtime_s());
   const pid_t pid =
@@ -112,7 +157,7 @@ void run_case(const std::string& name, const std::function<void(pid_t)>& fault) 
     std::printf("PROBE %s-fault never: flowsteer did not start driving\n", name.c_str());
   } else {
     std::printf("PROBE %s-fault %.6f\n", name.c_str(), realtime_s());
-    fault(pid);
+    fault(pid, log_path);
   }
   const Exit exit = wait_for_exit(pid, 10.0);
   std::printf("PROBE %s-exit %d %.6f\n", name.c_str(), exit.status, exit.exited_s);
@@ -126,16 +171,21 @@ void run_case(const std::string& name, const std::function<void(pid_t)>& fault) 
 int run() {
   std::ofstream(kLaunchPath) << kLaunch;
   flowsteer::drivers::SimulatedOdrive axes("vcan0", 3, 5);
-  run_case("sigint", [](pid_t pid) { ::kill(pid, SIGINT); });
-  run_case("sigterm", [](pid_t pid) { ::kill(pid, SIGTERM); });
+  run_case("sigint", [](pid_t pid, const std::string&) { ::kill(pid, SIGINT); });
+  run_case("sigterm", [](pid_t pid, const std::string&) { ::kill(pid, SIGTERM); });
   // A button: any value presses it. vivid answers every call on the node with ENODEV until
   // its last file handle is closed, as a USB camera pulled out does.
-  run_case("camera-gone",
-           [](pid_t) { flowsteer::vm_test::set_vivid_control(kCamera, "Disconnect", 1); });
-  run_case("can-down", [](pid_t) {
-    if (std::system("ip link set vcan0 down") != 0) {
-      std::printf("PROBE can-down-failed ip link set vcan0 down\n");
+  run_case("camera-gone", [](pid_t, const std::string&) {
+    flowsteer::vm_test::set_vivid_control(kCamera, "Disconnect", 1);
+  });
+  run_case("can-down", [](pid_t, const std::string& log_path) {
+    const std::string error = take_link_down(kCanInterface);
+    if (!error.empty()) {
+      std::printf("PROBE can-down-failed %s %s\n", kCanInterface, error.c_str());
+      return;
     }
+    std::printf("PROBE can-down-reported %.6f\n",
+                when_logged(log_path, "the stop could not be sent either", 10.0));
   });
   std::printf("PROBE done\n");
   return 0;
