@@ -139,7 +139,8 @@ struct RadialProblem {
   }
 };
 
-// The linear least-squares p, and the samples' mean flow magnitude in `flow_scale`. Empty when
+// The linear least-squares p, and the samples' mean flow magnitude as delivered (before
+// derotation, FlowSample::delivered_norm) in `flow_scale`. Empty when
 // p is not finite or all samples sit at one point, where the model is not identifiable.
 template <int N>
 std::optional<Parameters<N>> least_squares_start(const RadialProblem<N>& problem,
@@ -152,7 +153,7 @@ std::optional<Parameters<N>> least_squares_start(const RadialProblem<N>& problem
     const Eigen::Matrix<double, 2, N> a = design<N>(s, problem.foe);
     normal.noalias() += a.transpose() * a;
     rhs.noalias() += a.transpose() * s.flow;
-    flow_scale += s.flow.norm();
+    flow_scale += std::max(s.flow.norm(), s.delivered_norm);
   }
   flow_scale /= n;
   Parameters<N> p;
@@ -301,7 +302,10 @@ std::optional<Parameters<N>> robust_radial_fit(std::span<const FlowSample> sampl
   buffers.weights.assign(samples.size(), 1.0);
   scale_residual_norms(problem, p, buffers);
   double sigma = robust_sigma(buffers.norms, buffers.sorted);
-  // Flow comes in float32: residuals below this are rounding, not noise.
+  // Flow comes in float32: residuals below this are rounding, not noise. A turning camera's flow
+  // rounds at its magnitude before derotation (the rotation's grows as 1 + x², 15 times the
+  // centre's at a 150° view's edges): below that, a static wall failed the static-FOE test on
+  // rounding alone.
   const double exact = 1e-6 * flow_scale + 1e-12;
   if (sigma > exact) {
     sigma = reweighted_rounds(problem, options, buffers, sigma, p, fit);
@@ -656,7 +660,11 @@ void take_samples(const FlowField& field, std::span<const std::uint32_t> pixels,
     const auto col = static_cast<int>(i % static_cast<std::uint32_t>(field.width()));
     const auto row = static_cast<int>(i / static_cast<std::uint32_t>(field.width()));
     const double scale = inverse_mean_depth ? depth[i] * *inverse_mean_depth : 1.0;
-    out[k] = {{field.x(col), field.y(row)}, scale * flow[i].cast<double>()};
+    const Eigen::Vector2d point(field.x(col), field.y(row));
+    const Eigen::Vector2d u = flow[i].cast<double>();
+    const Eigen::Vector2d delivered =
+        u + rotational_flow(point.x(), point.y(), field.removed_rotation());
+    out[k] = {point, scale * u, scale * delivered.norm()};
   }
 }
 

@@ -54,6 +54,7 @@ void derotate(FlowField& field, const Eigen::Vector3d& camera_omega) {
       flow[field.index(col, row)] -= rotation.cast<float>();
     }
   }
+  field.removed_rotation_ = camera_omega;
 }
 
 }  // namespace flowsteer::servo

@@ -212,6 +212,37 @@ TEST(ClearanceBehaviour, AStaticObjectTheCoursePassesClearOfIsLeftOut) {
   EXPECT_GT(cost(wall), 0.0);
 }
 
+// A person standing 4 m ahead, 0.1 m left of the course, with a wall along the path 0.9 m to the
+// right from 1 m to 10 m ahead. Alone, the person is passed on its right, the nearer way round.
+// The wall is passed clear and costs nothing of its own, but leaves no room between it and the
+// person: the two are one group, and the person is passed on its left.
+TEST(ClearanceBehaviour, AWallPassedClearClosesTheGapBesideAPersonAhead) {
+  test::TwoBody person_at;
+  person_at.point = {4.0, 0.1};
+  ObjectFeatures person = point_object(person_at, 1);
+  person.fit.static_foe = true;
+  ObjectFeatures wall;
+  wall.source_id = 2;
+  wall.pixel_count = 1000;
+  wall.min_x = 0.9 / 10.0;
+  wall.max_x = 0.9 / 1.0;
+  wall.centre = {0.5 * (wall.min_x + wall.max_x), 0.0};
+  wall.min_x_depth_m = 10.0;
+  wall.max_x_depth_m = 1.0;
+  wall.depth_m = 3.0;
+  wall.status = MotionStatus::approaching;
+  wall.foe = {0.0, 0.0};
+  wall.ttc_s = 3.0;  // at 1 m/s
+  wall.fit.static_foe = true;
+  // A term of its own for each: the side taken is remembered from step to step.
+  const auto gradient = [](const std::vector<ObjectFeatures>& objects) {
+    return clearance_term(options_without_convention(1.0))->evaluate({objects, {}, {}, {}}, {1.0});
+  };
+  EXPECT_EQ(gradient({wall}).cost, 0.0);
+  EXPECT_LT(gradient({person}).per_turn, 0.0);        // ω = −∂L̇/∂ω > 0: turn right
+  EXPECT_GT(gradient({person, wall}).per_turn, 0.0);  // turn left
+}
+
 // A car 1.8 m wide and 4.2 m long crossing from the left at 2.5 m/s on a collision course with
 // an agent walking at 1 m/s (CGF's street): its near side 4.1 m ahead, its front corner 12.5 m to
 // the left, so that both reach the point 5 m ahead after 5 s. Seen by the agent 72° to the left,

@@ -86,6 +86,10 @@ struct ObjectFeatures {
 struct FlowSample {
   Eigen::Vector2d point;
   Eigen::Vector2d flow;
+  // |u| as the flow source gave it, before derotation took the camera's turn out, scaled as
+  // `flow` is: float flow is exact only to that. The fit's rounding floor follows the larger of
+  // it and |flow|.
+  double delivered_norm = 0.0;
 };
 
 struct RadialFitOptions {

@@ -41,6 +41,10 @@ class FlowField {
   double interval_s() const { return interval_s_; }
   void set_interval_s(double interval_s) { interval_s_ = interval_s; }
 
+  // The camera rotation derotate() took out of this flow, zero where none was. The vectors are
+  // float, exact only to their magnitude before it came off (FlowSample::delivered_norm).
+  const Eigen::Vector3d& removed_rotation() const { return removed_rotation_; }
+
   std::size_t index(int col, int row) const {
     return static_cast<std::size_t>(row) * static_cast<std::size_t>(width()) +
            static_cast<std::size_t>(col);
@@ -53,6 +57,9 @@ class FlowField {
   std::vector<Eigen::Vector2f> flow_;
   std::vector<float> depth_;
   double interval_s_ = 0.0;
+  Eigen::Vector3d removed_rotation_ = Eigen::Vector3d::Zero();
+
+  friend void derotate(FlowField& field, const Eigen::Vector3d& camera_omega);
 };
 
 // Angular velocity of the camera, in the camera frame, for an agent turning at turn_rate_cy
