@@ -72,7 +72,7 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
     }
   }
   if (c.law != servo::NavigationLaw::flowsteer) {
-    for (const char* key : {"braking", "anticipation", "follow_gap_m"}) {
+    for (const char* key : {"braking", "anticipation", "follow_gap_m", "max_speed_ratio"}) {
       if (node[key]) {
         r.fail(node[key], base::YamlReader::join(field, key),
                "only for law: flowsteer (this controller's law is " +
@@ -81,6 +81,7 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
     }
   }
   c.follow_gap_m = r.non_negative(node, field, "follow_gap_m", c.follow_gap_m);
+  c.max_speed_ratio = r.at_least(node, field, "max_speed_ratio", 1.0, c.max_speed_ratio);
   const servo::NavigationWeights weights = servo::navigation_weights(c);
   if (weights.delta > weights.gamma) {
     r.fail(node["delta"] ? node["delta"] : node, field + ".delta",

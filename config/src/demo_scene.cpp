@@ -80,10 +80,10 @@ servo::SceneObject read_object(const base::YamlReader& r, const YAML::Node& node
 // reaching) and the leader's object id (following). Following weighs its terms alike (CGF
 // Eq. 18: beta 1) unless told otherwise.
 void read_controller(const base::YamlReader& r, const YAML::Node& node, DemoScene& d) {
-  r.only_keys(
-      node, "controller",
-      {"kind", "law", "alpha", "beta", "gamma", "delta", "braking", "anticipation", "follow_gap_m",
-       "preferred_speed_mps", "lambda", "max_accel_mps2", "max_turn_rate", "use_depth", "leader"});
+  r.only_keys(node, "controller",
+              {"kind", "law", "alpha", "beta", "gamma", "delta", "braking", "anticipation",
+               "follow_gap_m", "preferred_speed_mps", "lambda", "max_accel_mps2", "max_turn_rate",
+               "max_speed_ratio", "use_depth", "leader"});
   const bool following = r.word(node, "controller", "kind", {"goal_reaching", "following"},
                                 "goal_reaching") == "following";
   if (following) {

@@ -145,6 +145,7 @@ servo::ControllerConfig read_scenario_controller(const base::YamlReader& r, cons
                  "lambda",
                  "max_accel_mps2",
                  "max_turn_rate",
+                 "max_speed_ratio",
                  "use_depth",
                  "clearance_margin_m",
                  "mass_from",

@@ -361,6 +361,10 @@ Controller::Controller(NavigationFunction navigation, double lambda, const Contr
     throw std::invalid_argument("controller: max_turn_rate must be positive, got " +
                                 std::to_string(limits.max_turn_rate));
   }
+  if (std::isnan(limits.max_speed_mps) || limits.max_speed_mps <= 0.0) {
+    throw std::invalid_argument("controller: max_speed_mps must be positive, got " +
+                                std::to_string(limits.max_speed_mps));
+  }
 }
 
 void Controller::step(const Percept& percept, const AgentState& agent, ControlOutput& out) {
@@ -388,8 +392,12 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
     }
     throw std::domain_error("controller: the command is not finite");
   }
+  double accel_mps2 = out.unclamped.accel_mps2;
+  if (agent.period_s > 0.0) {
+    accel_mps2 = std::min(accel_mps2, (limits_.max_speed_mps - agent.speed_mps) / agent.period_s);
+  }
   out.command = {
-      std::clamp(out.unclamped.accel_mps2, -limits_.max_accel_mps2, limits_.max_accel_mps2),
+      std::clamp(accel_mps2, -limits_.max_accel_mps2, limits_.max_accel_mps2),
       std::clamp(out.unclamped.turn_rate, -limits_.max_turn_rate, limits_.max_turn_rate)};
 }
 

@@ -115,13 +115,16 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
   AvoidanceOptions avoidance;
   avoidance.agent_width_m = agent_width_m + c.clearance_margin_m;
   avoidance.use_depth = c.use_depth;
-  const ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
+  ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
   const NavigationWeights w = navigation_weights(c);
   if (c.law == NavigationLaw::flowsteer) {
     // The flowsteer law keeps the margin in proportion to the agent's speed.
     avoidance.agent_width_m = agent_width_m;
     avoidance.margin_m = c.clearance_margin_m;
     avoidance.margin_full_speed_mps = std::max(preferred_speed_mps, avoidance.min_speed_mps);
+    if (c.kind == NavigationKind::goal_reaching) {  // a follower keeps its leader's pace
+      limits.max_speed_mps = c.max_speed_ratio * avoidance.margin_full_speed_mps;
+    }
     FlowsteerWeights weights;
     weights.alpha = w.alpha;
     weights.beta = w.beta;

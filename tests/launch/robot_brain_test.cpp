@@ -67,7 +67,7 @@ TEST(RobotLaunchSections, BadSectionsNameTheLineAndField) {
   EXPECT_EQ(error_of(camera + "controller: {kind: following}\n"),
             "bad.yaml:4:14: controller.kind: unknown key (expected one of: law, alpha, beta, "
             "gamma, delta, braking, anticipation, lambda, max_accel_mps2, max_turn_rate, "
-            "clearance_margin_m, preferred_speed_mps, robot_width_m)");
+            "max_speed_ratio, clearance_margin_m, preferred_speed_mps, robot_width_m)");
   // The shared reader's checks hold here too.
   EXPECT_EQ(error_of(camera + "controller: {gamma: 0.5, delta: 1}\n"),
             "bad.yaml:4:33: controller.delta: must not exceed gamma (MIG 2019: visible "

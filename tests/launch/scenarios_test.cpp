@@ -257,6 +257,23 @@ TEST(ScenarioFile, AnticipationIsTheFlowsteerLawsOnly) {
             std::string::npos);
 }
 
+// The flowsteer law's speed limit is a multiple of the preferred speed, never below it; the
+// papers' laws have none.
+TEST(ScenarioFile, MaxSpeedRatioIsTheFlowsteerLawsOnlyAndAtLeastOne) {
+  const auto w = parse_scenario(
+      "agents:\n  - {start: [0, 0], goal: [9, 0], controller: {max_speed_ratio: 1.5}}\n",
+      "scenario.yaml");
+  EXPECT_DOUBLE_EQ(w.agents[0].controller.max_speed_ratio, 1.5);
+  EXPECT_EQ(
+      error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
+               "controller: {max_speed_ratio: 0.8}}\n"),
+      "scenario.yaml:2:65: agents[0].controller.max_speed_ratio: must be at least 1, got 0.8");
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
+                     "controller: {law: cgf2019, max_speed_ratio: 2}}\n")
+                .find("max_speed_ratio: only for law: flowsteer"),
+            std::string::npos);
+}
+
 TEST(SteerSuite, TestCaseBecomesAWorld) {
   const sim_camera::WorldSpec w = load_steersuite(FLOWSTEER_TEST_DATA "/corridor.xml").world;
   EXPECT_EQ(w.name, "corridor");

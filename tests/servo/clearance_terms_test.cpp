@@ -181,23 +181,30 @@ TEST(ClearanceBehaviour, ASlowAgentKeepsLessRoom) {
   EXPECT_EQ(term->evaluate({objects, {}, {}, {}}, {2.0}).cost, walking);  // full from 1 m/s
 }
 
-// A wall along the path 1.5 m to the right, from 1 m to 10 m ahead: the straight course passes it
-// by more than half the kept width (0.5 m) and static_clearance_m (0.25 m). Static, it is left
-// out; were it moving it could turn into the path, and its cost's tail would still push.
-TEST(ClearanceBehaviour, AStaticObjectTheCoursePassesClearOfIsLeftOut) {
+// A static wall along the path `right_m` to the right, from 1 m to 10 m ahead, seen by an agent
+// walking at 1 m/s.
+ObjectFeatures wall_along_the_path(double right_m) {
   ObjectFeatures wall;
   wall.source_id = 4;
   wall.pixel_count = 1000;
-  wall.min_x = 1.5 / 10.0;
-  wall.max_x = 1.5 / 1.0;
+  wall.min_x = right_m / 10.0;
+  wall.max_x = right_m / 1.0;
   wall.centre = {0.5 * (wall.min_x + wall.max_x), 0.0};
   wall.min_x_depth_m = 10.0;
   wall.max_x_depth_m = 1.0;
   wall.depth_m = 3.0;
   wall.status = MotionStatus::approaching;
   wall.foe = {0.0, 0.0};
-  wall.ttc_s = 3.0;  // at 1 m/s
+  wall.ttc_s = 3.0;
   wall.fit.static_foe = true;
+  return wall;
+}
+
+// A wall along the path 1.5 m to the right: the straight course passes it by more than half the
+// kept width (0.5 m) and static_clearance_m (0.25 m). Static, it is left out; were it moving it
+// could turn into the path, and its cost's tail would still push.
+TEST(ClearanceBehaviour, AStaticObjectTheCoursePassesClearOfIsLeftOut) {
+  ObjectFeatures wall = wall_along_the_path(1.5);
   const AvoidanceOptions options = options_without_convention(1.0);
   auto cost = [&](const ObjectFeatures& object) {
     const std::vector<ObjectFeatures> objects = {object};
@@ -206,34 +213,19 @@ TEST(ClearanceBehaviour, AStaticObjectTheCoursePassesClearOfIsLeftOut) {
   EXPECT_EQ(cost(wall), 0.0);
   wall.fit.static_foe = false;
   EXPECT_GT(cost(wall), 0.0);
-  wall.fit.static_foe = true;
-  wall.min_x = 0.7 / 10.0;  // 0.7 m to the right: within the margin
-  wall.max_x = 0.7;
-  EXPECT_GT(cost(wall), 0.0);
+  EXPECT_GT(cost(wall_along_the_path(0.7)), 0.0);  // within the margin
 }
 
 // A person standing 4 m ahead, 0.1 m left of the course, with a wall along the path 0.9 m to the
-// right from 1 m to 10 m ahead. Alone, the person is passed on its right, the nearer way round.
-// The wall is passed clear and costs nothing of its own, but leaves no room between it and the
-// person: the two are one group, and the person is passed on its left.
+// right. Alone, the person is passed on its right, the nearer way round. The wall is passed clear
+// and costs nothing of its own, but leaves no room between it and the person: the two are one
+// group, and the person is passed on its left.
 TEST(ClearanceBehaviour, AWallPassedClearClosesTheGapBesideAPersonAhead) {
   test::TwoBody person_at;
   person_at.point = {4.0, 0.1};
   ObjectFeatures person = point_object(person_at, 1);
   person.fit.static_foe = true;
-  ObjectFeatures wall;
-  wall.source_id = 2;
-  wall.pixel_count = 1000;
-  wall.min_x = 0.9 / 10.0;
-  wall.max_x = 0.9 / 1.0;
-  wall.centre = {0.5 * (wall.min_x + wall.max_x), 0.0};
-  wall.min_x_depth_m = 10.0;
-  wall.max_x_depth_m = 1.0;
-  wall.depth_m = 3.0;
-  wall.status = MotionStatus::approaching;
-  wall.foe = {0.0, 0.0};
-  wall.ttc_s = 3.0;  // at 1 m/s
-  wall.fit.static_foe = true;
+  const ObjectFeatures wall = wall_along_the_path(0.9);
   // A term of its own for each: the side taken is remembered from step to step.
   const auto gradient = [](const std::vector<ObjectFeatures>& objects) {
     return clearance_term(options_without_convention(1.0))->evaluate({objects, {}, {}, {}}, {1.0});

@@ -226,6 +226,30 @@ TEST(ControlInput, LimitsClampAndTheUnclampedCommandIsKept) {
   EXPECT_GT(out.unclamped.turn_rate, 0.2);
 }
 
+// A term that always asks for more speed, as the clearance term does to widen a gap in front.
+class SpeedUpTerm final : public CostTerm {
+ public:
+  std::string_view name() const override { return "speed up"; }
+  TermGradient evaluate(const Percept&, const AgentState&) override { return {0.0, -5.0, 0.0}; }
+};
+
+// The speed limit holds the acceleration so that the period ends at the limit, and brings a
+// speed above it back down (within max_accel_mps2); without a period it does nothing.
+TEST(ControlInput, TheSpeedLimitHoldsTheAcceleration) {
+  NavigationFunction f;
+  f.add(1.0, std::make_unique<SpeedUpTerm>());
+  ControlLimits limits{1.0, 1.0};
+  limits.max_speed_mps = 1.43;
+  Controller c(std::move(f), 1.0, limits);
+  const Percept nothing{{}, {}, {}, {}};
+  EXPECT_DOUBLE_EQ(c.step(nothing, {1.0, 0.05}).command.accel_mps2, 1.0);
+  EXPECT_NEAR(c.step(nothing, {1.4, 0.05}).command.accel_mps2, 0.03 / 0.05, 1e-12);
+  EXPECT_NEAR(c.step(nothing, {1.43, 0.05}).command.accel_mps2, 0.0, 1e-12);
+  EXPECT_DOUBLE_EQ(c.step(nothing, {2.0, 0.05}).command.accel_mps2, -1.0);
+  EXPECT_DOUBLE_EQ(c.step(nothing, {2.0, 0.0}).command.accel_mps2, 1.0);
+  EXPECT_EQ(c.step(nothing, {1.43, 0.05}).unclamped.accel_mps2, 5.0);
+}
+
 // A term whose cost is stiff along ω: the explicit step (CGF Eq. 15) turns by −λ g however long
 // the command is held; the implicit one by −λ g / (1 + λ T c), and by −λ g when T is not known.
 class StiffTerm final : public CostTerm {
@@ -258,6 +282,8 @@ TEST(ControlStep, TheImplicitStepDampsAStiffCostByItsCurvatureOverThePeriod) {
 TEST(ControlInput, BadSettingsAreRejected) {
   EXPECT_THROW(Controller(goal_reaching({}), 0.0, {}), std::invalid_argument);
   EXPECT_THROW(Controller(goal_reaching({}), 1.0, {-1.0, 1.0}), std::invalid_argument);
+  EXPECT_THROW(Controller(goal_reaching({}), 1.0, {1.0, 1.0, 0.0}), std::invalid_argument);
+  EXPECT_THROW(Controller(goal_reaching({}), 1.0, {1.0, 1.0, std::nan("")}), std::invalid_argument);
   GoalReachingWeights w;
   w.delta = 2.0;  // more than γ
   EXPECT_THROW(goal_reaching(w), std::invalid_argument);

@@ -92,6 +92,16 @@ class YamlReader {
     return value;
   }
 
+  double at_least(const YAML::Node& map, const std::string& field, const char* key,
+                  double min_value, double fallback) const {
+    const double value = number(map, field, key, fallback);
+    if (value < min_value) {
+      fail(map[key] ? map[key] : map, join(field, key),
+           "must be at least " + format(min_value) + ", got " + format(value));
+    }
+    return value;
+  }
+
   int integer(const YAML::Node& node, const std::string& field, int min_value) const {
     int value = 0;
     if (!node.IsScalar() || !YAML::convert<int>::decode(node, value)) {

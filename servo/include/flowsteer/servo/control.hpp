@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -233,6 +234,9 @@ NavigationFunction flowsteer_following(const FlowsteerWeights& weights,
 struct ControlLimits {
   double max_accel_mps2 = 1.0;
   double max_turn_rate = 1.0;  // rad/s
+  // The acceleration is held so that the speed does not pass this within the control period
+  // (and brings it back down where it has). Unlimited by default: the papers' laws have none.
+  double max_speed_mps = std::numeric_limits<double>::infinity();
 };
 
 struct ControlOutput {

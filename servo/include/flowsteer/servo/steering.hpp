@@ -59,6 +59,10 @@ struct ControllerConfig {
   double lambda = 1.0;
   double max_accel_mps2 = 1.0;
   double max_turn_rate = 1.0;
+  // Law flowsteer, goal reaching: the fastest it lets the agent go, as a multiple of its
+  // preferred speed (>= 1). Without a limit, the clearance term's way to widen a gap by speeding
+  // up took agents in circle_20 to 2.5 m/s for 1.3 (docs/NAVIGATION.md, session 31).
+  double max_speed_ratio = 1.1;
   // With the renderer's flow, fit features with its depth (a camera has none).
   bool use_depth = true;
   // Added to the agent's own width as the width it keeps clear (CGF §6.2's agent width): room
