@@ -140,8 +140,8 @@ struct RadialProblem {
 };
 
 // The linear least-squares p, and the samples' mean flow magnitude as delivered (before
-// derotation, FlowSample::delivered_norm) in `flow_scale`. Empty when
-// p is not finite or all samples sit at one point, where the model is not identifiable.
+// derotation, FlowSample::delivered_norm) in `flow_scale`. Empty when p is not finite or all
+// samples sit at one point, where the model is not identifiable.
 template <int N>
 std::optional<Parameters<N>> least_squares_start(const RadialProblem<N>& problem,
                                                  double& flow_scale) {

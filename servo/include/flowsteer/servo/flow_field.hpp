@@ -41,8 +41,9 @@ class FlowField {
   double interval_s() const { return interval_s_; }
   void set_interval_s(double interval_s) { interval_s_ = interval_s; }
 
-  // The camera rotation derotate() took out of this flow, zero where none was. The vectors are
-  // float, exact only to their magnitude before it came off (FlowSample::delivered_norm).
+  // The camera rotation the last derotate() took out of this flow, zero until one has. The
+  // vectors are float, exact only to their magnitude before it came off
+  // (FlowSample::delivered_norm). Perception derotates each frame of the renderer's flow.
   const Eigen::Vector3d& removed_rotation() const { return removed_rotation_; }
 
   std::size_t index(int col, int row) const {
