@@ -170,7 +170,7 @@ void run_case(const std::string& name,
 
 int run() {
   std::ofstream(kLaunchPath) << kLaunch;
-  flowsteer::drivers::SimulatedOdrive axes("vcan0", 3, 5);
+  flowsteer::drivers::SimulatedOdrive axes(kCanInterface, 3, 5);
   run_case("sigint", [](pid_t pid, const std::string&) { ::kill(pid, SIGINT); });
   run_case("sigterm", [](pid_t pid, const std::string&) { ::kill(pid, SIGTERM); });
   // A button: any value presses it. vivid answers every call on the node with ENODEV until
