@@ -169,8 +169,6 @@ PerceptionSection read_robot_perception(const base::YamlReader& r, const YAML::N
 
 ControllerSection read_robot_controller(const base::YamlReader& r, const YAML::Node& node) {
   ControllerSection c;
-  // No depth from a camera: the features' tau v_c / Z is MIG's 1/2, not the renderer's depth.
-  c.spec.use_depth = false;
   if (!node) {
     return c;
   }
@@ -178,8 +176,8 @@ ControllerSection read_robot_controller(const base::YamlReader& r, const YAML::N
   // steering models need a simulator.
   r.only_keys(node, "controller",
               {"law", "alpha", "beta", "gamma", "delta", "braking", "anticipation", "lambda",
-               "max_accel_mps2", "max_turn_rate", "max_speed_ratio", "clearance_margin_m",
-               "preferred_speed_mps", "robot_width_m"});
+               "max_accel_mps2", "max_turn_rate", "max_speed_ratio", "use_depth",
+               "clearance_margin_m", "preferred_speed_mps", "robot_width_m"});
   c.spec = read_controller(r, node, "controller", c.spec);
   c.preferred_speed_mps =
       r.non_negative(node, "controller", "preferred_speed_mps", c.preferred_speed_mps);

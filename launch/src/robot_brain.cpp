@@ -10,9 +10,11 @@ pipeline::BrainConfig robot_brain_config(const config::PerceptionSection& percep
                                          const config::ControllerSection& controller) {
   pipeline::BrainConfig config;
   config.controller = controller.spec;
-  // Without a mount there is no drive, so the speed is zero and the ground test is skipped. Dark
-  // regions follow controller.delta > 0, as in the simulator; the reader has checked that
+  // Without a mount there is no drive, so the speed is zero and the ground test is skipped, and
+  // nothing says where the ground is: no depth from it either. Dark regions follow
+  // controller.delta > 0, as in the simulator; the reader has checked that
   // perception.dark_regions says the same.
+  config.controller.use_depth = controller.spec.use_depth && perception.mount.has_value();
   config.perception =
       pipeline::perception_options({perception.flow, perception.segmentation}, controller.spec,
                                    perception.mount.value_or(base::CameraMount{}));

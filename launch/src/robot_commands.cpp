@@ -163,7 +163,6 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
   config::PerceptionSection perception;
   perception.flow = command.flow;
   config::ControllerSection controller;
-  controller.spec.use_depth = false;
   RobotBrain robot(source.intrinsics(), robot_brain_config(perception, controller), log);
   const pipeline::Brain& brain = robot.brain();
 

@@ -21,6 +21,10 @@ bool synthetic(const PerceptionOptions& options) {
 servo::FeatureOptions feature_options(const PerceptionOptions& options) {
   servo::FeatureOptions features;
   features.use_depth = synthetic(options) && options.use_depth;
+  // A camera has no depth; where objects stand on the ground, the ground gives it.
+  if (!features.use_depth) {
+    features.ground_mount = options.mount;
+  }
   features.static_foe = options.mount.forward_foe();
   features.flow_noise_correlation_px = servo::noise_correlation_px(options.flow);
   return features;

@@ -9,6 +9,7 @@
 #include <ceres/tiny_solver.h>
 #include <Eigen/Dense>
 
+#include "flowsteer/servo/ground.hpp"
 #include "radial_fit.hpp"
 
 namespace flowsteer::servo {
@@ -337,6 +338,18 @@ void set_motion(RadialFit& fit, double inverse_ttc, const Eigen::Vector2d& foe,
   fit.foe = foe;
 }
 
+// How far (in columns) a region's leftmost or rightmost ground contact may lie inside its extent
+// and still give that end its depth: a person's silhouette is rounded at the feet.
+constexpr double kContactColumns = 2.0;
+
+// dx/dy of the world's vertical through (x, y) in the image (normalised units): an upright edge
+// is seen along it. Its vanishing point, the nadir, is (0, cot θ) for a camera pitched by θ;
+// without pitch upright edges are the image's columns.
+double upright_slant(const base::CameraMount& mount, double x, double y) {
+  const double nadir_y = std::cos(mount.pitch_rad) / std::sin(mount.pitch_rad);
+  return std::isfinite(nadir_y) ? -x / (nadir_y - y) : 0.0;
+}
+
 }  // namespace
 
 RadialFit fit_radial_flow(std::span<const FlowSample> samples, const RadialFitOptions& options,
@@ -472,6 +485,15 @@ struct FeatureExtractor::Accumulator {
   int valid_depth_count = 0;  // over pixels with a valid vector: the flow moments
   double sum_inv_depth = 0.0;
   double sum_x_inv_depth = 0.0;
+  // Where the region stands on the ground (FeatureOptions::ground_mount): its leftmost and
+  // rightmost such columns, and the depth there.
+  double contact_min_x = std::numeric_limits<double>::infinity();
+  double contact_max_x = -std::numeric_limits<double>::infinity();
+  double contact_min_x_depth = std::numeric_limits<double>::infinity();
+  double contact_max_x_depth = std::numeric_limits<double>::infinity();
+  double contact_min_x_y = 0.0;  // the contacts' image rows, normalised
+  double contact_max_x_y = 0.0;
+  double min_y = std::numeric_limits<double>::infinity();  // the region's top
 
   int valid() const { return pixels - invalid; }
   // Every pixel has a depth, so the fit's samples are scaled by it (FeatureOptions::use_depth).
@@ -503,6 +525,7 @@ struct FeatureExtractor::Accumulator {
                                : max_x_depth;
     min_x = std::min(min_x, x);
     max_x = std::max(max_x, x);
+    min_y = std::min(min_y, y);
     if (has_depth) {
       ++depth_count;
       sum_depth += depth;
@@ -528,8 +551,58 @@ struct FeatureExtractor::Accumulator {
     return true;
   }
 
+  // Adds a point where the region meets the ground, at the ground's depth there. Without a depth
+  // per pixel, the nearest point is the nearest such contact.
+  void add_contact(double x, double y, double depth) {
+    if (x < contact_min_x || (x == contact_min_x && depth < contact_min_x_depth)) {
+      contact_min_x_y = y;
+    }
+    if (x > contact_max_x || (x == contact_max_x && depth < contact_max_x_depth)) {
+      contact_max_x_y = y;
+    }
+    contact_min_x_depth = x < contact_min_x    ? depth
+                          : x == contact_min_x ? std::min(contact_min_x_depth, depth)
+                                               : contact_min_x_depth;
+    contact_max_x_depth = x > contact_max_x    ? depth
+                          : x == contact_max_x ? std::min(contact_max_x_depth, depth)
+                                               : contact_max_x_depth;
+    contact_min_x = std::min(contact_min_x, x);
+    contact_max_x = std::max(contact_max_x, x);
+    if (const double range2 = depth * depth * (1.0 + x * x); range2 < nearest_range2) {
+      nearest_range2 = range2;
+      nearest_x = x;
+      nearest_depth = depth;
+    }
+  }
+
+  // The ends' and nearest point's depths from the ground contacts, for a region that rises above
+  // the horizon (taller than the camera's height: the ground never does, and a camera at rest
+  // sees no flow to tell a patch of ground by) and whose leftmost and rightmost columns stand on
+  // the ground: within two columns, or as far as an upright edge from the contact up to the
+  // region's top leans in a pitched camera's image. An end further out stands behind
+  // something, or below the image.
+  void describe_contacts(const FlowField& field, const base::CameraMount& mount,
+                         ObjectFeatures& f) const {
+    if (FlatGround(mount).depth_at(0.0, min_y)) {
+      return;
+    }
+    const double columns = kContactColumns / field.intrinsics().fx_px;
+    const auto lean = [&](double x, double y) {
+      return std::abs(upright_slant(mount, x, y)) * std::max(0.0, y - min_y);
+    };
+    if (contact_min_x - min_x > columns + lean(contact_min_x, contact_min_x_y) ||
+        max_x - contact_max_x > columns + lean(contact_max_x, contact_max_x_y)) {
+      return;
+    }
+    f.min_x_depth_m = contact_min_x_depth;
+    f.max_x_depth_m = contact_max_x_depth;
+    f.nearest_x = nearest_x;
+    f.nearest_depth_m = nearest_depth;
+  }
+
   // The region's size, extent, mean depth and flow moments into f: all but its fit.
-  void describe(const FlowField& field, ObjectFeatures& f) const {
+  void describe(const FlowField& field, const std::optional<base::CameraMount>& ground_mount,
+                ObjectFeatures& f) const {
     f.pixel_count = pixels;
     f.invalid_flow_count = invalid;
     if (pixels == 0) {
@@ -549,6 +622,8 @@ struct FeatureExtractor::Accumulator {
         f.min_x_depth_m = min_x_depth;
         f.max_x_depth_m = max_x_depth;
       }
+    } else if (ground_mount && std::isfinite(contact_min_x)) {
+      describe_contacts(field, *ground_mount, f);
     }
     if (valid() > 0) {
       f.moments.mean_u = sum_u / valid();
@@ -631,6 +706,65 @@ void for_each_region_pixel(const FlowField& field, const Segmentation& segmentat
       const std::int32_t label = row_labels[col];
       if (label >= 0) {
         visit(field.index(col, row), col, row, label);
+      }
+    }
+  }
+}
+
+// Rows below a candidate contact that must show no pixel of its region, along the world's
+// vertical: enough to follow an upright edge that a pitched camera sees slanted.
+constexpr int kContactRows = 3;
+
+// Whether the pixel at (col, row) of `label` stands on the ground: the pixels below it along the
+// world's vertical (towards the nadir's vanishing point (0, cot θ) of a camera pitched down by θ,
+// straight down without pitch) are ground, no region or a ground region. An upright edge that a
+// pitched camera sees slanted has its own pixels there, and the image's bottom row has none.
+bool stands_on_ground(const FlowField& field, const Segmentation& segmentation,
+                      const base::CameraMount& mount, int col, int row, std::int32_t label) {
+  const double x = field.x(col);
+  const double nadir_y = std::cos(mount.pitch_rad) / std::sin(mount.pitch_rad);
+  const double dx_per_row =
+      std::isfinite(nadir_y)
+          ? -x / (nadir_y - field.y(row)) * field.intrinsics().fx_px / field.intrinsics().fy_px
+          : 0.0;
+  if (row + 1 >= field.height()) {
+    return false;
+  }
+  for (int k = 1; k <= kContactRows && row + k < field.height(); ++k) {
+    const double traced_col = col + k * dx_per_row;
+    for (const double c : {std::floor(traced_col), std::ceil(traced_col)}) {
+      if (c < 0.0 || c >= field.width()) {
+        continue;
+      }
+      const std::int32_t below = segmentation.labels[field.index(static_cast<int>(c), row + k)];
+      if (below == label ||
+          (k == 1 && below >= 0 &&
+           segmentation.kinds[static_cast<std::size_t>(below)] != RegionKind::ground)) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// Adds to each visible region the points where it stands on the ground (stands_on_ground), at
+// the ground's depth one row below the pixel: the foot lies above the next row's centre, which
+// the region does not cover, so the depth is never further than the foot's.
+template <typename Accumulators>
+void add_ground_contacts(const FlowField& field, const Segmentation& segmentation,
+                         const base::CameraMount& mount, Accumulators& accumulators) {
+  const FlatGround ground(mount);
+  for (int row = 0; row + 1 < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      const std::int32_t label = segmentation.labels[field.index(col, row)];
+      if (label < 0 || segmentation.kinds[static_cast<std::size_t>(label)] != RegionKind::visible ||
+          segmentation.labels[field.index(col, row + 1)] == label) {
+        continue;
+      }
+      const auto depth = ground.depth_at(field.x(col), field.y(row + 1));
+      if (depth && stands_on_ground(field, segmentation, mount, col, row, label)) {
+        accumulators[static_cast<std::size_t>(label)].add_contact(field.x(col), field.y(row),
+                                                                  *depth);
       }
     }
   }
@@ -744,6 +878,9 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
           region_pixels_[r].push_back(static_cast<std::uint32_t>(i));
         }
       });
+  if (depth.empty() && options_.ground_mount) {
+    add_ground_contacts(field, segmentation, *options_.ground_mount, accumulators_);
+  }
 
   // Every region with enough valid vectors gets up to max_fit_samples of them, taken at an even
   // stride from its pixels in raster order.
@@ -770,7 +907,7 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
     f.label = static_cast<int>(r);
     f.source_id = segmentation.source_ids[r];
     f.kind = segmentation.kinds[r];
-    a.describe(field, f);
+    a.describe(field, options_.ground_mount, f);
     const std::span<const FlowSample> region_samples(
         samples_.data() + sample_offsets_[r],
         static_cast<std::size_t>(sample_offsets_[r + 1] - sample_offsets_[r]));

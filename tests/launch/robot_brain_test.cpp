@@ -52,9 +52,24 @@ TEST(RobotLaunchSections, PerceptionAndControllerAreRead) {
   EXPECT_NEAR(l.perception.mount->pitch_rad, 10.0 * M_PI / 180.0, 1e-12);
   EXPECT_DOUBLE_EQ(*l.controller.spec.alpha, 2.0);
   EXPECT_DOUBLE_EQ(*l.controller.spec.delta, 0.5);
-  EXPECT_FALSE(l.controller.spec.use_depth);
+  EXPECT_TRUE(l.controller.spec.use_depth) << "the ground's depth where objects stand on it";
   EXPECT_DOUBLE_EQ(l.controller.preferred_speed_mps, 0.4);
   EXPECT_DOUBLE_EQ(l.controller.robot_width_m, 0.5);
+}
+
+// The law takes the ground's depth where objects stand on it by default; the launch file may
+// turn that off, and without a mount there is no ground to take it from.
+TEST(RobotLaunchSections, TheGroundsDepthNeedsTheMount) {
+  const auto brain_use_depth = [](const std::string& perception, const std::string& controller) {
+    const config::RobotLaunch l = config::parse_robot_launch(
+        std::string(kCamera) + kDrive + perception + controller, "depth.yaml", "");
+    return launch::robot_brain_config(l.perception, l.controller).controller.use_depth;
+  };
+  const std::string mount = "perception: {flow: dis_fast, height_m: 0.3, pitch_deg: 5}\n";
+  EXPECT_TRUE(brain_use_depth(mount, ""));
+  EXPECT_FALSE(brain_use_depth(mount, "controller: {use_depth: false}\n"));
+  // A recording replayed (no drive) has no mount.
+  EXPECT_FALSE(launch::robot_brain_config({}, {}).controller.use_depth);
 }
 
 TEST(RobotLaunchSections, BadSectionsNameTheLineAndField) {
@@ -67,7 +82,7 @@ TEST(RobotLaunchSections, BadSectionsNameTheLineAndField) {
   EXPECT_EQ(error_of(camera + "controller: {kind: following}\n"),
             "bad.yaml:4:14: controller.kind: unknown key (expected one of: law, alpha, beta, "
             "gamma, delta, braking, anticipation, lambda, max_accel_mps2, max_turn_rate, "
-            "max_speed_ratio, clearance_margin_m, preferred_speed_mps, robot_width_m)");
+            "max_speed_ratio, use_depth, clearance_margin_m, preferred_speed_mps, robot_width_m)");
   // The shared reader's checks hold here too.
   EXPECT_EQ(error_of(camera + "controller: {gamma: 0.5, delta: 1}\n"),
             "bad.yaml:4:33: controller.delta: must not exceed gamma (MIG 2019: visible "
@@ -304,7 +319,6 @@ TEST_P(OneBrain, SimulatorAndRobotPathsGiveTheSameCommands) {
   for (sim_camera::AgentSpec& a : spec.agents) {
     a.camera.width_px = a.camera.height_px = 96;
     a.perception = {servo::FlowMethod::dis_fast, servo::SegmentationMethod::flow_graph_fast};
-    a.controller.use_depth = false;  // a camera has no depth
     a.controller.model = GetParam();
     a.controller.mass_from = servo::MassSource::ground;  // a camera has no object ids
   }

@@ -1,9 +1,13 @@
 #include "flowsteer/servo/features.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -451,6 +455,77 @@ TEST(FeatureExtractor, ABoxSeenAtItsCornerIsNearestThere) {
   EXPECT_NEAR(*e.features.nearest_depth_m, 4.0, 4.0 * pixel);
   EXPECT_NEAR(*e.features.min_x_depth_m, 6.0, 0.1);
   EXPECT_NEAR(*e.features.max_x_depth_m, 4.0, 0.1);
+}
+
+// The features of a scene's objects as a camera sees them: the flow without its depth, the
+// ground's depth where the objects stand on it (FeatureOptions::ground_mount).
+std::vector<ObjectFeatures> seen_by_a_camera(const AnalyticScene& scene) {
+  const SceneRender render = render_scene(scene);
+  FlowField field(scene.intrinsics);
+  std::copy(render.flow.flow().begin(), render.flow.flow().end(), field.flow().begin());
+  Segmentation segmentation;
+  segment_by_ids(render.ids, field.width(), field.height(), {}, segmentation);
+  FeatureOptions options;
+  options.use_depth = false;
+  options.ground_mount = scene.mount;
+  FeatureExtractor extractor(options);
+  const auto objects = extractor.extract(field, segmentation);
+  return {objects.begin(), objects.end()};
+}
+
+const ObjectFeatures& object_with_id(std::span<const ObjectFeatures> objects, std::int32_t id) {
+  const auto it = std::find_if(objects.begin(), objects.end(),
+                               [&](const ObjectFeatures& f) { return f.source_id == id; });
+  if (it == objects.end()) {
+    throw std::runtime_error("no object with id " + std::to_string(id));
+  }
+  return *it;
+}
+
+// Without depth, the box of the test above gets its ends' and corner's depths from where it
+// stands on the ground: within what one image row spans at that depth (Z² / h per unit of y).
+TEST(FeatureExtractor, ACameraGetsTheDepthWhereAnObjectStandsOnTheGround) {
+  for (const double pitch_rad : {0.0, 10.0 * kDeg}) {
+    AnalyticScene scene = base_scene(pitch_rad);
+    SceneObject box = panel(8, 5.0, -2.0, 2.0, {0.0, 0.0});
+    box.length_m = 2.0;
+    scene.objects = {box};
+    const ObjectFeatures f = object_with_id(seen_by_a_camera(scene), 8);
+    const double row = 1.0 / scene.intrinsics.fy_px;
+    const auto within_a_row = [&](double depth_m) { return 2.0 * depth_m * depth_m * row; };
+    // A point of the ground `forward_m` ahead, at the camera's depth.
+    const auto depth = [&](double forward_m) {
+      return forward_m * std::cos(pitch_rad) + scene.mount.height_m * std::sin(pitch_rad);
+    };
+    ASSERT_TRUE(f.min_x_depth_m && f.max_x_depth_m && f.nearest_depth_m) << pitch_rad;
+    EXPECT_FALSE(f.depth_m.has_value()) << "the mean depth is not measured";
+    EXPECT_NEAR(*f.nearest_depth_m, depth(4.0), within_a_row(4.0)) << pitch_rad;
+    EXPECT_NEAR(f.nearest_x, 1.0 / depth(4.0), 2.0 / scene.intrinsics.fx_px) << pitch_rad;
+    EXPECT_NEAR(*f.min_x_depth_m, depth(6.0), within_a_row(6.0)) << pitch_rad;
+    EXPECT_NEAR(*f.max_x_depth_m, depth(4.0), within_a_row(4.0)) << pitch_rad;
+    // The contact is taken at the lowest pixel's lower edge: never further than the truth.
+    EXPECT_LE(*f.nearest_depth_m, depth(4.0) + 1e-9) << pitch_rad;
+  }
+}
+
+// No contact, no depth: an object whose foot is hidden behind a nearer one, or below the
+// image's bottom edge. Nor for one lower than the camera: a patch of ground that the flow does
+// not tell from the rest (a camera at rest sees none) looks just like it.
+TEST(FeatureExtractor, ACameraGetsNoDepthWhereTheGroundIsNotSeenBelowAnObject) {
+  AnalyticScene scene = base_scene();
+  SceneObject low_wall = panel(1, 3.0, 0.0, 2.0, {0.0, 0.0});
+  low_wall.height_m = 1.2;
+  const SceneObject behind = panel(2, 6.0, 0.0, 0.6, {0.0, 0.0});
+  const SceneObject at_the_feet = panel(3, 1.0, -1.0, 0.6, {0.0, 0.0});
+  SceneObject lower_than_the_camera = panel(4, 4.0, 2.0, 1.0, {0.0, 0.0});
+  lower_than_the_camera.height_m = 0.8;
+  scene.objects = {low_wall, behind, at_the_feet, lower_than_the_camera};
+  const std::vector<ObjectFeatures> objects = seen_by_a_camera(scene);
+  for (const std::int32_t id : {2, 3, 4}) {
+    ASSERT_GT(object_with_id(objects, id).pixel_count, 0) << id;
+    EXPECT_FALSE(object_with_id(objects, id).min_x_depth_m.has_value()) << id;
+  }
+  EXPECT_NEAR(object_with_id(objects, 1).min_x_depth_m.value_or(0.0), 3.0, 0.15);
 }
 
 TEST(FeatureExtractor, RegionsReachingTheImageEdgeAreMarkedCut) {

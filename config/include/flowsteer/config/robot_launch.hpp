@@ -53,7 +53,9 @@ struct PerceptionSection {
 // The `controller:` section: goal reaching (CGF's navigation function on the features), with
 // the robot's preferred speed and width.
 struct ControllerSection {
-  servo::ControllerConfig spec;  // model vision, kind goal_reaching; use_depth false
+  // Model vision, kind goal_reaching. use_depth: the depths a camera's features carry, those of
+  // the ground where objects stand on it (servo::FeatureOptions::ground_mount).
+  servo::ControllerConfig spec;
   double preferred_speed_mps = 0.3;
   // The robot's own width in the avoidance terms (CGF §6.2's agent width, plus
   // spec.clearance_margin_m).

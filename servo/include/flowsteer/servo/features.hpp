@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/flow_field.hpp"
 #include "flowsteer/servo/segmentation.hpp"
 
@@ -152,6 +153,12 @@ struct FeatureOptions {
   // margin above 1 leans towards the static reading, which most of what a moving camera sees is;
   // it was chosen by sweeps of `room` and `crossing` with DIS flow over camera resolutions.
   double static_surface_rss_ratio = 1.5;
+  // Where the field has no depth (a camera), the mount of a camera above a flat ground: each
+  // region's ends and nearest point then get the depth of the ground where the region stands on
+  // it (its lowest pixel in a column, with ground below it), Z = h / (y cos θ + sin θ). An end
+  // whose column shows no such contact (cut by the image's bottom edge, or standing behind
+  // another region) leaves both ends without depth.
+  std::optional<base::CameraMount> ground_mount;
 };
 
 // Extracts per-region features from a derotated flow field. Keeps its scratch buffers between

@@ -63,7 +63,9 @@ struct ControllerConfig {
   // preferred speed (>= 1). Without a limit, the clearance term's way to widen a gap by speeding
   // up took agents in circle_20 to 2.5 m/s for 1.3 (docs/NAVIGATION.md, session 31).
   double max_speed_ratio = 1.1;
-  // With the renderer's flow, fit features with its depth (a camera has none).
+  // Use the depths the features carry: the renderer's per pixel with its flow; a camera's, those
+  // of the ground where objects stand on it (FeatureOptions::ground_mount). False: MIG's
+  // depth-free guess τ v_c / Z = 1/2 everywhere.
   bool use_depth = true;
   // Added to the agent's own width as the width it keeps clear (CGF §6.2's agent width): room
   // for the path's curvature and the step, like a person's personal space.
