@@ -555,19 +555,15 @@ struct FeatureExtractor::Accumulator {
   // per pixel, the nearest point is the nearest such contact.
   void add_contact(double x, double y, double depth) {
     if (x < contact_min_x || (x == contact_min_x && depth < contact_min_x_depth)) {
+      contact_min_x = x;
+      contact_min_x_depth = depth;
       contact_min_x_y = y;
     }
     if (x > contact_max_x || (x == contact_max_x && depth < contact_max_x_depth)) {
+      contact_max_x = x;
+      contact_max_x_depth = depth;
       contact_max_x_y = y;
     }
-    contact_min_x_depth = x < contact_min_x    ? depth
-                          : x == contact_min_x ? std::min(contact_min_x_depth, depth)
-                                               : contact_min_x_depth;
-    contact_max_x_depth = x > contact_max_x    ? depth
-                          : x == contact_max_x ? std::min(contact_max_x_depth, depth)
-                                               : contact_max_x_depth;
-    contact_min_x = std::min(contact_min_x, x);
-    contact_max_x = std::max(contact_max_x, x);
     if (const double range2 = depth * depth * (1.0 + x * x); range2 < nearest_range2) {
       nearest_range2 = range2;
       nearest_x = x;
@@ -718,18 +714,11 @@ constexpr int kContactRows = 3;
 // Whether the pixel at (col, row) of `label` stands on the ground: the pixels below it along the
 // world's vertical (towards the nadir's vanishing point (0, cot θ) of a camera pitched down by θ,
 // straight down without pitch) are ground, no region or a ground region. An upright edge that a
-// pitched camera sees slanted has its own pixels there, and the image's bottom row has none.
+// pitched camera sees slanted has its own pixels there. The pixel must not be in the bottom row.
 bool stands_on_ground(const FlowField& field, const Segmentation& segmentation,
                       const base::CameraMount& mount, int col, int row, std::int32_t label) {
-  const double x = field.x(col);
-  const double nadir_y = std::cos(mount.pitch_rad) / std::sin(mount.pitch_rad);
-  const double dx_per_row =
-      std::isfinite(nadir_y)
-          ? -x / (nadir_y - field.y(row)) * field.intrinsics().fx_px / field.intrinsics().fy_px
-          : 0.0;
-  if (row + 1 >= field.height()) {
-    return false;
-  }
+  const double dx_per_row = upright_slant(mount, field.x(col), field.y(row)) *
+                            field.intrinsics().fx_px / field.intrinsics().fy_px;
   for (int k = 1; k <= kContactRows && row + k < field.height(); ++k) {
     const double traced_col = col + k * dx_per_row;
     for (const double c : {std::floor(traced_col), std::ceil(traced_col)}) {

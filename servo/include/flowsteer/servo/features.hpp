@@ -154,10 +154,11 @@ struct FeatureOptions {
   // it was chosen by sweeps of `room` and `crossing` with DIS flow over camera resolutions.
   double static_surface_rss_ratio = 1.5;
   // Where the field has no depth (a camera), the mount of a camera above a flat ground: each
-  // region's ends and nearest point then get the depth of the ground where the region stands on
-  // it (its lowest pixel in a column, with ground below it), Z = h / (y cos θ + sin θ). An end
-  // whose column shows no such contact (cut by the image's bottom edge, or standing behind
-  // another region) leaves both ends without depth.
+  // region that rises above the horizon gets, for its ends and nearest point, the depth of the
+  // ground where it stands on it (its lowest pixels, with ground below them),
+  // Z = h / (y cos θ + sin θ). An end whose column shows no such contact (cut by the image's
+  // bottom edge, or standing behind another region) leaves both ends without depth; the mean
+  // depth (depth_m) stays empty.
   std::optional<base::CameraMount> ground_mount;
 };
 
