@@ -743,20 +743,19 @@ template <typename Accumulators>
 void add_ground_contacts(const FlowField& field, const Segmentation& segmentation,
                          const base::CameraMount& mount, Accumulators& accumulators) {
   const FlatGround ground(mount);
-  for (int row = 0; row + 1 < field.height(); ++row) {
-    for (int col = 0; col < field.width(); ++col) {
-      const std::int32_t label = segmentation.labels[field.index(col, row)];
-      if (label < 0 || segmentation.kinds[static_cast<std::size_t>(label)] != RegionKind::visible ||
-          segmentation.labels[field.index(col, row + 1)] == label) {
-        continue;
-      }
-      const auto depth = ground.depth_at(field.x(col), field.y(row + 1));
-      if (depth && stands_on_ground(field, segmentation, mount, col, row, label)) {
-        accumulators[static_cast<std::size_t>(label)].add_contact(field.x(col), field.y(row),
-                                                                  *depth);
-      }
-    }
-  }
+  for_each_region_pixel(
+      field, segmentation, [&](std::size_t i, int col, int row, std::int32_t label) {
+        if (row + 1 == field.height() ||
+            segmentation.kinds[static_cast<std::size_t>(label)] != RegionKind::visible ||
+            segmentation.labels[i + static_cast<std::size_t>(field.width())] == label) {
+          return;
+        }
+        const auto depth = ground.depth_at(field.x(col), field.y(row + 1));
+        if (depth && stands_on_ground(field, segmentation, mount, col, row, label)) {
+          accumulators[static_cast<std::size_t>(label)].add_contact(field.x(col), field.y(row),
+                                                                    *depth);
+        }
+      });
 }
 
 // Of `valid` vectors, a fit takes `take`, one every `stride`: at most max_samples, evenly spread.
