@@ -16,7 +16,7 @@ pipeline::BrainConfig robot_brain_config(const config::PerceptionSection& percep
   // perception.dark_regions says the same.
   config.controller.use_depth = controller.spec.use_depth && perception.mount.has_value();
   config.perception =
-      pipeline::perception_options({perception.flow, perception.segmentation}, controller.spec,
+      pipeline::perception_options({perception.flow, perception.segmentation}, config.controller,
                                    perception.mount.value_or(base::CameraMount{}));
   config.agent_width_m = controller.robot_width_m;
   config.preferred_speed_mps = controller.preferred_speed_mps;
