@@ -744,10 +744,10 @@ void add_ground_contacts(const FlowField& field, const Segmentation& segmentatio
                          const base::CameraMount& mount, Accumulators& accumulators) {
   const FlatGround ground(mount);
   for_each_region_pixel(
-      field, segmentation, [&](std::size_t i, int col, int row, std::int32_t label) {
+      field, segmentation, [&](std::size_t, int col, int row, std::int32_t label) {
         if (row + 1 == field.height() ||
             segmentation.kinds[static_cast<std::size_t>(label)] != RegionKind::visible ||
-            segmentation.labels[i + static_cast<std::size_t>(field.width())] == label) {
+            segmentation.labels[field.index(col, row + 1)] == label) {
           return;
         }
         const auto depth = ground.depth_at(field.x(col), field.y(row + 1));
