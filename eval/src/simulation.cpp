@@ -458,6 +458,9 @@ double composite01(int collisions, const Effort& effort) {
 RunSummary summarize(const SimResult& result) {
   RunSummary summary;
   summary.collisions = static_cast<int>(result.collisions.size());
+  summary.obstacle_collisions = static_cast<int>(std::count_if(
+      result.collisions.begin(), result.collisions.end(),
+      [](const sim_camera::Collision& c) { return c.body == sim_camera::Body::obstacle; }));
   summary.agents = static_cast<int>(result.agents.size());
   summary.min_clearance_m = std::numeric_limits<double>::infinity();
   double time_sum = 0.0;

@@ -174,6 +174,8 @@ void print_configuration_totals(const std::vector<SuiteRun>& runs, std::ostream&
     int cases = 0;
     int clean = 0;
     int failed = 0;
+    int collisions = 0;
+    int obstacle_collisions = 0;
     double score = 0.0;
     for (const SuiteRun& run : runs) {
       if (to_string(run.configuration) != configuration) {
@@ -182,11 +184,14 @@ void print_configuration_totals(const std::vector<SuiteRun>& runs, std::ostream&
       ++cases;
       clean += run.clean() ? 1 : 0;
       failed += run.failed() ? 1 : 0;
+      collisions += run.failed() ? 0 : run.summary.collisions;
+      obstacle_collisions += run.failed() ? 0 : run.summary.obstacle_collisions;
       score +=
           run.failed() || !std::isfinite(run.summary.composite01) ? 0.0 : run.summary.composite01;
     }
     out << "configuration " << configuration << ": clean " << clean << " of " << cases
-        << " cases, total composite01 " << measure(score, "");
+        << " cases, total composite01 " << measure(score, "") << ", " << collisions
+        << " collisions (" << obstacle_collisions << " with obstacles)";
     if (failed > 0) {
       out << " (" << failed << " failed runs not scored)";
     }
@@ -373,10 +378,10 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
   const auto w = [](std::size_t width) { return std::setw(static_cast<int>(width)); };
   std::ostringstream table;
   table << std::left << w(case_width) << "case" << w(configuration_width) << "configuration"
-        << std::setw(11) << "status" << std::right << std::setw(10) << "collisions" << std::setw(8)
-        << "goals" << std::setw(15) << "min_clearance" << std::setw(14) << "time_to_goal"
-        << std::setw(11) << "path_ratio" << std::setw(11) << "time_ratio" << std::setw(12)
-        << "composite01"
+        << std::setw(11) << "status" << std::right << std::setw(10) << "collisions" << std::setw(11)
+        << "obstacles" << std::setw(8) << "goals" << std::setw(15) << "min_clearance"
+        << std::setw(14) << "time_to_goal" << std::setw(11) << "path_ratio" << std::setw(11)
+        << "time_ratio" << std::setw(12) << "composite01"
         << "\n";
   for (const SuiteRun& run : runs) {
     table << std::left << w(case_width) << run.case_name << w(configuration_width)
@@ -390,7 +395,7 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
       continue;
     }
     const RunSummary& s = run.summary;
-    table << std::setw(10) << s.collisions << std::setw(8)
+    table << std::setw(10) << s.collisions << std::setw(11) << s.obstacle_collisions << std::setw(8)
           << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents_with_goal()))
           << std::setw(15) << measure(s.min_clearance_m, " m") << std::setw(14)
           << measure(s.mean_time_to_goal_s, " s") << std::setw(11)

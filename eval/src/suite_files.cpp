@@ -19,11 +19,12 @@ namespace {
 
 const char* const kHeader =
     "run,case,flow,segmentation,controller,law,resolution,status,agents,goals_reached,"
-    "agents_with_goal,collisions,min_clearance_m,mean_time_to_goal_s,mean_path_length_m,"
+    "agents_with_goal,collisions,obstacle_collisions,min_clearance_m,mean_time_to_goal_s,"
+    "mean_path_length_m,"
     "mean_path_length_ratio,mean_time_ratio,"
     "composite01,error";
 constexpr std::size_t kLabelColumns = 8;   // run ... status
-constexpr std::size_t kScoreColumns = 10;  // agents ... composite01
+constexpr std::size_t kScoreColumns = 11;  // agents ... composite01
 
 std::vector<std::string> split(const std::string& line, char separator) {
   std::vector<std::string> cells;
@@ -190,6 +191,7 @@ std::string summary_fields(const RunSummary& s) {
                                         static_cast<double>(s.goals_reached),
                                         static_cast<double>(s.agents_with_goal()),
                                         static_cast<double>(s.collisions),
+                                        static_cast<double>(s.obstacle_collisions),
                                         s.min_clearance_m,
                                         s.mean_time_to_goal_s,
                                         s.mean_path_length_m,
@@ -219,12 +221,13 @@ RunSummary parse_summary_fields(const std::string& text, const std::string& sour
   s.goals_reached = integer(1);
   s.followers = s.agents - integer(2);
   s.collisions = integer(3);
-  s.min_clearance_m = real(4);
-  s.mean_time_to_goal_s = real(5);
-  s.mean_path_length_m = real(6);
-  s.mean_path_length_ratio = real(7);
-  s.mean_time_ratio = real(8);
-  s.composite01 = real(9);
+  s.obstacle_collisions = integer(4);
+  s.min_clearance_m = real(5);
+  s.mean_time_to_goal_s = real(6);
+  s.mean_path_length_m = real(7);
+  s.mean_path_length_ratio = real(8);
+  s.mean_time_ratio = real(9);
+  s.composite01 = real(10);
   return s;
 }
 

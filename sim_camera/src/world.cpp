@@ -245,15 +245,20 @@ void World::detect_collisions() {
     const double r = spec_.agents[i].radius_m;
     std::size_t body = 0;
     // The name of what was hit is built only when a contact starts.
-    auto check = [&](bool touching, const char* kind, std::size_t index) {
+    auto check = [&](bool touching, Body kind, std::size_t index) {
       const bool was = in_contact_[i][body];
       in_contact_[i][body] = touching;
       if (touching && !was) {
-        Collision c{time_s_, i, std::string(kind) + " " + std::to_string(index), p, std::nullopt};
-        if (std::string_view(kind) == "agent") {
-          c.other_agent = index;
-        }
-        new_collisions_.push_back(std::move(c));
+        const char* name = kind == Body::agent      ? "agent"
+                           : kind == Body::obstacle ? "obstacle"
+                                                    : "moving";
+        new_collisions_.push_back(
+            {.time_s = time_s_,
+             .agent = i,
+             .with = std::string(name) + " " + std::to_string(index),
+             .position_m = p,
+             .other_agent = kind == Body::agent ? std::optional(index) : std::nullopt,
+             .body = kind});
       }
       ++body;
     };
@@ -261,13 +266,13 @@ void World::detect_collisions() {
       // Each pair once, on the lower index; the higher one's slot stays unused.
       const bool touching =
           j > i && (agents_[j].position_m - p).norm() < r + spec_.agents[j].radius_m;
-      check(touching, "agent", j);
+      check(touching, Body::agent, j);
     }
     for (std::size_t k = 0; k < spec_.obstacles.size(); ++k) {
-      check(footprint_distance(spec_.obstacles[k], p) < r, "obstacle", k);
+      check(footprint_distance(spec_.obstacles[k], p) < r, Body::obstacle, k);
     }
     for (std::size_t k = 0; k < moving_.size(); ++k) {
-      check(footprint_distance(moving_now(k), p) < r, "moving", k);
+      check(footprint_distance(moving_now(k), p) < r, Body::moving, k);
     }
   }
 }

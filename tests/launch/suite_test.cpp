@@ -70,9 +70,13 @@ TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
   bumped.collisions = 2;
   bumped.min_clearance_m = -0.1;
   result.agents = {straight, bumped};
-  result.collisions.resize(1);  // one contact between two agents counts once for the run
+  // The bumped agent's two contacts: one with another agent, which the run counts once, and one
+  // with a wall.
+  result.collisions.resize(2);
+  result.collisions[1].body = sim_camera::Body::obstacle;
   const RunSummary s = summarize(result);
-  EXPECT_EQ(s.collisions, 1);
+  EXPECT_EQ(s.collisions, 2);
+  EXPECT_EQ(s.obstacle_collisions, 1);
   EXPECT_EQ(s.goals_reached, 1);
   EXPECT_FALSE(s.clean());
   EXPECT_DOUBLE_EQ(s.mean_path_length_ratio, 1.2);  // only agents that arrived

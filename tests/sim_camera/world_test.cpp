@@ -40,9 +40,35 @@ TEST(World, HeadOnAgentsCollideOnceAndBothCount) {
   ASSERT_EQ(all.size(), 1U);  // one contact, however long it lasts
   EXPECT_EQ(all[0].agent, 0U);
   EXPECT_EQ(all[0].with, "agent 1");
+  EXPECT_EQ(all[0].body, Body::agent);
   ASSERT_TRUE(all[0].other_agent.has_value());
   EXPECT_EQ(*all[0].other_agent, 1U);
   EXPECT_NEAR(all[0].time_s, 1.25, 0.051);  // 3 m apart, closing at 2 m/s, radii 0.25 each
+}
+
+TEST(World, AContactSaysWhatKindOfBodyWasTouched) {
+  WorldSpec spec;
+  spec.agents = {walker({0, 0}, 0.0, {10, 0}), walker({0, 5}, 0.0, {10, 5})};
+  Solid wall;  // across the first agent's way, 2 m ahead
+  wall.centre_m = {2.5, 0.0};
+  wall.size_m = {0.2, 2.0};
+  spec.obstacles = {wall};
+  MovingObstacle car;  // a 1 m box parked across the second agent's way, touched later
+  car.body.centre_m = {4.0, 5.0};
+  car.waypoints = {{4.0, 5.0}, {4.0, 5.1}};
+  spec.moving = {car};
+  World world(spec);
+  std::vector<Collision> all;
+  for (int k = 0; k < 80; ++k) {
+    world.step({{0.0, 0.0}, {0.0, 0.0}});
+    all.insert(all.end(), world.new_collisions().begin(), world.new_collisions().end());
+  }
+  ASSERT_EQ(all.size(), 2U);
+  EXPECT_EQ(all[0].body, Body::obstacle);
+  EXPECT_EQ(all[0].with, "obstacle 0");
+  EXPECT_FALSE(all[0].other_agent.has_value());
+  EXPECT_EQ(all[1].body, Body::moving);
+  EXPECT_EQ(all[1].with, "moving 0");
 }
 
 TEST(World, CarsFollowTheirWaypoints) {

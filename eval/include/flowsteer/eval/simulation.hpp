@@ -104,6 +104,7 @@ double composite01(int collisions, const Effort& effort);
 // What one run came to, over its agents.
 struct RunSummary {
   int collisions = 0;
+  int obstacle_collisions = 0;  // of those, an agent touching a static obstacle (a wall, a pillar)
   int goals_reached = 0;
   int agents = 0;
   int followers = 0;                 // agents following a leader: they have no goal to reach

@@ -34,12 +34,16 @@ struct MovingState {
   double yaw_rad = 0.0;
 };
 
+// What an agent touched: another agent, a static obstacle or a moving object (a car).
+enum class Body { agent, obstacle, moving };
+
 struct Collision {
   double time_s;
   std::size_t agent;
   std::string with;  // "agent N", "obstacle N", "moving N"
   Eigen::Vector2d position_m;
   std::optional<std::size_t> other_agent;  // when two agents collide: the other one
+  Body body = Body::agent;
 };
 
 // The simulated world: agents move as unicycles driven by (a_c, ω), cars along waypoints.
