@@ -469,7 +469,13 @@ RunSummary summarize(const SimResult& result) {
   double time_ratio_sum = 0.0;
   int ratios = 0;
   double score_sum = 0.0;
+  int flips = 0;
+  int turn_changes = 0;
   for (const AgentResult& a : result.agents) {
+    for (std::size_t k = 1; k < a.turn_rates.size(); ++k) {
+      flips += std::abs(a.turn_rates[k] - a.turn_rates[k - 1]) >= kTurnFlipRadPerS ? 1 : 0;
+      ++turn_changes;
+    }
     if (a.reached_goal) {
       ++summary.goals_reached;
       time_sum += a.time_to_goal_s;
@@ -493,6 +499,7 @@ RunSummary summarize(const SimResult& result) {
   summary.mean_path_length_ratio = ratios > 0 ? ratio_sum / ratios : nan;
   summary.mean_time_ratio = ratios > 0 ? time_ratio_sum / ratios : nan;
   summary.composite01 = summary.agents > 0 ? score_sum / summary.agents : nan;
+  summary.turn_flip_ratio = turn_changes > 0 ? static_cast<double>(flips) / turn_changes : nan;
   return summary;
 }
 

@@ -381,7 +381,7 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
         << std::setw(11) << "status" << std::right << std::setw(10) << "collisions" << std::setw(11)
         << "obstacles" << std::setw(8) << "goals" << std::setw(15) << "min_clearance"
         << std::setw(14) << "time_to_goal" << std::setw(11) << "path_ratio" << std::setw(11)
-        << "time_ratio" << std::setw(12) << "composite01"
+        << "time_ratio" << std::setw(12) << "composite01" << std::setw(11) << "turn_flips"
         << "\n";
   for (const SuiteRun& run : runs) {
     table << std::left << w(case_width) << run.case_name << w(configuration_width)
@@ -400,7 +400,8 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
           << std::setw(15) << measure(s.min_clearance_m, " m") << std::setw(14)
           << measure(s.mean_time_to_goal_s, " s") << std::setw(11)
           << measure(s.mean_path_length_ratio, "") << std::setw(11)
-          << measure(s.mean_time_ratio, "") << std::setw(12) << measure(s.composite01, "") << "\n";
+          << measure(s.mean_time_ratio, "") << std::setw(12) << measure(s.composite01, "")
+          << std::setw(11) << measure(100.0 * s.turn_flip_ratio, " %") << "\n";
   }
   print_configuration_totals(runs, table);
   out << table.str();

@@ -22,9 +22,9 @@ const char* const kHeader =
     "agents_with_goal,collisions,obstacle_collisions,min_clearance_m,mean_time_to_goal_s,"
     "mean_path_length_m,"
     "mean_path_length_ratio,mean_time_ratio,"
-    "composite01,error";
+    "composite01,turn_flip_ratio,error";
 constexpr std::size_t kLabelColumns = 8;   // run ... status
-constexpr std::size_t kScoreColumns = 11;  // agents ... composite01
+constexpr std::size_t kScoreColumns = 12;  // agents ... turn_flip_ratio
 
 std::vector<std::string> split(const std::string& line, char separator) {
   std::vector<std::string> cells;
@@ -197,7 +197,8 @@ std::string summary_fields(const RunSummary& s) {
                                         s.mean_path_length_m,
                                         s.mean_path_length_ratio,
                                         s.mean_time_ratio,
-                                        s.composite01};
+                                        s.composite01,
+                                        s.turn_flip_ratio};
   std::string fields;
   for (std::size_t k = 0; k < kScoreColumns; ++k) {
     if (k > 0) {
@@ -228,6 +229,7 @@ RunSummary parse_summary_fields(const std::string& text, const std::string& sour
   s.mean_path_length_ratio = real(8);
   s.mean_time_ratio = real(9);
   s.composite01 = real(10);
+  s.turn_flip_ratio = real(11);
   return s;
 }
 

@@ -62,6 +62,7 @@ TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
   straight.active_time_s = 10.0;
   straight.kinetic_energy_sum = 20.0;
   straight.min_clearance_m = 0.4;
+  straight.turn_rates = {0.0, 0.2, 1.5, 0.4};  // two changes of 1 rad/s or more out of three
   AgentResult bumped;  // two collisions, did not arrive
   bumped.path_length_m = 5.0;
   bumped.straight_line_m = 8.0;
@@ -69,6 +70,7 @@ TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
   bumped.kinetic_energy_sum = 4.0;
   bumped.collisions = 2;
   bumped.min_clearance_m = -0.1;
+  bumped.turn_rates = {0.0, 0.5};
   result.agents = {straight, bumped};
   // The bumped agent's two contacts: one with another agent, which the run counts once, and one
   // with a wall.
@@ -83,6 +85,7 @@ TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
   EXPECT_DOUBLE_EQ(s.mean_time_ratio, 1.25);        // 10 s for what takes 8 s at 1.25 m/s
   EXPECT_DOUBLE_EQ(s.min_clearance_m, -0.1);
   EXPECT_DOUBLE_EQ(s.composite01, ((0 + 10 + 20) + (100 + 30 + 4)) / 2.0);
+  EXPECT_DOUBLE_EQ(s.turn_flip_ratio, 2.0 / 4.0);
 }
 
 TEST(SuiteScore, AnAgentsEffortStopsWhenItReachesItsGoal) {

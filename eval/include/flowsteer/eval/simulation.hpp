@@ -118,10 +118,15 @@ struct RunSummary {
   // agents (NaN if none): how much its start, its detours and its waits cost it.
   double mean_time_ratio = 0.0;
   double composite01 = 0.0;  // the mean of the agents' composite01 (NaN without agents)
+  // Of all the agents' steps after their first, the share whose turn rate command differs from
+  // the step before by kTurnFlipRadPerS or more: chatter, which a real drive cannot follow (NaN
+  // without such steps).
+  double turn_flip_ratio = 0.0;
   int agents_with_goal() const { return agents - followers; }
   // No collision, and every agent that has a goal reached it.
   bool clean() const { return collisions == 0 && goals_reached == agents_with_goal(); }
 };
+inline constexpr double kTurnFlipRadPerS = 1.0;
 RunSummary summarize(const SimResult& result);
 
 // Runs the world to its end: each agent renders its view, the servo core turns it into a
