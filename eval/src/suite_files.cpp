@@ -20,9 +20,7 @@ namespace {
 const char* const kHeader =
     "run,case,flow,segmentation,controller,law,resolution,status,agents,goals_reached,"
     "agents_with_goal,collisions,obstacle_collisions,min_clearance_m,mean_time_to_goal_s,"
-    "mean_path_length_m,"
-    "mean_path_length_ratio,mean_time_ratio,"
-    "composite01,turn_flip_ratio,error";
+    "mean_path_length_m,mean_path_length_ratio,mean_time_ratio,composite01,turn_flip_ratio,error";
 constexpr std::size_t kLabelColumns = 8;   // run ... status
 constexpr std::size_t kScoreColumns = 12;  // agents ... turn_flip_ratio
 
