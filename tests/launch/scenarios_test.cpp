@@ -116,7 +116,7 @@ TEST(Scenarios, StreetCarsHitAgentsThatDoNotAvoid) {
   const SimResult blind = run_simulation(street, options, log);
   int with_cars = 0;
   for (const auto& c : blind.collisions) {
-    with_cars += c.with.starts_with("moving") ? 1 : 0;
+    with_cars += c.body == sim_camera::Body::moving ? 1 : 0;
   }
   EXPECT_GE(with_cars, 2);
 }
