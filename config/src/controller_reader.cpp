@@ -72,13 +72,22 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
     }
   }
   if (c.law != servo::NavigationLaw::flowsteer) {
-    for (const char* key : {"braking", "anticipation", "follow_gap_m", "max_speed_ratio"}) {
+    for (const char* key :
+         {"braking", "anticipation", "follow_gap_m", "max_speed_ratio", "without"}) {
       if (node[key]) {
         r.fail(node[key], base::YamlReader::join(field, key),
                "only for law: flowsteer (this controller's law is " +
                    std::string(servo::to_string(c.law)) + ")");
       }
     }
+  }
+  if (const YAML::Node without = node["without"]) {
+    const auto mechanism = servo::parse_law_mechanism(without.IsScalar() ? without.Scalar() : "");
+    if (!mechanism) {
+      r.fail(without, base::YamlReader::join(field, "without"),
+             "expected one of " + servo::law_mechanism_names());
+    }
+    c.without = *mechanism;
   }
   c.follow_gap_m = r.non_negative(node, field, "follow_gap_m", c.follow_gap_m);
   c.max_speed_ratio = r.at_least(node, field, "max_speed_ratio", 1.0, c.max_speed_ratio);

@@ -141,6 +141,7 @@ servo::ControllerConfig read_scenario_controller(const base::YamlReader& r, cons
                  "delta",
                  "braking",
                  "anticipation",
+                 "without",
                  "follow_gap_m",
                  "lambda",
                  "max_accel_mps2",

@@ -18,6 +18,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "flowsteer/base/clock.hpp"
+#include "flowsteer/base/config_error.hpp"
 #include "flowsteer/eval/output_files.hpp"
 #include "flowsteer/eval/overlay.hpp"
 #include "flowsteer/eval/simulated_agent.hpp"
@@ -420,6 +421,19 @@ sim_camera::WorldSpec with_overrides(sim_camera::WorldSpec spec, const SimOption
 }
 
 }  // namespace
+
+void switch_off(sim_camera::WorldSpec& world, servo::LawMechanism mechanism) {
+  for (sim_camera::AgentSpec& agent : world.agents) {
+    if (mechanism != servo::LawMechanism::none &&
+        agent.controller.law != servo::NavigationLaw::flowsteer) {
+      throw base::ConfigError("--without " + std::string(servo::to_string(mechanism)),
+                              "agent " + agent.name + "'s law is " +
+                                  std::string(servo::to_string(agent.controller.law)) +
+                                  "; only the flowsteer law's mechanisms can be switched off");
+    }
+    agent.controller.without = mechanism;
+  }
+}
 
 SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& options,
                          std::ostream& log) {

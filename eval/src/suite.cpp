@@ -67,6 +67,20 @@ void refuse_repeated_names(const std::vector<SuiteCase>& cases) {
   }
 }
 
+// A mechanism switched off is the flowsteer law's: refused beside another law given on the command
+// line (a case's own law is checked when its run starts).
+void check_switched_off(const SuiteOptions& options) {
+  for (const servo::LawMechanism mechanism : options.switched_off) {
+    for (const servo::NavigationLaw law : options.laws) {
+      if (mechanism != servo::LawMechanism::none && law != servo::NavigationLaw::flowsteer) {
+        throw base::ConfigError("--without " + std::string(servo::to_string(mechanism)),
+                                "switches off a mechanism of the flowsteer law, which --law " +
+                                    std::string(servo::to_string(law)) + " does not have");
+      }
+    }
+  }
+}
+
 // The case under the configuration, run as `flowsteer sim` runs it, its files into `folder`.
 RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& configuration,
                     const SuiteOptions& options, const std::filesystem::path& folder) {
@@ -74,6 +88,9 @@ RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& confi
   for (sim_camera::AgentSpec& agent : world.agents) {
     agent.controller.model = configuration.controller.value_or(agent.controller.model);
     agent.controller.law = configuration.law.value_or(agent.controller.law);
+  }
+  if (configuration.without) {
+    switch_off(world, *configuration.without);
   }
   SimOptions sim;
   sim.out_dir = folder;
@@ -246,7 +263,7 @@ SuiteResult join_shards(const std::vector<std::filesystem::path>& shard_dirs) {
 
 std::string to_string(const SuiteConfiguration& c) {
   return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" + name_or_own(c.controller) +
-         "/" + name_or_own(c.law) + "/" +
+         "/" + name_or_own(c.law) + "/" + name_or_own(c.without) + "/" +
          (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
 }
 
@@ -288,14 +305,18 @@ std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options
   refuse_repeats(options.segmentations, "--segmentation");
   refuse_repeats(options.controllers, "--controller");
   refuse_repeats(options.laws, "--law");
+  refuse_repeats(options.switched_off, "--without");
+  check_switched_off(options);
   check_resolutions(options.resolutions);
   std::vector<SuiteConfiguration> configurations;
   for (const auto& flow : each_or_own(options.flows)) {
     for (const auto& segmentation : each_or_own(options.segmentations)) {
       for (const auto& controller : each_or_own(options.controllers)) {
         for (const auto& law : each_or_own(options.laws)) {
-          for (const auto& resolution : each_or_own(options.resolutions)) {
-            configurations.push_back({flow, segmentation, controller, law, resolution});
+          for (const auto& without : each_or_own(options.switched_off)) {
+            for (const auto& resolution : each_or_own(options.resolutions)) {
+              configurations.push_back({flow, segmentation, controller, law, without, resolution});
+            }
           }
         }
       }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <utility>
 
 namespace flowsteer::servo {
@@ -26,6 +27,19 @@ constexpr std::array<std::pair<NavigationLaw, std::string_view>, 3> kLaws{{
     {NavigationLaw::flowsteer, "flowsteer"},
     {NavigationLaw::cgf2019, "cgf2019"},
     {NavigationLaw::mig2019, "mig2019"},
+}};
+
+constexpr std::array<std::pair<LawMechanism, std::string_view>, 10> kMechanisms{{
+    {LawMechanism::none, "none"},
+    {LawMechanism::braking, "braking"},
+    {LawMechanism::anticipation, "anticipation"},
+    {LawMechanism::passing_convention, "passing_convention"},
+    {LawMechanism::commitment, "commitment"},
+    {LawMechanism::passed_clear, "passed_clear"},
+    {LawMechanism::giving_way, "giving_way"},
+    {LawMechanism::speed_limit, "speed_limit"},
+    {LawMechanism::implicit_step, "implicit_step"},
+    {LawMechanism::proportional_margin, "proportional_margin"},
 }};
 
 template <typename Enum, std::size_t N>
@@ -56,6 +70,36 @@ std::optional<Enum> value_of(const std::array<std::pair<Enum, std::string_view>,
   return std::nullopt;
 }
 
+// The avoidance options' part of LawMechanism; the weights, the speed limit and the step are
+// make_controller's.
+void disable(LawMechanism mechanism, AvoidanceOptions& avoidance) {
+  constexpr double kNever = std::numeric_limits<double>::infinity();
+  switch (mechanism) {
+    case LawMechanism::passing_convention:
+      avoidance.passing_side = PassingSide::none;
+      break;
+    case LawMechanism::commitment:
+      avoidance.commit_band = 0.0;
+      avoidance.rest_commit_s = 0.0;
+      break;
+    case LawMechanism::passed_clear:
+      avoidance.static_clearance_m = kNever;
+      break;
+    case LawMechanism::giving_way:
+      avoidance.yield_speed_ratio = kNever;
+      break;
+    case LawMechanism::proportional_margin:
+      avoidance.standing_margin_m = avoidance.margin_m;
+      break;
+    case LawMechanism::none:
+    case LawMechanism::braking:
+    case LawMechanism::anticipation:
+    case LawMechanism::speed_limit:
+    case LawMechanism::implicit_step:
+      break;
+  }
+}
+
 }  // namespace
 
 std::string_view to_string(SteeringModel model) {
@@ -84,6 +128,16 @@ std::optional<NavigationLaw> parse_navigation_law(std::string_view name) {
   return value_of(kLaws, name);
 }
 
+std::string_view to_string(LawMechanism mechanism) {
+  return name_of(kMechanisms, mechanism);
+}
+std::optional<LawMechanism> parse_law_mechanism(std::string_view name) {
+  return value_of(kMechanisms, name);
+}
+std::string law_mechanism_names() {
+  return names_of(kMechanisms);
+}
+
 std::string steering_model_names() {
   return names_of(kModels);
 }
@@ -107,6 +161,11 @@ NavigationWeights navigation_weights(const ControllerConfig& c) {
   w.delta = c.delta.value_or(w.delta);
   w.braking = c.braking.value_or(w.braking);
   w.anticipation = c.anticipation.value_or(w.anticipation);
+  if (c.without == LawMechanism::braking) {
+    w.braking = 0.0;
+  } else if (c.without == LawMechanism::anticipation) {
+    w.anticipation = 0.0;
+  }
   return w;
 }
 
@@ -122,9 +181,11 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
     avoidance.agent_width_m = agent_width_m;
     avoidance.margin_m = c.clearance_margin_m;
     avoidance.margin_full_speed_mps = std::max(preferred_speed_mps, avoidance.min_speed_mps);
-    if (c.kind == NavigationKind::goal_reaching) {  // a follower keeps its leader's pace
+    // A follower keeps its leader's pace.
+    if (c.kind == NavigationKind::goal_reaching && c.without != LawMechanism::speed_limit) {
       limits.max_speed_mps = c.max_speed_ratio * avoidance.margin_full_speed_mps;
     }
+    disable(c.without, avoidance);
     FlowsteerWeights weights;
     weights.alpha = w.alpha;
     weights.beta = w.beta;
@@ -138,7 +199,9 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
     return Controller(c.kind == NavigationKind::following
                           ? flowsteer_following(weights, avoidance)
                           : flowsteer_goal_reaching(weights, avoidance),
-                      c.lambda, limits, GradientStep::implicit_euler);
+                      c.lambda, limits,
+                      c.without == LawMechanism::implicit_step ? GradientStep::explicit_euler
+                                                               : GradientStep::implicit_euler);
   }
   if (c.kind == NavigationKind::following) {
     return Controller(following({w.alpha, w.beta, w.gamma}, avoidance), c.lambda, limits);

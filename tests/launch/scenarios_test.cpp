@@ -257,6 +257,23 @@ TEST(ScenarioFile, AnticipationIsTheFlowsteerLawsOnly) {
             std::string::npos);
 }
 
+// An ablation in a scenario file: the flowsteer law with one mechanism switched off, by name.
+TEST(ScenarioFile, AMechanismOfTheFlowsteerLawIsSwitchedOffByName) {
+  const auto w = parse_scenario(
+      "agents:\n  - {start: [0, 0], goal: [9, 0], controller: {without: passed_clear}}\n"
+      "  - {start: [0, 2], goal: [9, 2]}\n",
+      "scenario.yaml");
+  EXPECT_EQ(w.agents[0].controller.without, servo::LawMechanism::passed_clear);
+  EXPECT_EQ(w.agents[1].controller.without, servo::LawMechanism::none);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], controller: {without: brake}}\n")
+                .find("without: expected one of none, braking"),
+            std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
+                     "controller: {law: cgf2019, without: braking}}\n")
+                .find("without: only for law: flowsteer"),
+            std::string::npos);
+}
+
 // The flowsteer law's speed limit is a multiple of the preferred speed, never below it; the
 // papers' laws have none.
 TEST(ScenarioFile, MaxSpeedRatioIsTheFlowsteerLawsOnlyAndAtLeastOne) {

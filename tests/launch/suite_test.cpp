@@ -63,7 +63,7 @@ TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
   straight.kinetic_energy_sum = 20.0;
   straight.min_clearance_m = 0.4;
   straight.turn_rates = {0.0, 0.2, 1.5, 0.4};  // two changes of 1 rad/s or more out of three
-  AgentResult bumped;  // two collisions, did not arrive
+  AgentResult bumped;                          // two collisions, did not arrive
   bumped.path_length_m = 5.0;
   bumped.straight_line_m = 8.0;
   bumped.active_time_s = 30.0;
@@ -234,18 +234,20 @@ TEST_F(SuiteRunTest, EveryCaseRunsUnderEveryConfigurationAndAFailureStopsNoOther
   const std::filesystem::path out = dir_ / "all";
   const std::string csv = file_text(out / "suite.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
-  EXPECT_NE(csv.find("5,follow,own,own,motion_energy,own,24,failed,"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("0,near,own,own,geometric,own,24,clean,1,1,1,0,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("5,follow,own,own,motion_energy,own,own,24,failed,"), std::string::npos)
+      << csv;
+  EXPECT_NE(csv.find("0,near,own,own,geometric,own,own,24,clean,1,1,1,0,"), std::string::npos)
+      << csv;
   EXPECT_TRUE(std::filesystem::exists(out / "contact_sheet.png"));
   EXPECT_TRUE(std::filesystem::exists(out / "suite.json"));
   EXPECT_NE(file_text(out / "suite.txt").find("clean 2 of 3 cases"), std::string::npos);
   // Top views of every run that got one; folders only for the runs that are not clean.
-  EXPECT_TRUE(std::filesystem::exists(out / "topviews" / "near.own.own.geometric.own.24.png"));
-  EXPECT_FALSE(std::filesystem::exists(out / "runs" / "near.own.own.geometric.own.24"));
-  EXPECT_TRUE(
-      std::filesystem::exists(out / "runs" / "far.own.own.geometric.own.24" / "trajectories.csv"));
-  EXPECT_TRUE(
-      std::filesystem::exists(out / "runs" / "follow.own.own.motion_energy.own.24" / "error.txt"));
+  EXPECT_TRUE(std::filesystem::exists(out / "topviews" / "near.own.own.geometric.own.own.24.png"));
+  EXPECT_FALSE(std::filesystem::exists(out / "runs" / "near.own.own.geometric.own.own.24"));
+  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "far.own.own.geometric.own.own.24" /
+                                      "trajectories.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "follow.own.own.motion_energy.own.own.24" /
+                                      "error.txt"));
   for (const auto& entry : std::filesystem::directory_iterator(out)) {
     EXPECT_EQ(entry.path().filename().string().rfind(".staging", 0), std::string::npos);
   }
@@ -268,7 +270,8 @@ TEST_F(SuiteRunTest, ThreeShardsMergedAreTheUnshardedSuite) {
     EXPECT_EQ(file_text(dir_ / "merged" / file), file_text(dir_ / "whole" / file)) << file;
   }
   EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "contact_sheet.png"));
-  EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "runs" / "far.own.own.geometric.own.24"));
+  EXPECT_TRUE(
+      std::filesystem::exists(dir_ / "merged" / "runs" / "far.own.own.geometric.own.own.24"));
 
   // A shard missing, one given twice, or a shard of another suite are refused by name.
   EXPECT_NE(error_of([&] {
@@ -305,6 +308,31 @@ TEST_F(SuiteRunTest, RepeatedConfigurationsAndCaseNamesAreRefused) {
             }).find("a second case named 'a'"),
             std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir_ / "bad" / "suite.csv"));
+}
+
+// An ablation: each mechanism switched off is a configuration of its own, beside the law as it is
+// (none), read back by a merge; only the flowsteer law has them.
+TEST_F(SuiteRunTest, EachMechanismSwitchedOffIsAConfigurationOfItsOwn) {
+  std::ostringstream log;
+  SuiteOptions o = options("ablation");
+  o.controllers = {servo::SteeringModel::geometric};
+  o.switched_off = {servo::LawMechanism::none, servo::LawMechanism::braking};
+  const SuiteResult result = run_suite({walk_case("near", 1.5)}, o, log);
+  ASSERT_EQ(result.runs.size(), 2U);
+  EXPECT_TRUE(result.runs[0].clean()) << result.runs[0].error;
+  const std::string csv = file_text(o.out_dir / "suite.csv");
+  EXPECT_NE(csv.find("0,near,own,own,geometric,own,none,24,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("1,near,own,own,geometric,own,braking,24,"), std::string::npos) << csv;
+  const SuiteResult merged = merge_suite_shards({o.out_dir}, dir_ / "merged");
+  ASSERT_EQ(merged.runs.size(), 2U);
+  EXPECT_EQ(merged.runs[1].configuration.without, servo::LawMechanism::braking);
+  EXPECT_EQ(merged.runs[1].folder_name(), "near.own.own.geometric.own.braking.24");
+
+  o.laws = {servo::NavigationLaw::flowsteer, servo::NavigationLaw::cgf2019};
+  EXPECT_NE(error_of([&] { run_suite(cases_, o, log); })
+                .find("--without braking: switches off a mechanism of the flowsteer law, which "
+                      "--law cgf2019 does not have"),
+            std::string::npos);
 }
 
 }  // namespace

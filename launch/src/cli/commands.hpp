@@ -44,6 +44,7 @@ servo::FlowMethod flow_method_option(const std::string& option, const std::strin
 servo::SegmentationMethod segmentation_method_option(const std::string& option,
                                                      const std::string& name);
 servo::NavigationLaw navigation_law_option(const std::string& option, const std::string& name);
+servo::LawMechanism law_mechanism_option(const std::string& option, const std::string& name);
 
 // The scenario a command runs: the scenario file or the built-in scenario `scenario` names (a
 // name of `flowsteer scenarios` first, else a file), or a SteerSuite test case; "room" when none
@@ -54,13 +55,14 @@ struct ScenarioChoice {
   std::string steersuite;  // --steersuite, where the command has it
   std::uint32_t seed = 1;  // --seed: the SteerSuite test case's random placements
   std::string law;         // --law: every agent's navigation law, when given
+  std::string without;     // --without: the flowsteer law's mechanism switched off, when given
 };
 sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice);
 // Makes each of the command's repeatable options take one value per use (`--flow a --flow b`),
 // so that a positional argument after one is not read as another of its values.
 void one_value_per_use(CLI::App& command);
-// Adds SCENARIO_FILE, --scenario, --steersuite, --seed and --law to a command that runs a
-// scenario.
+// Adds SCENARIO_FILE, --scenario, --steersuite, --seed, --law and --without to a command that runs
+// a scenario.
 void add_scenario_options(CLI::App& command, ScenarioChoice& choice);
 
 }  // namespace flowsteer::cli

@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/eval/simulation.hpp"
 
 namespace flowsteer::cli {
 
@@ -37,6 +38,15 @@ servo::NavigationLaw navigation_law_option(const std::string& option, const std:
   return *law;
 }
 
+servo::LawMechanism law_mechanism_option(const std::string& option, const std::string& name) {
+  const auto mechanism = servo::parse_law_mechanism(name);
+  if (!mechanism) {
+    throw CLI::ValidationError(
+        option, "unknown mechanism '" + name + "' (known: " + servo::law_mechanism_names() + ")");
+  }
+  return *mechanism;
+}
+
 namespace {
 
 sim_camera::WorldSpec load_chosen_world(const std::string& command, const ScenarioChoice& choice) {
@@ -64,9 +74,16 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
   if (!choice.law.empty()) {
     law = navigation_law_option("--law", choice.law);
   }
+  std::optional<servo::LawMechanism> without;
+  if (!choice.without.empty()) {
+    without = law_mechanism_option("--without", choice.without);
+  }
   sim_camera::WorldSpec world = load_chosen_world(command, choice);
   for (sim_camera::AgentSpec& agent : world.agents) {
     agent.controller.law = law.value_or(agent.controller.law);
+  }
+  if (without) {
+    eval::switch_off(world, *without);
   }
   return world;
 }
@@ -93,6 +110,10 @@ void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
   command.add_option(
       "--law", choice.law,
       "every agent's navigation law (default: the scenario's): " + servo::navigation_law_names());
+  command.add_option("--without", choice.without,
+                     "every agent's flowsteer law with this mechanism switched off, an ablation "
+                     "(default: the scenario's): " +
+                         servo::law_mechanism_names());
 }
 
 }  // namespace flowsteer::cli

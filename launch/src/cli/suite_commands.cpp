@@ -21,6 +21,7 @@ struct EvalSuiteCommand {
   std::vector<std::string> segmentations;
   std::vector<std::string> controllers;
   std::vector<std::string> laws;
+  std::vector<std::string> switched_off;
   std::vector<int> resolutions;
   int jobs = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
   std::string shard = "0/1";
@@ -70,6 +71,9 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
   }
   for (const std::string& name : command.laws) {
     options.laws.push_back(navigation_law_option("--law", name));
+  }
+  for (const std::string& name : command.switched_off) {
+    options.switched_off.push_back(law_mechanism_option("--without", name));
   }
   const auto keep = eval::parse_keep_runs(command.keep_runs);
   if (!keep) {
@@ -133,6 +137,10 @@ Subcommand add_eval_suite(CLI::App& eval) {
   suite->add_option("--law", command->laws,
                     "every agent's navigation law (default: the case's); repeat for several: " +
                         servo::navigation_law_names());
+  suite->add_option("--without", command->switched_off,
+                    "an ablation: every agent's flowsteer law with this mechanism switched off "
+                    "(default: the case's); repeat for several, none for the law as it is: " +
+                        servo::law_mechanism_names());
   suite->add_option("--resolution", command->resolutions,
                     "every agent's camera, N x N pixels (default: the case's); repeat for several");
   suite->add_option("--jobs,-j", command->jobs, "runs at once, each in its own process")

@@ -129,6 +129,10 @@ struct RunSummary {
 inline constexpr double kTurnFlipRadPerS = 1.0;
 RunSummary summarize(const SimResult& result);
 
+// Switches `mechanism` off in every agent's controller: an ablation (`--without`). Throws
+// base::ConfigError naming --without for an agent whose law is not flowsteer, which has none.
+void switch_off(sim_camera::WorldSpec& world, servo::LawMechanism mechanism);
+
 // Runs the world to its end: each agent renders its view, the servo core turns it into a
 // command, the world moves. Writes trajectories.csv, costs.csv, topview.png and summary.json
 // (and agent_N.mp4 with --video) into out_dir, each file complete or not at all. Progress goes

@@ -31,10 +31,11 @@ struct SuiteConfiguration {
   std::optional<servo::SegmentationMethod> segmentation;
   std::optional<servo::SteeringModel> controller;
   std::optional<servo::NavigationLaw> law;
-  std::optional<int> resolution;  // N × N pixels
+  std::optional<servo::LawMechanism> without;  // the flowsteer law's, switched off
+  std::optional<int> resolution;               // N × N pixels
   bool operator==(const SuiteConfiguration&) const = default;
 };
-// "flow/segmentation/controller/law/resolution", "own" for what is not overridden.
+// "flow/segmentation/controller/law/without/resolution", "own" for what is not overridden.
 std::string to_string(const SuiteConfiguration& configuration);
 
 // The i-th of n slices of a suite's runs (runs i, i + n, i + 2n, ...).
@@ -55,6 +56,7 @@ struct SuiteOptions {
   std::vector<servo::SegmentationMethod> segmentations;
   std::vector<servo::SteeringModel> controllers;
   std::vector<servo::NavigationLaw> laws;
+  std::vector<servo::LawMechanism> switched_off;  // an ablation: `none` is the law as it is
   std::vector<int> resolutions;
   std::optional<int> steps;  // stop each run after this many steps
   std::uint32_t seed = 1;    // the seed the cases were placed with, recorded with the suite
@@ -75,7 +77,7 @@ struct SuiteRun {
   bool failed() const { return !error.empty(); }
   bool clean() const { return !failed() && summary.clean(); }
   // The run's folder and top view are named this:
-  // "case.flow.segmentation.controller.law.resolution".
+  // "case.flow.segmentation.controller.law.without.resolution".
   std::string folder_name() const;
 };
 
@@ -89,8 +91,9 @@ struct SuiteResult {
   int jobs = 1;                // a merge: the most any shard had
 };
 
-// The suite's configurations, every flow × segmentation × controller × law × resolution in that
-// nesting. Throws base::ConfigError for a resolution out of 16..4096 or any value given twice.
+// The suite's configurations, every flow × segmentation × controller × law × mechanism switched
+// off × resolution in that nesting. Throws base::ConfigError for a resolution out of 16..4096, any
+// value given twice, or a mechanism switched off under a law other than flowsteer.
 std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options);
 
 // Runs the shard's runs in options.jobs worker processes, each as `flowsteer sim` runs a

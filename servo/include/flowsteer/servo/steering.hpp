@@ -22,6 +22,24 @@ enum class NavigationKind { goal_reaching, following };
 // honest, or the project's own law (docs/NAVIGATION.md), the default; mig2019 is cgf2019 with
 // MIG 2019's weights, dark regions included.
 enum class NavigationLaw { flowsteer, cgf2019, mig2019 };
+// One mechanism of the flowsteer law, switched off for an ablation (docs/NAVIGATION.md, "Where
+// the flowsteer law stands"): its braking and anticipation terms (weights 0), the passing
+// convention (no side preferred), commitment to the side taken (no band, no hold at rest),
+// static objects passed clear left out of the cost (kept in), giving way to fast crossers (never),
+// the speed limit (none), the implicit gradient step (CGF Eq. 15's explicit step) and the margin
+// in proportion to speed (the full margin always). none: the law as it is.
+enum class LawMechanism {
+  none,
+  braking,
+  anticipation,
+  passing_convention,
+  commitment,
+  passed_clear,
+  giving_way,
+  speed_limit,
+  implicit_step,
+  proportional_margin
+};
 // Where motion energy's "mass" and "floor" pixels come from: the renderer's object ids, or the
 // flat-ground test on the flow, as a real camera would give them.
 enum class MassSource { ids, ground };
@@ -30,14 +48,18 @@ std::string_view to_string(SteeringModel model);
 std::string_view to_string(NavigationKind kind);
 std::string_view to_string(MassSource source);
 std::string_view to_string(NavigationLaw law);
+std::string_view to_string(LawMechanism mechanism);
 std::optional<SteeringModel> parse_steering_model(std::string_view name);
 std::optional<NavigationKind> parse_navigation_kind(std::string_view name);
 std::optional<MassSource> parse_mass_source(std::string_view name);
 std::optional<NavigationLaw> parse_navigation_law(std::string_view name);
+std::optional<LawMechanism> parse_law_mechanism(std::string_view name);
 // "vision, geometric, motion_energy", for messages and help texts.
 std::string steering_model_names();
 // "flowsteer, cgf2019, mig2019".
 std::string navigation_law_names();
+// "none, braking, anticipation, ...".
+std::string law_mechanism_names();
 
 // A controller's settings, as scenario files, robot launch files and demo scenes give them.
 struct ControllerConfig {
@@ -54,6 +76,8 @@ struct ControllerConfig {
   std::optional<double> delta;
   std::optional<double> braking;
   std::optional<double> anticipation;
+  // Law flowsteer: the mechanism switched off, for an ablation; it wins over a weight given.
+  LawMechanism without = LawMechanism::none;
   // Law flowsteer, following: the gap kept behind the leader.
   double follow_gap_m = 2.0;
   double lambda = 1.0;
