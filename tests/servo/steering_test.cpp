@@ -73,7 +73,7 @@ TEST(LawMechanism, WithoutThePassingConventionNothingTurnsTheAgentRight) {
 
 // The same percept under the explicit step turns harder: the implicit one damps the stiff cost.
 TEST(LawMechanism, WithoutTheImplicitStepTheTurnIsTheExplicitOne) {
-  const double implicit = step_towards_object_ahead({}).command.turn_rate;
+  const double implicit = step_towards_object_ahead({}).unclamped.turn_rate;
   const ControlOutput explicit_step =
       step_towards_object_ahead(flowsteer_without(LawMechanism::implicit_step));
   EXPECT_GT(std::abs(explicit_step.unclamped.turn_rate), std::abs(implicit));
