@@ -232,10 +232,13 @@ class RunCounter {
   std::int32_t run_ = 0;
 };
 
-// Whether pixel i's flow is one to segment: not excluded, and finite.
-bool has_flow(std::span<const Eigen::Vector2f> flow, std::span<const std::uint8_t> excluded,
-              std::size_t i) {
-  return (excluded.empty() || excluded[i] == 0) && flow[i].allFinite();
+// Whether pixel i's flow is one to segment: not excluded, finite, and of something seen. Where a
+// field with depth has none (NaN or +inf), the pixel sees nothing, the sky past the world: its
+// flow, none after derotation, joined the tops of walls on either side of the view into one
+// region whose outline closed the way ahead.
+bool has_flow(const FlowField& derotated, std::span<const std::uint8_t> excluded, std::size_t i) {
+  return (excluded.empty() || excluded[i] == 0) && derotated.flow()[i].allFinite() &&
+         (!derotated.has_depth() || std::isfinite(derotated.depth()[i]));
 }
 
 // The fast method segments the features at the nearest pixels of a grid of at most
@@ -265,7 +268,7 @@ void fill_graph_features(const FlowField& derotated, std::span<const std::uint8_
     const int source_row = row * derotated.height() / size.height;
     for (int col = 0; col < size.width; ++col) {
       const std::size_t i = derotated.index(col * derotated.width() / size.width, source_row);
-      f[col] = has_flow(flow, excluded, i)
+      f[col] = has_flow(derotated, excluded, i)
                    ? cv::Vec3f(flow[i].x() * to_px_x, flow[i].y() * to_px_y, 0.0F)
                    : cv::Vec3f(0.0F, 0.0F, kInvalidMark);
     }
@@ -298,7 +301,6 @@ void label_full_resolution(const FlowField& derotated, std::span<const std::uint
                            std::vector<std::int32_t>& labels, std::vector<std::int32_t>& counts) {
   const int width = derotated.width();
   const int height = derotated.height();
-  const auto flow = derotated.flow();
   graph_cols.resize(static_cast<std::size_t>(width));
   const double col_scale = static_cast<double>(graph_labels.cols) / width;
   const double row_scale = static_cast<double>(graph_labels.rows) / height;
@@ -312,7 +314,7 @@ void label_full_resolution(const FlowField& derotated, std::span<const std::uint
         std::min(graph_labels.rows - 1, static_cast<int>(row * row_scale)));
     for (int col = 0; col < width; ++col) {
       const std::size_t i = derotated.index(col, row);
-      const std::int32_t segment = has_flow(flow, excluded, i)
+      const std::int32_t segment = has_flow(derotated, excluded, i)
                                        ? g[graph_cols[static_cast<std::size_t>(col)]]
                                        : Segmentation::kNoRegion;
       labels[i] = segment;

@@ -1,6 +1,7 @@
 #include "flowsteer/servo/optical_flow.hpp"
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -236,6 +237,35 @@ TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame
   Segmentation out;
   EXPECT_THROW(segmenter.segment(field, std::vector<std::uint8_t>(3, 0), out),
                std::invalid_argument);
+}
+
+// Two walls at either side of the view, standing still, under the sky: the sky (no depth) shows
+// the walls' own flow after derotation, none, and joined them into one region across the view.
+TEST(FlowSegmenter, PixelsThatSeeNothingAreInNoRegion) {
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg), true);
+  std::vector<std::uint8_t> ground(field.size(), 0);
+  for (int row = 0; row < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      const std::size_t i = field.index(col, row);
+      field.at(col, row) = Eigen::Vector2f::Zero();
+      const bool wall = col < 16 || col >= 48;
+      field.depth()[i] = row < 20 ? (col % 2 == 0 ? std::numeric_limits<float>::infinity()
+                                                  : std::numeric_limits<float>::quiet_NaN())
+                                  : (wall ? 3.0F : 2.0F);
+      ground[i] = row >= 20 && !wall ? 1 : 0;
+    }
+  }
+  for (SegmentationMethod method :
+       {SegmentationMethod::flow_graph, SegmentationMethod::flow_graph_fast}) {
+    FlowSegmenter segmenter(method);
+    Segmentation out;
+    segmenter.segment(field, ground, out);
+    ASSERT_EQ(out.region_count(), 2) << to_string(method);
+    EXPECT_NE(out.labels[field.index(5, 30)], out.labels[field.index(60, 30)]);
+    EXPECT_EQ(out.labels[field.index(5, 10)], Segmentation::kNoRegion);
+    EXPECT_EQ(out.labels[field.index(32, 10)], Segmentation::kNoRegion);
+    EXPECT_EQ(out.labels[field.index(33, 10)], Segmentation::kNoRegion);
+  }
 }
 
 // A field wider than fast_max_side_px: flow_graph_fast segments it on a reduced grid and brings

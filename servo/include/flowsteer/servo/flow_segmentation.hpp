@@ -40,7 +40,8 @@ struct FlowSegmentationOptions {
 
 // Segmentation from the flow alone, which is what a real camera has. Regions are connected sets
 // of pixels whose derotated flow varies smoothly; pixels set in `excluded` (the ground) and
-// pixels without flow (NaN) belong to no region. Each region's source id follows it from frame
+// pixels without flow (NaN) belong to no region, as do, in a field with depth (a simulator's),
+// pixels without depth, which see nothing (the sky). Each region's source id follows it from frame
 // to frame (the previous region it overlaps most), so that what the controller remembers about
 // an object (its side, commit_band) stays with it; ids start at kFirstTrackId, clear of the
 // renderer's.
