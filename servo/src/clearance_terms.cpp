@@ -242,7 +242,7 @@ class ThreatCones {
     return &still;
   }
 
-  // A static object (by the fit) whose ends, taken as a segment on the ground, stay further than
+  // A static object (stands_still) whose ends, taken as a segment on the ground, stay further than
   // half the kept width plus static_clearance_m from the agent for the whole horizon if it goes
   // straight on: a wall along the path, people standing beside the course. Their clearance cost
   // would still pull: its importance is that of their nearer end, small in time for anything
@@ -259,7 +259,7 @@ class ThreatCones {
                            const AvoidanceOptions& options, double kept_width_m) {
     const std::optional<Eigen::Vector2d> velocity =
         detail::relative_velocity(object, agent, options);
-    if (!object.fit.static_foe || !velocity) {
+    if (!detail::stands_still(object, agent, options) || !velocity) {
       return false;
     }
     detail::Outline outline;
@@ -383,7 +383,7 @@ class ClearanceTerm final : public CostTerm {
       const ObjectFeatures& object = *entry.object;
       const bool measured = ends_measured(object, options_);
       const std::optional<Eigen::Vector2d> relative =
-          entry.group == group && measured && !object.fit.static_foe
+          entry.group == group && measured && !detail::stands_still(object, agent, options_)
               ? detail::relative_velocity(object, agent, options_)
               : std::nullopt;
       if (!relative) {

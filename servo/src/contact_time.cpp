@@ -100,7 +100,7 @@ std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
   // mean depth and its fitted τ is the speed of no one point of it: for a wall along the path,
   // whose fit leans on its near pixels, it was three times the agent's, and a wall's far end 9 m
   // ahead came within the horizon.
-  if (object.fit.static_foe && object.has_foe() && std::isfinite(object.foe.x())) {
+  if (stands_still(object, agent, options) && object.has_foe() && std::isfinite(object.foe.x())) {
     const double vz = -agent.speed_mps;
     return Eigen::Vector2d{object.foe.x() * vz, vz};
   }

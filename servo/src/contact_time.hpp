@@ -52,9 +52,9 @@ double distance_to_outline(const Outline& outline);
 double distance_to_path_m(const Outline& outline, const Eigen::Vector2d& v, double half_width_m);
 
 // The object's velocity relative to the agent (x right, z forward, m/s) from its flow: V_z =
-// −Z/τ and V_x = f V_z at the depth the fit used (CGF Eq. 2–3), V_z = −v_c for an object the fit
-// finds static; for lateral motion, the derotated flow u = V_x / Z gives V_x = mean(u) /
-// mean(1/Z). Nothing for an object without a usable fit.
+// −Z/τ and V_x = f V_z at the depth the fit used (CGF Eq. 2–3), V_z = −v_c for an object that
+// stands still (stands_still); for lateral motion, the derotated flow u = V_x / Z gives V_x =
+// mean(u) / mean(1/Z). Nothing for an object without a usable fit.
 std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
                                                  const AgentState& agent,
                                                  const AvoidanceOptions& options);

@@ -247,6 +247,8 @@ void validate(const AvoidanceOptions& o) {
           "anticipation_s must be positive, got " + std::to_string(o.anticipation_s));
   require(o.static_clearance_m >= 0.0,
           "static_clearance_m must be >= 0, got " + std::to_string(o.static_clearance_m));
+  require(o.static_closing_ratio > 0.0,
+          "static_closing_ratio must be > 0, got " + std::to_string(o.static_closing_ratio));
 }
 
 void require_weight(double value, const char* name) {

@@ -73,6 +73,27 @@ inline DepthScale depth_scale(const ObjectFeatures& object, const AgentState& ag
   return {tau_over_depth, object.ttc_s / tau_over_depth};
 }
 
+// Whether the object stands still: its fit found the static FOE and, where the field has a depth
+// per pixel (a simulator's), it does not close in faster than static_closing_ratio times the
+// agent's speed at its nearest point's depth. Not the mean depth: the fit of a wall along the
+// path leans on its near pixels, and its τ is a third of the mean depth over the agent's speed.
+// Not with a camera's depth from the ground: numerical flow's τ errs by more than the ratio
+// allows, walls came out moving, and DIS flow lost (docs/NAVIGATION.md, session 36).
+inline bool stands_still(const ObjectFeatures& object, const AgentState& agent,
+                         const AvoidanceOptions& options) {
+  if (!object.fit.static_foe) {
+    return false;
+  }
+  const std::optional<double>& nearest_m = object.nearest_depth_m;
+  // An agent at rest or nearly sees no expansion from what stands still to measure this by.
+  if (!options.use_depth || !object.depth_m || !nearest_m || !std::isfinite(object.ttc_s) ||
+      std::abs(agent.speed_mps) < options.min_speed_mps) {
+    return true;
+  }
+  // Infinity times a τ of 0 is NaN: still standing.
+  return !(options.static_closing_ratio * std::abs(agent.speed_mps) * object.ttc_s < *nearest_m);
+}
+
 // An object the avoidance terms weigh: visible, approaching within the horizon, fitted.
 inline bool is_threat(const ObjectFeatures& object, const AvoidanceOptions& options) {
   return object.kind == RegionKind::visible && object.status == MotionStatus::approaching &&

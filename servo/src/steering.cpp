@@ -29,7 +29,7 @@ constexpr std::array<std::pair<NavigationLaw, std::string_view>, 3> kLaws{{
     {NavigationLaw::mig2019, "mig2019"},
 }};
 
-constexpr std::array<std::pair<LawMechanism, std::string_view>, 10> kMechanisms{{
+constexpr std::array<std::pair<LawMechanism, std::string_view>, 11> kMechanisms{{
     {LawMechanism::none, "none"},
     {LawMechanism::braking, "braking"},
     {LawMechanism::anticipation, "anticipation"},
@@ -40,6 +40,7 @@ constexpr std::array<std::pair<LawMechanism, std::string_view>, 10> kMechanisms{
     {LawMechanism::speed_limit, "speed_limit"},
     {LawMechanism::implicit_step, "implicit_step"},
     {LawMechanism::proportional_margin, "proportional_margin"},
+    {LawMechanism::static_closing, "static_closing"},
 }};
 
 template <typename Enum, std::size_t N>
@@ -90,6 +91,9 @@ void disable(LawMechanism mechanism, AvoidanceOptions& avoidance) {
       break;
     case LawMechanism::proportional_margin:
       avoidance.standing_margin_m = avoidance.margin_m;
+      break;
+    case LawMechanism::static_closing:
+      avoidance.static_closing_ratio = kNever;
       break;
     case LawMechanism::none:
     case LawMechanism::braking:

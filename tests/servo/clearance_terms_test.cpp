@@ -503,6 +503,30 @@ TEST(ClearanceBehaviour, AnAgentAtRestKeepsTheEndItChoseWhenTurningTakesAWallOut
   EXPECT_GT(turns(*unheld, alone), 0.0);
 }
 
+// Someone 3 m ahead, 0.9 to 1.3 m right of the course, whose FOE the fit finds where a static
+// object's lies, straight ahead, as it does for anyone walking straight at the agent. Standing
+// (τ = 3 s at 1 m/s) the course passes it clear; closing in at 2 m/s (τ = 1.5 s) it moves, may
+// turn into the path, and costs. Without the check (static_closing switched off) the fit's word
+// is taken.
+TEST(ClearanceBehaviour, AnObjectClosingInFasterThanTheAgentWalksIsNotTakenAsStanding) {
+  ObjectFeatures person = standing_object({0.9, 3.0}, {1.3, 3.0});
+  person.nearest_x = person.min_x;
+  person.nearest_depth_m = 3.0;
+  person.status = MotionStatus::approaching;
+  person.foe = {0.0, 0.0};
+  person.fit.static_foe = true;
+  AvoidanceOptions options = options_without_convention(1.0);
+  auto cost = [&](double ttc_s) {
+    person.ttc_s = ttc_s;
+    const std::vector<ObjectFeatures> objects = {person};
+    return clearance_term(options)->evaluate({objects, {}, {}, {}}, {1.0}).cost;
+  };
+  EXPECT_EQ(cost(3.0), 0.0);
+  EXPECT_GT(cost(1.5), 0.0);
+  options.static_closing_ratio = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(cost(1.5), 0.0);
+}
+
 // A wall on the right that the agent's heading meets 9.4 m ahead, its far end 8 m ahead and
 // 0.235 m right of the course, its near end cut by the image beside the agent. Its fit, pulled
 // towards the near pixels, gives τ = 0.8 s for a mean depth of 2.5 m. At 1 m/s the agent's disc

@@ -48,7 +48,7 @@ TEST(LawMechanism, EveryNameReadsBack) {
     EXPECT_EQ(to_string(*mechanism), name);
     ++count;
   }
-  EXPECT_EQ(count, 10);
+  EXPECT_EQ(count, 11);
   EXPECT_FALSE(parse_law_mechanism("brake"));
 }
 
@@ -89,6 +89,35 @@ TEST(LawMechanism, WithoutTheSpeedLimitOnlyTheApproachTermSlowsAFastAgent) {
   EXPECT_DOUBLE_EQ(accel(LawMechanism::none), -1.0);
   EXPECT_GT(accel(LawMechanism::speed_limit), -1.0);
   EXPECT_LT(accel(LawMechanism::speed_limit), 0.0);
+}
+
+// Someone 3 m ahead, 1 to 1.4 m right of the course, walking straight at the agent (1.3 m/s each:
+// τ = 3 / 2.6 s) with the FOE a standing object would have. Taken as standing, the course passes
+// it clear and the agent walks on as if it were not there.
+TEST(LawMechanism, WithoutTheClosingCheckAnObjectWalkingStraightAtTheAgentIsTakenAsStanding) {
+  ObjectFeatures person;
+  person.source_id = 7;
+  person.pixel_count = 200;
+  person.min_x = 1.0 / 3.0;
+  person.max_x = 1.4 / 3.0;
+  person.width = person.max_x - person.min_x;
+  person.min_x_depth_m = 3.0;
+  person.max_x_depth_m = 3.0;
+  person.depth_m = 3.0;
+  person.nearest_x = person.min_x;
+  person.nearest_depth_m = 3.0;
+  person.status = MotionStatus::approaching;
+  person.foe = {0.0, 0.0};
+  person.ttc_s = 3.0 / 2.6;
+  person.fit.static_foe = true;
+  const auto step = [](const ControllerConfig& config, const std::vector<ObjectFeatures>& objects) {
+    Controller controller = make_controller(config, 0.6, 1.3);
+    return controller.step({objects, 0.0, 20.0, {}}, {1.3, 0.05}).unclamped;
+  };
+  const ControllerConfig without = flowsteer_without(LawMechanism::static_closing);
+  EXPECT_EQ(step(without, {person}).turn_rate, step(without, {}).turn_rate);
+  EXPECT_EQ(step(without, {person}).accel_mps2, step(without, {}).accel_mps2);
+  EXPECT_NE(step({}, {person}).turn_rate, step({}, {}).turn_rate);
 }
 
 }  // namespace

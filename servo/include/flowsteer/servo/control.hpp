@@ -107,6 +107,10 @@ struct AvoidanceOptions {
   // course passes further than half its kept width plus this from, within the horizon, is left
   // out (infinity: none is).
   double static_clearance_m = 0.25;
+  // An object whose FOE the fit could not tell from a static one's moves all the same when it
+  // closes in faster than this many times the agent's own speed (Z / τ at its measured depth):
+  // someone walking straight at the agent has the FOE of a wall ahead, and half its τ.
+  double static_closing_ratio = 1.5;
 };
 
 // L_t = ½ t_x² (CGF Eq. 7). Needs the goal's bearing; zero without one.

@@ -26,8 +26,9 @@ enum class NavigationLaw { flowsteer, cgf2019, mig2019 };
 // the flowsteer law stands"): its braking and anticipation terms (weights 0), the passing
 // convention (no side preferred), commitment to the side taken (no band, no hold at rest),
 // static objects passed clear left out of the cost (kept in), giving way to fast crossers (never),
-// the speed limit (none), the implicit gradient step (CGF Eq. 15's explicit step) and the margin
-// in proportion to speed (the full margin always). none: the law as it is.
+// the speed limit (none), the implicit gradient step (CGF Eq. 15's explicit step), the margin
+// in proportion to speed (the full margin always) and the static FOE checked against the closing
+// speed (the fit's word taken). none: the law as it is.
 enum class LawMechanism {
   none,
   braking,
@@ -38,7 +39,8 @@ enum class LawMechanism {
   giving_way,
   speed_limit,
   implicit_step,
-  proportional_margin
+  proportional_margin,
+  static_closing
 };
 // Where motion energy's "mass" and "floor" pixels come from: the renderer's object ids, or the
 // flat-ground test on the flow, as a real camera would give them.
