@@ -107,9 +107,10 @@ struct AvoidanceOptions {
   // course passes further than half its kept width plus this from, within the horizon, is left
   // out (infinity: none is).
   double static_clearance_m = 0.25;
-  // An object whose FOE the fit could not tell from a static one's moves all the same when it
-  // closes in faster than this many times the agent's own speed (Z / τ at its measured depth):
-  // someone walking straight at the agent has the FOE of a wall ahead, and half its τ.
+  // The flowsteer law: an object whose FOE the fit could not tell from a static one's moves all
+  // the same when it closes in faster than this many times the agent's own speed (Z / τ at its
+  // nearest point, where the field has a depth per pixel): someone walking straight at the agent
+  // has the FOE of a wall ahead, and half its τ (infinity: the fit's word is taken).
   double static_closing_ratio = 1.5;
 };
 
