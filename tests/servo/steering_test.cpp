@@ -16,24 +16,31 @@ ControllerConfig flowsteer_without(LawMechanism mechanism) {
   return config;
 }
 
-// A standing object 3 m dead ahead, 0.4 m wide, seen by an agent walking at 1.3 m/s towards a goal
-// straight on: both ways round are the same but for the passing convention.
-ControlOutput step_towards_object_ahead(const ControllerConfig& config) {
+// An object 3 m ahead between `left_m` and `right_m` of the course (positive: right), facing the
+// agent, whose FOE the fit finds where a standing object's lies, straight ahead.
+ObjectFeatures object_3m_ahead(double left_m, double right_m, double ttc_s) {
   ObjectFeatures object;
   object.source_id = 7;
   object.pixel_count = 200;
-  object.min_x = -0.2 / 3.0;
-  object.max_x = 0.2 / 3.0;
+  object.min_x = left_m / 3.0;
+  object.max_x = right_m / 3.0;
   object.width = object.max_x - object.min_x;
   object.min_x_depth_m = 3.0;
   object.max_x_depth_m = 3.0;
   object.depth_m = 3.0;
+  object.nearest_x = 0.5 * (object.min_x + object.max_x);
   object.nearest_depth_m = 3.0;
   object.status = MotionStatus::approaching;
   object.foe = {0.0, 0.0};
-  object.ttc_s = 3.0 / 1.3;
+  object.ttc_s = ttc_s;
   object.fit.static_foe = true;
-  const std::vector<ObjectFeatures> objects = {object};
+  return object;
+}
+
+// A standing object 3 m dead ahead, 0.4 m wide, seen by an agent walking at 1.3 m/s towards a goal
+// straight on: both ways round are the same but for the passing convention.
+ControlOutput step_towards_object_ahead(const ControllerConfig& config) {
+  const std::vector<ObjectFeatures> objects = {object_3m_ahead(-0.2, 0.2, 3.0 / 1.3)};
   Controller controller = make_controller(config, 0.6, 1.3);
   return controller.step({objects, 0.0, 20.0, {}}, {1.3, 0.05});
 }
@@ -95,21 +102,7 @@ TEST(LawMechanism, WithoutTheSpeedLimitOnlyTheApproachTermSlowsAFastAgent) {
 // τ = 3 / 2.6 s) with the FOE a standing object would have. Taken as standing, the course passes
 // it clear and the agent walks on as if it were not there.
 TEST(LawMechanism, WithoutTheClosingCheckAnObjectWalkingStraightAtTheAgentIsTakenAsStanding) {
-  ObjectFeatures person;
-  person.source_id = 7;
-  person.pixel_count = 200;
-  person.min_x = 1.0 / 3.0;
-  person.max_x = 1.4 / 3.0;
-  person.width = person.max_x - person.min_x;
-  person.min_x_depth_m = 3.0;
-  person.max_x_depth_m = 3.0;
-  person.depth_m = 3.0;
-  person.nearest_x = person.min_x;
-  person.nearest_depth_m = 3.0;
-  person.status = MotionStatus::approaching;
-  person.foe = {0.0, 0.0};
-  person.ttc_s = 3.0 / 2.6;
-  person.fit.static_foe = true;
+  const ObjectFeatures person = object_3m_ahead(1.0, 1.4, 3.0 / 2.6);
   const auto step = [](const ControllerConfig& config, const std::vector<ObjectFeatures>& objects) {
     Controller controller = make_controller(config, 0.6, 1.3);
     return controller.step({objects, 0.0, 20.0, {}}, {1.3, 0.05}).unclamped;
