@@ -127,6 +127,13 @@ servo::PerceptionConfig read_perception(const base::YamlReader& r, const YAML::N
     }
     perception.segmentation = *method;
   }
+  if (const YAML::Node depth = node["depth"]) {
+    const auto source = servo::parse_depth_source(depth.IsScalar() ? depth.Scalar() : "");
+    if (!source) {
+      r.fail(depth, field + ".depth", "expected one of " + servo::depth_source_names());
+    }
+    perception.depth = *source;
+  }
   return perception;
 }
 

@@ -168,7 +168,7 @@ servo::PerceptionConfig read_scenario_perception(const base::YamlReader& r, cons
                                                  const std::string& field,
                                                  const servo::PerceptionConfig& p) {
   if (node) {
-    r.only_keys(node, field, {"flow", "segmentation"});
+    r.only_keys(node, field, {"flow", "segmentation", "depth"});
   }
   return read_perception(r, node, field, p);
 }

@@ -416,6 +416,8 @@ sim_camera::WorldSpec with_overrides(sim_camera::WorldSpec spec, const SimOption
       a.perception.flow = *options.flow;
     if (options.segmentation)
       a.perception.segmentation = *options.segmentation;
+    if (options.depth)
+      a.perception.depth = *options.depth;
   }
   return spec;
 }

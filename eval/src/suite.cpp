@@ -98,6 +98,7 @@ RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& confi
   sim.steps = options.steps;
   sim.flow = configuration.flow;
   sim.segmentation = configuration.segmentation;
+  sim.depth = configuration.depth;
   std::ostream quiet(nullptr);
   return summarize(run_simulation(world, sim, quiet));
 }
@@ -262,9 +263,9 @@ SuiteResult join_shards(const std::vector<std::filesystem::path>& shard_dirs) {
 }  // namespace
 
 std::string to_string(const SuiteConfiguration& c) {
-  return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" + name_or_own(c.controller) +
-         "/" + name_or_own(c.law) + "/" + name_or_own(c.without) + "/" +
-         (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
+  return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" + name_or_own(c.depth) +
+         "/" + name_or_own(c.controller) + "/" + name_or_own(c.law) + "/" + name_or_own(c.without) +
+         "/" + (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
 }
 
 std::string SuiteRun::folder_name() const {
@@ -303,6 +304,7 @@ std::optional<KeepRuns> parse_keep_runs(const std::string& name) {
 std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options) {
   refuse_repeats(options.flows, "--flow");
   refuse_repeats(options.segmentations, "--segmentation");
+  refuse_repeats(options.depths, "--depth");
   refuse_repeats(options.controllers, "--controller");
   refuse_repeats(options.laws, "--law");
   refuse_repeats(options.switched_off, "--without");
@@ -311,11 +313,14 @@ std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options
   std::vector<SuiteConfiguration> configurations;
   for (const auto& flow : each_or_own(options.flows)) {
     for (const auto& segmentation : each_or_own(options.segmentations)) {
-      for (const auto& controller : each_or_own(options.controllers)) {
-        for (const auto& law : each_or_own(options.laws)) {
-          for (const auto& without : each_or_own(options.switched_off)) {
-            for (const auto& resolution : each_or_own(options.resolutions)) {
-              configurations.push_back({flow, segmentation, controller, law, without, resolution});
+      for (const auto& depth : each_or_own(options.depths)) {
+        for (const auto& controller : each_or_own(options.controllers)) {
+          for (const auto& law : each_or_own(options.laws)) {
+            for (const auto& without : each_or_own(options.switched_off)) {
+              for (const auto& resolution : each_or_own(options.resolutions)) {
+                configurations.push_back(
+                    {flow, segmentation, depth, controller, law, without, resolution});
+              }
             }
           }
         }

@@ -18,10 +18,11 @@ namespace flowsteer::eval {
 namespace {
 
 const char* const kHeader =
-    "run,case,flow,segmentation,controller,law,without,resolution,status,agents,goals_reached,"
+    "run,case,flow,segmentation,depth,controller,law,without,resolution,status,agents,"
+    "goals_reached,"
     "agents_with_goal,collisions,obstacle_collisions,min_clearance_m,mean_time_to_goal_s,"
     "mean_path_length_m,mean_path_length_ratio,mean_time_ratio,composite01,turn_flip_ratio,error";
-constexpr std::size_t kLabelColumns = 9;   // run ... status
+constexpr std::size_t kLabelColumns = 10;  // run ... status
 constexpr std::size_t kScoreColumns = 12;  // agents ... turn_flip_ratio
 
 std::vector<std::string> split(const std::string& line, char separator) {
@@ -108,15 +109,17 @@ SuiteRun parse_csv_row(const std::string& line, const std::string& where) {
       cells[2], [](const std::string& s) { return servo::parse_flow_method(s); }, where);
   run.configuration.segmentation = own_or<servo::SegmentationMethod>(
       cells[3], [](const std::string& s) { return servo::parse_segmentation_method(s); }, where);
+  run.configuration.depth = own_or<servo::DepthSource>(
+      cells[4], [](const std::string& s) { return servo::parse_depth_source(s); }, where);
   run.configuration.controller = own_or<servo::SteeringModel>(
-      cells[4], [](const std::string& s) { return servo::parse_steering_model(s); }, where);
+      cells[5], [](const std::string& s) { return servo::parse_steering_model(s); }, where);
   run.configuration.law = own_or<servo::NavigationLaw>(
-      cells[5], [](const std::string& s) { return servo::parse_navigation_law(s); }, where);
+      cells[6], [](const std::string& s) { return servo::parse_navigation_law(s); }, where);
   run.configuration.without = own_or<servo::LawMechanism>(
-      cells[6], [](const std::string& s) { return servo::parse_law_mechanism(s); }, where);
-  run.configuration.resolution = own_or<int>(cells[7], parse_int, where + ": resolution");
+      cells[7], [](const std::string& s) { return servo::parse_law_mechanism(s); }, where);
+  run.configuration.resolution = own_or<int>(cells[8], parse_int, where + ": resolution");
   run.error = cells.back();
-  if (cells[8] == "failed") {
+  if (cells[9] == "failed") {
     run.error = run.error.empty() ? "failed" : run.error;
     return run;
   }

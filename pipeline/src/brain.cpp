@@ -16,6 +16,7 @@ PerceptionOptions perception_options(const servo::PerceptionConfig& perception,
   PerceptionOptions options;
   options.flow = perception.flow;
   options.segmentation = perception.segmentation;
+  options.depth = perception.depth;
   options.dark_regions = servo::navigation_weights(controller).delta > 0.0;
   options.use_depth = controller.use_depth;
   options.mount = mount;

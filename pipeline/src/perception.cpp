@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -18,9 +19,14 @@ bool synthetic(const PerceptionOptions& options) {
   return options.flow == servo::FlowMethod::synthetic;
 }
 
+// Whether the field carries the renderer's depth at every pixel.
+bool per_pixel_depth(const PerceptionOptions& options) {
+  return synthetic(options) && options.use_depth && options.depth == servo::DepthSource::renderer;
+}
+
 servo::FeatureOptions feature_options(const PerceptionOptions& options) {
   servo::FeatureOptions features;
-  features.use_depth = synthetic(options) && options.use_depth;
+  features.use_depth = per_pixel_depth(options);
   // A camera has no depth; where objects stand on the ground, the ground gives it.
   if (!features.use_depth) {
     features.ground_mount = options.mount;
@@ -30,16 +36,23 @@ servo::FeatureOptions feature_options(const PerceptionOptions& options) {
   return features;
 }
 
-// Copies the simulator's flow and depth into the servo core's field.
-void copy_sim_channels(const camera_io::SimChannels& sim, servo::FlowField& field) {
+// Copies the simulator's flow and depth into the servo core's field. With the ground's depth
+// only, a pixel that sees nothing (the sky, without depth) gets no flow either: a camera's sky has
+// no texture to show motion by.
+void copy_sim_channels(const camera_io::SimChannels& sim, servo::DepthSource depth_source,
+                       servo::FlowField& field) {
   auto flow = field.flow();
   auto depth = field.depth();
+  const bool sky_without_flow = depth_source == servo::DepthSource::ground;
+  const Eigen::Vector2f no_flow =
+      Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
   for (int row = 0; row < field.height(); ++row) {
     const auto* f = sim.flow.ptr<cv::Vec2f>(row);
     const auto* d = sim.depth_m.ptr<float>(row);
     for (int col = 0; col < field.width(); ++col) {
       const std::size_t i = field.index(col, row);
-      flow[i] = Eigen::Vector2f(f[col][0], f[col][1]);
+      flow[i] = sky_without_flow && !std::isfinite(d[col]) ? no_flow
+                                                           : Eigen::Vector2f(f[col][0], f[col][1]);
       if (!depth.empty())
         depth[i] = d[col];
     }
@@ -60,7 +73,7 @@ StageTimes& StageTimes::operator+=(const StageTimes& other) {
 
 Perception::Perception(const base::CameraIntrinsics& intrinsics, const PerceptionOptions& options)
     : options_(options),
-      field_(intrinsics, synthetic(options) && options.use_depth),
+      field_(intrinsics, per_pixel_depth(options)),
       dark_finder_(options.dark),
       extractor_(feature_options(options)),
       motions_(std::make_unique<MotionHistory>(
@@ -116,7 +129,7 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
              flow.empty() || flow.cols != field_.width() || flow.rows != field_.height()) {
     status_ = flow.empty() ? servo::FlowStatus::empty_frame : servo::FlowStatus::size_changed;
   } else {
-    copy_sim_channels(*frame.sim, field_);
+    copy_sim_channels(*frame.sim, options_.depth, field_);
     status_ = servo::FlowStatus::ok;
   }
   if (status_ != servo::FlowStatus::ok) {

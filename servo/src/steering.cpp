@@ -22,6 +22,10 @@ constexpr std::array<std::pair<MassSource, std::string_view>, 2> kMassSources{{
     {MassSource::ids, "ids"},
     {MassSource::ground, "ground"},
 }};
+constexpr std::array<std::pair<DepthSource, std::string_view>, 2> kDepthSources{{
+    {DepthSource::renderer, "renderer"},
+    {DepthSource::ground, "ground"},
+}};
 
 constexpr std::array<std::pair<NavigationLaw, std::string_view>, 3> kLaws{{
     {NavigationLaw::flowsteer, "flowsteer"},
@@ -115,6 +119,9 @@ std::string_view to_string(NavigationKind kind) {
 std::string_view to_string(MassSource source) {
   return name_of(kMassSources, source);
 }
+std::string_view to_string(DepthSource source) {
+  return name_of(kDepthSources, source);
+}
 std::optional<SteeringModel> parse_steering_model(std::string_view name) {
   return value_of(kModels, name);
 }
@@ -123,6 +130,12 @@ std::optional<NavigationKind> parse_navigation_kind(std::string_view name) {
 }
 std::optional<MassSource> parse_mass_source(std::string_view name) {
   return value_of(kMassSources, name);
+}
+std::optional<DepthSource> parse_depth_source(std::string_view name) {
+  return value_of(kDepthSources, name);
+}
+std::string depth_source_names() {
+  return names_of(kDepthSources);
 }
 
 std::string_view to_string(NavigationLaw law) {

@@ -234,19 +234,20 @@ TEST_F(SuiteRunTest, EveryCaseRunsUnderEveryConfigurationAndAFailureStopsNoOther
   const std::filesystem::path out = dir_ / "all";
   const std::string csv = file_text(out / "suite.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
-  EXPECT_NE(csv.find("5,follow,own,own,motion_energy,own,own,24,failed,"), std::string::npos)
+  EXPECT_NE(csv.find("5,follow,own,own,own,motion_energy,own,own,24,failed,"), std::string::npos)
       << csv;
-  EXPECT_NE(csv.find("0,near,own,own,geometric,own,own,24,clean,1,1,1,0,"), std::string::npos)
+  EXPECT_NE(csv.find("0,near,own,own,own,geometric,own,own,24,clean,1,1,1,0,"), std::string::npos)
       << csv;
   EXPECT_TRUE(std::filesystem::exists(out / "contact_sheet.png"));
   EXPECT_TRUE(std::filesystem::exists(out / "suite.json"));
   EXPECT_NE(file_text(out / "suite.txt").find("clean 2 of 3 cases"), std::string::npos);
   // Top views of every run that got one; folders only for the runs that are not clean.
-  EXPECT_TRUE(std::filesystem::exists(out / "topviews" / "near.own.own.geometric.own.own.24.png"));
-  EXPECT_FALSE(std::filesystem::exists(out / "runs" / "near.own.own.geometric.own.own.24"));
-  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "far.own.own.geometric.own.own.24" /
+  EXPECT_TRUE(
+      std::filesystem::exists(out / "topviews" / "near.own.own.own.geometric.own.own.24.png"));
+  EXPECT_FALSE(std::filesystem::exists(out / "runs" / "near.own.own.own.geometric.own.own.24"));
+  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "far.own.own.own.geometric.own.own.24" /
                                       "trajectories.csv"));
-  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "follow.own.own.motion_energy.own.own.24" /
+  EXPECT_TRUE(std::filesystem::exists(out / "runs" / "follow.own.own.own.motion_energy.own.own.24" /
                                       "error.txt"));
   for (const auto& entry : std::filesystem::directory_iterator(out)) {
     EXPECT_EQ(entry.path().filename().string().rfind(".staging", 0), std::string::npos);
@@ -271,7 +272,7 @@ TEST_F(SuiteRunTest, ThreeShardsMergedAreTheUnshardedSuite) {
   }
   EXPECT_TRUE(std::filesystem::exists(dir_ / "merged" / "contact_sheet.png"));
   EXPECT_TRUE(
-      std::filesystem::exists(dir_ / "merged" / "runs" / "far.own.own.geometric.own.own.24"));
+      std::filesystem::exists(dir_ / "merged" / "runs" / "far.own.own.own.geometric.own.own.24"));
 
   // A shard missing, one given twice, or a shard of another suite are refused by name.
   EXPECT_NE(error_of([&] {
@@ -321,17 +322,41 @@ TEST_F(SuiteRunTest, EachMechanismSwitchedOffIsAConfigurationOfItsOwn) {
   ASSERT_EQ(result.runs.size(), 2U);
   EXPECT_TRUE(result.runs[0].clean()) << result.runs[0].error;
   const std::string csv = file_text(o.out_dir / "suite.csv");
-  EXPECT_NE(csv.find("0,near,own,own,geometric,own,none,24,"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("1,near,own,own,geometric,own,braking,24,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("0,near,own,own,own,geometric,own,none,24,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("1,near,own,own,own,geometric,own,braking,24,"), std::string::npos) << csv;
   const SuiteResult merged = merge_suite_shards({o.out_dir}, dir_ / "merged");
   ASSERT_EQ(merged.runs.size(), 2U);
   EXPECT_EQ(merged.runs[1].configuration.without, servo::LawMechanism::braking);
-  EXPECT_EQ(merged.runs[1].folder_name(), "near.own.own.geometric.own.braking.24");
+  EXPECT_EQ(merged.runs[1].folder_name(), "near.own.own.own.geometric.own.braking.24");
 
   o.laws = {servo::NavigationLaw::flowsteer, servo::NavigationLaw::cgf2019};
   EXPECT_NE(error_of([&] { run_suite(cases_, o, log); })
                 .find("--without braking: switches off a mechanism of the flowsteer law, which "
                       "--law cgf2019 does not have"),
+            std::string::npos);
+}
+
+// The depth a simulated agent's features get (the renderer's per pixel, or the ground's as a
+// camera's) is a dimension of its own, after the segmentation, read back by a merge.
+TEST_F(SuiteRunTest, TheDepthSourceIsAConfigurationOfItsOwn) {
+  std::ostringstream log;
+  SuiteOptions o = options("depth");
+  o.controllers = {};
+  o.depths = {servo::DepthSource::renderer, servo::DepthSource::ground};
+  const SuiteResult result = run_suite({walk_case("near", 1.5)}, o, log);
+  ASSERT_EQ(result.runs.size(), 2U);
+  EXPECT_TRUE(result.runs[0].clean()) << result.runs[0].error;
+  EXPECT_TRUE(result.runs[1].clean()) << result.runs[1].error;
+  const std::string csv = file_text(o.out_dir / "suite.csv");
+  EXPECT_NE(csv.find("0,near,own,own,renderer,own,own,own,24,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("1,near,own,own,ground,own,own,own,24,"), std::string::npos) << csv;
+  const SuiteResult merged = merge_suite_shards({o.out_dir}, dir_ / "merged");
+  ASSERT_EQ(merged.runs.size(), 2U);
+  EXPECT_EQ(merged.runs[1].configuration.depth, servo::DepthSource::ground);
+  EXPECT_EQ(merged.runs[1].folder_name(), "near.own.own.ground.own.own.own.24");
+
+  o.depths = {servo::DepthSource::ground, servo::DepthSource::ground};
+  EXPECT_NE(error_of([&] { run_suite(cases_, o, log); }).find("--depth ground: given twice"),
             std::string::npos);
 }
 

@@ -43,6 +43,7 @@ servo::FlowMethod flow_method_option(const std::string& option, const std::strin
                                      bool refuse_synthetic = false);
 servo::SegmentationMethod segmentation_method_option(const std::string& option,
                                                      const std::string& name);
+servo::DepthSource depth_source_option(const std::string& option, const std::string& name);
 servo::NavigationLaw navigation_law_option(const std::string& option, const std::string& name);
 servo::LawMechanism law_mechanism_option(const std::string& option, const std::string& name);
 

@@ -29,6 +29,15 @@ servo::SegmentationMethod segmentation_method_option(const std::string& option,
   return *method;
 }
 
+servo::DepthSource depth_source_option(const std::string& option, const std::string& name) {
+  const auto source = servo::parse_depth_source(name);
+  if (!source) {
+    throw CLI::ValidationError(
+        option, "unknown depth source '" + name + "' (known: " + servo::depth_source_names() + ")");
+  }
+  return *source;
+}
+
 servo::NavigationLaw navigation_law_option(const std::string& option, const std::string& name) {
   const auto law = servo::parse_navigation_law(name);
   if (!law) {

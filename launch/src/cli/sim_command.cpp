@@ -22,6 +22,7 @@ struct SimCommand {
   int threads = 0;
   std::string flow;
   std::string segmentation;
+  std::string depth;
 };
 
 // Seconds and metres with two decimals, the unit after the number.
@@ -69,6 +70,9 @@ int run_sim(const SimCommand& command) {
   if (!command.segmentation.empty()) {
     options.segmentation = segmentation_method_option("--segmentation", command.segmentation);
   }
+  if (!command.depth.empty()) {
+    options.depth = depth_source_option("--depth", command.depth);
+  }
   options.video = command.video;
   options.threads = command.threads;
   if (command.threads != 1 && world.agents.size() > 1) {
@@ -102,6 +106,11 @@ Subcommand add_sim(CLI::App& app) {
   sim->add_option("--flow", command->flow, "every agent's flow: " + servo::flow_method_names());
   sim->add_option("--segmentation", command->segmentation,
                   "every agent's segmentation: " + servo::segmentation_method_names());
+  sim->add_option("--depth", command->depth,
+                  "where every agent's features take depths from with synthetic flow: " +
+                      servo::depth_source_names() +
+                      " (ground: only where objects stand on it, "
+                      "as a camera)");
   return {sim, [command] { return run_sim(*command); }};
 }
 

@@ -19,6 +19,7 @@ struct EvalSuiteCommand {
   std::vector<std::string> paths;
   std::vector<std::string> flows;
   std::vector<std::string> segmentations;
+  std::vector<std::string> depths;
   std::vector<std::string> controllers;
   std::vector<std::string> laws;
   std::vector<std::string> switched_off;
@@ -60,6 +61,9 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
   }
   for (const std::string& name : command.segmentations) {
     options.segmentations.push_back(segmentation_method_option("--segmentation", name));
+  }
+  for (const std::string& name : command.depths) {
+    options.depths.push_back(depth_source_option("--depth", name));
   }
   for (const std::string& name : command.controllers) {
     const auto model = servo::parse_steering_model(name);
@@ -131,6 +135,11 @@ Subcommand add_eval_suite(CLI::App& eval) {
   suite->add_option("--segmentation", command->segmentations,
                     "every agent's segmentation (default: the case's); repeat for several: " +
                         servo::segmentation_method_names());
+  suite->add_option("--depth", command->depths,
+                    "where every agent's features take depths from with synthetic flow (default: "
+                    "the case's); repeat for several: " +
+                        servo::depth_source_names() +
+                        " (ground: only where objects stand on it, as a camera)");
   suite->add_option("--controller", command->controllers,
                     "every agent's steering model (default: the case's); repeat for several: " +
                         servo::steering_model_names());

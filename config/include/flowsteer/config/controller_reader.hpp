@@ -16,7 +16,8 @@ namespace flowsteer::config {
 servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::Node& node,
                                         const std::string& field, servo::ControllerConfig c);
 
-// The flow method and the segmentation method, by name.
+// The flow method, the segmentation method and the depth source, by name (the callers say which
+// keys their files allow).
 servo::PerceptionConfig read_perception(const base::YamlReader& r, const YAML::Node& node,
                                         const std::string& field,
                                         servo::PerceptionConfig perception);

@@ -41,6 +41,7 @@ struct SimOptions {
   // Override every agent's perception (scenario key perception:).
   std::optional<servo::FlowMethod> flow;
   std::optional<servo::SegmentationMethod> segmentation;
+  std::optional<servo::DepthSource> depth;
   bool video = false;         // an MP4 per agent of its view with the features drawn on it
   bool progress_bar = false;  // a bar that redraws itself, for terminals
   bool write_outputs = true;  // false: only the returned result (tests, benchmarks)

@@ -29,13 +29,14 @@ struct SuiteCase {
 struct SuiteConfiguration {
   std::optional<servo::FlowMethod> flow;
   std::optional<servo::SegmentationMethod> segmentation;
+  std::optional<servo::DepthSource> depth;
   std::optional<servo::SteeringModel> controller;
   std::optional<servo::NavigationLaw> law;
   std::optional<servo::LawMechanism> without;  // the flowsteer law's, switched off
   std::optional<int> resolution;               // N × N pixels
   bool operator==(const SuiteConfiguration&) const = default;
 };
-// "flow/segmentation/controller/law/without/resolution", "own" for what is not overridden.
+// "flow/segmentation/depth/controller/law/without/resolution", "own" for what is not overridden.
 std::string to_string(const SuiteConfiguration& configuration);
 
 // The i-th of n slices of a suite's runs (runs i, i + n, i + 2n, ...).
@@ -54,6 +55,7 @@ struct SuiteOptions {
   // Every combination is run; an empty list is the case's own.
   std::vector<servo::FlowMethod> flows;
   std::vector<servo::SegmentationMethod> segmentations;
+  std::vector<servo::DepthSource> depths;
   std::vector<servo::SteeringModel> controllers;
   std::vector<servo::NavigationLaw> laws;
   std::vector<servo::LawMechanism> switched_off;  // an ablation: `none` is the law as it is
@@ -77,7 +79,7 @@ struct SuiteRun {
   bool failed() const { return !error.empty(); }
   bool clean() const { return !failed() && summary.clean(); }
   // The run's folder and top view are named this:
-  // "case.flow.segmentation.controller.law.without.resolution".
+  // "case.flow.segmentation.depth.controller.law.without.resolution".
   std::string folder_name() const;
 };
 
@@ -91,9 +93,9 @@ struct SuiteResult {
   int jobs = 1;                // a merge: the most any shard had
 };
 
-// The suite's configurations, every flow × segmentation × controller × law × mechanism switched
-// off × resolution in that nesting. Throws base::ConfigError for a resolution out of 16..4096, any
-// value given twice, or a mechanism switched off under a law other than flowsteer.
+// The suite's configurations, every flow × segmentation × depth × controller × law × mechanism
+// switched off × resolution in that nesting. Throws base::ConfigError for a resolution out of
+// 16..4096, any value given twice, or a mechanism switched off under a law other than flowsteer.
 std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options);
 
 // Runs the shard's runs in options.jobs worker processes, each as `flowsteer sim` runs a

@@ -12,6 +12,7 @@
 #include "flowsteer/servo/ground.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/servo.hpp"
+#include "flowsteer/servo/steering.hpp"
 
 namespace flowsteer::pipeline {
 
@@ -36,6 +37,9 @@ struct PerceptionOptions {
   bool dark_regions = false;  // MIG 2019's dark-region awareness
   // With synthetic flow, give the feature fit the renderer's depth (numerical flow has none).
   bool use_depth = true;
+  // With synthetic flow, whose depths the features get: the renderer's at every pixel, or the
+  // ground's only, a camera's (servo::DepthSource).
+  servo::DepthSource depth = servo::DepthSource::renderer;
   base::CameraMount mount;
   servo::OpticalFlowOptions optical_flow;
   servo::FlowSegmentationOptions flow_segmentation;

@@ -45,15 +45,22 @@ enum class LawMechanism {
 // Where motion energy's "mass" and "floor" pixels come from: the renderer's object ids, or the
 // flat-ground test on the flow, as a real camera would give them.
 enum class MassSource { ids, ground };
+// Where a simulated agent's features take objects' depths from, with the renderer's flow: its
+// depth at every pixel, or only where objects stand on the ground, as a camera must
+// (FeatureOptions::ground_mount). Numerical flow has no depth per pixel and always takes the
+// ground's; `ground` measures what that costs the law apart from the flow's noise.
+enum class DepthSource { renderer, ground };
 
 std::string_view to_string(SteeringModel model);
 std::string_view to_string(NavigationKind kind);
 std::string_view to_string(MassSource source);
+std::string_view to_string(DepthSource source);
 std::string_view to_string(NavigationLaw law);
 std::string_view to_string(LawMechanism mechanism);
 std::optional<SteeringModel> parse_steering_model(std::string_view name);
 std::optional<NavigationKind> parse_navigation_kind(std::string_view name);
 std::optional<MassSource> parse_mass_source(std::string_view name);
+std::optional<DepthSource> parse_depth_source(std::string_view name);
 std::optional<NavigationLaw> parse_navigation_law(std::string_view name);
 std::optional<LawMechanism> parse_law_mechanism(std::string_view name);
 // "vision, geometric, motion_energy", for messages and help texts.
@@ -62,6 +69,8 @@ std::string steering_model_names();
 std::string navigation_law_names();
 // "none, braking, anticipation, ...".
 std::string law_mechanism_names();
+// "renderer, ground".
+std::string depth_source_names();
 
 // A controller's settings, as scenario files, robot launch files and demo scenes give them.
 struct ControllerConfig {
@@ -105,6 +114,7 @@ struct ControllerConfig {
 struct PerceptionConfig {
   FlowMethod flow = FlowMethod::synthetic;
   SegmentationMethod segmentation = SegmentationMethod::semantic;
+  DepthSource depth = DepthSource::renderer;
 };
 
 // A config's weights, the law's own where it sets none:
