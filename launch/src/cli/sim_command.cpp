@@ -109,8 +109,7 @@ Subcommand add_sim(CLI::App& app) {
   sim->add_option("--depth", command->depth,
                   "where every agent's features take depths from with synthetic flow: " +
                       servo::depth_source_names() +
-                      " (ground: only where objects stand on it, "
-                      "as a camera)");
+                      " (ground: only where objects stand on it, as a camera)");
   return {sim, [command] { return run_sim(*command); }};
 }
 
