@@ -516,16 +516,31 @@ TEST(FeatureExtractor, ACameraGetsNoDepthWhereTheGroundIsNotSeenBelowAnObject) {
   SceneObject low_wall = panel(1, 3.0, 0.0, 2.0, {0.0, 0.0});
   low_wall.height_m = 1.2;
   const SceneObject behind = panel(2, 6.0, 0.0, 0.6, {0.0, 0.0});
-  const SceneObject at_the_feet = panel(3, 1.0, -1.0, 0.6, {0.0, 0.0});
   SceneObject lower_than_the_camera = panel(4, 4.0, 2.0, 1.0, {0.0, 0.0});
   lower_than_the_camera.height_m = 0.8;
-  scene.objects = {low_wall, behind, at_the_feet, lower_than_the_camera};
+  scene.objects = {low_wall, behind, lower_than_the_camera};
   const std::vector<ObjectFeatures> objects = seen_by_a_camera(scene);
-  for (const std::int32_t id : {2, 3, 4}) {
+  for (const std::int32_t id : {2, 4}) {
     ASSERT_GT(object_with_id(objects, id).pixel_count, 0) << id;
     EXPECT_FALSE(object_with_id(objects, id).min_x_depth_m.has_value()) << id;
   }
   EXPECT_NEAR(object_with_id(objects, 1).min_x_depth_m.value_or(0.0), 3.0, 0.15);
+}
+
+TEST(FeatureExtractor, AnObjectStandingBelowTheImageIsNoFurtherThanTheGroundAtItsLowerEdge) {
+  // 1 m ahead of a camera 1 m up whose view reaches 0.75 below the axis: the ground seen at the
+  // image's lower edge is 1.33 m away, the object's feet are below the image.
+  AnalyticScene scene = base_scene();
+  scene.objects = {panel(3, 1.0, -0.5, 0.6, {0.0, 0.0})};
+  const ObjectFeatures f = object_with_id(seen_by_a_camera(scene), 3);
+  const base::CameraIntrinsics& k = scene.intrinsics;
+  const double lower_edge_y = (k.height_px - 0.5 - k.cy_px) / k.fy_px;
+  const double bound_m = scene.mount.height_m / lower_edge_y;
+  ASSERT_NEAR(bound_m, 1.0 / 0.75, 1e-9);
+  ASSERT_TRUE(f.min_x_depth_m && f.max_x_depth_m && f.nearest_depth_m);
+  for (const double depth_m : {*f.min_x_depth_m, *f.max_x_depth_m, *f.nearest_depth_m}) {
+    EXPECT_NEAR(depth_m, bound_m, 1e-6);
+  }
 }
 
 TEST(FeatureExtractor, RegionsReachingTheImageEdgeAreMarkedCut) {

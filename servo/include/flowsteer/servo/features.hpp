@@ -156,9 +156,9 @@ struct FeatureOptions {
   // Where the field has no depth (a camera), the mount of a camera above a flat ground: each
   // region that rises above the horizon gets, for its ends and nearest point, the depth of the
   // ground where it stands on it (its lowest pixels, with ground below them),
-  // Z = h / (y cos θ + sin θ). An end whose column shows no such contact (cut by the image's
-  // bottom edge, or standing behind another region) leaves both ends without depth; the mean
-  // depth (depth_m) stays empty.
+  // Z = h / (y cos θ + sin θ); in the bottom row, the ground's depth at the image's lower edge,
+  // which bounds the hidden foot's from above. An end whose column shows no contact (standing
+  // behind another region) leaves both ends without depth; the mean depth (depth_m) stays empty.
   std::optional<base::CameraMount> ground_mount;
 };
 
