@@ -4,12 +4,14 @@
 
 #include <cmath>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/eval/simulation.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
@@ -81,6 +83,30 @@ TEST(DepthSource, WithTheGroundsDepthTheSkyIsInNoRegion) {
   for (int col = 0; col < s.width; ++col) {
     EXPECT_EQ(s.labels[static_cast<std::size_t>(col)], servo::Segmentation::kNoRegion)
         << "column " << col;
+  }
+}
+
+// A neighbour starting 0.2 m beside the agent, surface to surface, drifting into its path: its
+// feet are below a level camera's view (the ground is seen from 0.43 m on), so only the depth
+// bound at the image's lower edge gives it a place. Without that bound they walk into each other
+// (clearance −0.47 m); with the renderer's depth they pass.
+TEST(DepthSource, WithTheGroundsDepthANeighbourWhoseFeetAreBelowTheImageIsAvoided) {
+  const std::string text =
+      "step_s: 0.05\nduration_s: 12\n"
+      "camera: {resolution: 128, hfov_deg: 150, height_m: 1.6}\n"
+      "perception: {depth: ground}\n"
+      "agents:\n"
+      "  - {start: [0, 0], heading_deg: 0, speed_mps: 1, goal: [10, 0]}\n"
+      "  - {start: [0.2, 0.7], heading_deg: -10, speed_mps: 1, goal: [10, -3]}\n";
+  eval::SimOptions options;
+  options.write_outputs = false;
+  std::ostringstream log;
+  const eval::SimResult result =
+      eval::run_simulation(config::parse_scenario(text, "beside.yaml"), options, log);
+  EXPECT_EQ(result.collisions.size(), 0U);
+  for (const eval::AgentResult& a : result.agents) {
+    EXPECT_TRUE(a.reached_goal) << a.name;
+    EXPECT_GT(a.min_clearance_m, 0.0) << a.name;
   }
 }
 
