@@ -740,22 +740,24 @@ bool stands_on_ground(const FlowField& field, const Segmentation& segmentation,
 // the ground's depth one row below the pixel: the foot lies above the next row's centre, which
 // the region does not cover, so the depth is never further than the foot's. A region in the
 // bottom row stands below the image, nearer than the ground at the image's lower edge: that
-// depth bounds its foot's from above. Without it a neighbour a step away, whose feet a level
-// camera does not see, had no depth at all.
+// depth bounds its foot's from above (a neighbour a step away, whose feet a level camera does
+// not see).
 template <typename Accumulators>
 void add_ground_contacts(const FlowField& field, const Segmentation& segmentation,
                          const base::CameraMount& mount, Accumulators& accumulators) {
   const FlatGround ground(mount);
-  const double lower_edge_y = field.y(field.height() - 1) + 0.5 / field.intrinsics().fy_px;
+  // A row's ground depth does not depend on the column.
+  const std::optional<double> below_image_m =
+      ground.depth_at(0.0, field.y(field.height() - 1) + 0.5 / field.intrinsics().fy_px);
   for_each_region_pixel(
       field, segmentation, [&](std::size_t, int col, int row, std::int32_t label) {
         if (segmentation.kinds[static_cast<std::size_t>(label)] != RegionKind::visible) {
           return;
         }
         if (row + 1 == field.height()) {
-          if (const auto bound = ground.depth_at(field.x(col), lower_edge_y)) {
+          if (below_image_m) {
             accumulators[static_cast<std::size_t>(label)].add_contact(field.x(col), field.y(row),
-                                                                      *bound);
+                                                                      *below_image_m);
           }
           return;
         }
