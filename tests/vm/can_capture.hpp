@@ -4,6 +4,7 @@
 // of the bus (`candump -L`), which the VM's /init prints between "=== CAPTURE BEGIN ===" and
 // "=== CAPTURE END ===".
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <cstring>
 #include <map>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -126,14 +128,48 @@ inline std::optional<double> first_zero_velocity(const CanCaptureRun& run, unsig
   return std::nullopt;
 }
 
+// How many non-zero velocities `node` was sent in (from_s, to_s].
+inline int times_driven(const CanCaptureRun& run, unsigned node, double from_s, double to_s) {
+  int count = 0;
+  for (const CanFrame& f : run.frames) {
+    count += f.time_s > from_s && f.time_s <= to_s && is_set_input_vel(f, node) && f.f32(0) != 0.0f;
+  }
+  return count;
+}
+
 // Whether `node` was sent a non-zero velocity in (from_s, to_s].
 inline bool driven(const CanCaptureRun& run, unsigned node, double from_s, double to_s) {
+  return times_driven(run, node, from_s, to_s) > 0;
+}
+
+// The longest time between two consecutive Set_Input_Vel to `node` in (from_s, to_s]: `flowsteer
+// run` sends one per pass of its loop, so this is its slowest pass (a frame's perception and the
+// wait for the next frame); 0 with fewer than two.
+inline double longest_command_gap_s(const CanCaptureRun& run, unsigned node, double from_s,
+                                    double to_s) {
+  double longest_s = 0.0;
+  double last_s = NAN;
   for (const CanFrame& f : run.frames) {
-    if (f.time_s > from_s && f.time_s <= to_s && is_set_input_vel(f, node) && f.f32(0) != 0.0f) {
-      return true;
+    if (f.time_s > from_s && f.time_s <= to_s && is_set_input_vel(f, node)) {
+      longest_s = std::isnan(last_s) ? longest_s : std::max(longest_s, f.time_s - last_s);
+      last_s = f.time_s;
     }
   }
-  return false;
+  return longest_s;
+}
+
+// The time a stop (or the report that none can be sent) may take after a fault that came while
+// `flowsteer run` drove between from_s and fault_s: the pass the fault interrupts ends first. On
+// a robot's computer a pass is a few tens of ms and this is `floor_s`; on the VM's emulated CPU
+// a pass takes 0.3-0.8 s, more on a loaded host, so it is the slowest pass seen before the fault
+// and half of that again for the one the fault came in.
+inline double stop_bound_s(const CanCaptureRun& run, std::span<const unsigned> nodes, double from_s,
+                           double fault_s, double floor_s) {
+  double slowest_pass_s = 0.0;
+  for (const unsigned node : nodes) {
+    slowest_pass_s = std::max(slowest_pass_s, longest_command_gap_s(run, node, from_s, fault_s));
+  }
+  return std::max(floor_s, 1.5 * slowest_pass_s);
 }
 
 }  // namespace flowsteer::vm_test
