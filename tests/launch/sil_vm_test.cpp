@@ -26,7 +26,6 @@ using flowsteer::vm_test::driven;
 using flowsteer::vm_test::first_zero_velocity;
 using flowsteer::vm_test::stamp;
 using flowsteer::vm_test::stop_bound_s;
-using flowsteer::vm_test::times_driven;
 
 constexpr unsigned kNodes[] = {3, 5};
 // The loop's robot sees its world through an emulated CPU, a few views a second, a view late by
@@ -168,8 +167,6 @@ TEST_F(SilVm, ACameraUnpluggedStopsTheRobotAndTheSimulatorRecordsWhere) {
     const std::optional<double> zero_s = first_zero_velocity(run_, node, fault_s);
     ASSERT_TRUE(zero_s) << "no zero velocity on the bus after the fault";
     EXPECT_LT(*zero_s - fault_s, stop_within_s);
-    EXPECT_LE(times_driven(run_, node, fault_s, *zero_s), 1)
-        << "the loop went on driving after the fault";
     EXPECT_FALSE(driven(run_, node, *zero_s, INFINITY)) << "a wheel was driven after the stop";
     slowest_s = std::max(slowest_s, *zero_s - fault_s);
   }
