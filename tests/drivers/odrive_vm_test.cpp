@@ -15,7 +15,6 @@
 #include <numbers>
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -201,9 +200,14 @@ TEST_F(OdriveVm, AxisErrorIsReportedAndBothAxesAreStoppedAtTheNextPass) {
   // At the loop's next pass: the next read() finds the heartbeat. The pass that had read before
   // it came may still send its velocities; no later one does. The emulated CPU may make a pass
   // late and takes a few ms to send a pass's frames, so the time allows two periods.
-  const std::pair<unsigned, std::string> stops[] = {{3, "06D#0000000000000000"},
-                                                    {5, "0AD#0000000000000000"}};
-  for (const auto& [node, stop] : stops) {
+  struct AxisStop {
+    unsigned node;
+    std::string frame;
+  };
+  for (const AxisStop& axis :
+       {AxisStop{3, "06D#0000000000000000"}, AxisStop{5, "0AD#0000000000000000"}}) {
+    const unsigned node = axis.node;
+    const std::string& stop = axis.frame;
     const auto first_stop = std::find_if(error_hb, run_.frames.end(),
                                          [&](const CanFrame& f) { return f.text() == stop; });
     ASSERT_NE(first_stop, run_.frames.end()) << stop;
