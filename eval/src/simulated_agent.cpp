@@ -74,13 +74,16 @@ SimulatedAgent::SimulatedAgent(const sim_camera::World& world, std::size_t agent
 
 const servo::ControlOutput& SimulatedAgent::step(sim_camera::Renderer& renderer,
                                                  pipeline::StageTimes& times) {
+  const base::Stopwatch render;
+  renderer.render(world_, view(), view_, channels_);
+  return think(render.elapsed_ms(), times);
+}
+
+const servo::ControlOutput& SimulatedAgent::think(double render_ms, pipeline::StageTimes& times) {
   const sim_camera::AgentSpec& agent = world_.spec().agents[agent_];
   const sim_camera::AgentState& state = world_.agents()[agent_];
-  const base::Stopwatch render;
-  sim_camera::render_frame(renderer, world_, agent_, channels_, view_, frame_);
+  sim_camera::point_frame_at(view_, world_, frame_);
   frame_.sequence = sequence_++;
-  const double render_ms = render.elapsed_ms();
-
   pipeline::BrainInput input{frame_, state.speed_mps, state.turn_rate, {}, {}, {}};
   if (agent.leader) {
     input.leader_id = sim_camera::agent_render_id(static_cast<std::size_t>(*agent.leader));

@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
@@ -33,9 +34,11 @@ struct AgentLoop {
   AgentResult result;
   Eigen::Vector2d last_position;
   std::unique_ptr<cv::VideoWriter> video;
-  // This step's: whether it steered, and what its stages took.
+  // This step's: whether it steered, what its stages took and, where its view was rendered with
+  // others', its share of their render.
   bool steered = false;
   pipeline::StageTimes times;
+  double render_ms = 0.0;
 };
 
 class Progress {
@@ -205,6 +208,9 @@ class SimulationRun {
       loops_.push_back(std::move(loop));
     }
     trajectories_.reserve(steps * loops_.size());
+    batch_agents_.reserve(loops_.size());
+    batch_views_.reserve(loops_.size());
+    batch_out_.reserve(loops_.size());
   }
 
   int total_steps() const { return total_steps_; }
@@ -214,7 +220,9 @@ class SimulationRun {
   // (each sees the same world state and keeps its own brain, so the threads change nothing of
   // the result); then, in agent order, what the step records; then the world moves.
   void step() {
+    gather_views();
     arena_.execute([this] {
+      render_views();
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, loops_.size()),
                         [this](const tbb::blocked_range<std::size_t>& agents) {
                           sim_camera::Renderer& renderer = *renderers_.local();
@@ -312,11 +320,56 @@ class SimulationRun {
     return options_.driver != nullptr && options_.driven_agent == i;
   }
 
-  // Agent i's perception and control, when it still steers; touches nothing but its own loop.
+  // Which agents steer this step, and the views of those whose cameras draw the geometry
+  // channels alone: these are rendered together.
+  void gather_views() {
+    batch_agents_.clear();
+    batch_views_.clear();
+    batch_out_.clear();
+    for (std::size_t i = 0; i < loops_.size(); ++i) {
+      AgentLoop& loop = loops_[i];
+      loop.steered = !driven(i) && (!world_.agents()[i].reached_goal || spec_.agents[i].leader);
+      if (loop.steered && loop.agent->renders_geometry_only()) {
+        batch_agents_.push_back(i);
+        batch_views_.push_back(loop.agent->view());
+        batch_out_.push_back(&loop.agent->rendered_view());
+      }
+    }
+  }
+
+  // The gathered views in as many runs as the arena has threads, each rendered by the thread
+  // that takes it in one submission (Renderer::render_geometry).
+  void render_views() {
+    const std::size_t count = batch_views_.size();
+    if (count == 0) {
+      return;
+    }
+    const auto threads = static_cast<std::size_t>(arena_.max_concurrency());
+    const std::size_t per_run = (count + threads - 1) / threads;
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, count, per_run),
+        [this](const tbb::blocked_range<std::size_t>& run) {
+          const base::Stopwatch render;
+          renderers_.local()->render_geometry(
+              world_, std::span(batch_views_).subspan(run.begin(), run.size()),
+              std::span(batch_out_).subspan(run.begin(), run.size()));
+          const double per_view_ms = render.elapsed_ms() / static_cast<double>(run.size());
+          for (std::size_t k = run.begin(); k != run.end(); ++k) {
+            loops_[batch_agents_[k]].render_ms = per_view_ms;
+          }
+        },
+        tbb::simple_partitioner());
+  }
+
+  // Agent i's perception and control, when it steers; touches nothing but its own loop.
   void think(std::size_t i, sim_camera::Renderer& renderer) {
     AgentLoop& loop = loops_[i];
-    loop.steered = !driven(i) && (!world_.agents()[i].reached_goal || spec_.agents[i].leader);
-    if (loop.steered) {
+    if (!loop.steered) {
+      return;
+    }
+    if (loop.agent->renders_geometry_only()) {
+      loop.agent->think(loop.render_ms, loop.times);
+    } else {
       loop.agent->step(renderer, loop.times);
     }
   }
@@ -398,6 +451,10 @@ class SimulationRun {
   std::optional<OutputDir> out_;  // none: no files
   int total_steps_;
   std::vector<AgentLoop> loops_;
+  // This step's views rendered together: their agents, the views and where each goes.
+  std::vector<std::size_t> batch_agents_;
+  std::vector<sim_camera::View> batch_views_;
+  std::vector<sim_camera::RenderedView*> batch_out_;
   std::vector<std::vector<Eigen::Vector2d>> paths_;
   std::vector<std::pair<double, double>> commands_;
   std::vector<TrajectoryRow> trajectories_;

@@ -6,10 +6,12 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <initializer_list>
 #include <iterator>
 #include <limits>
@@ -17,6 +19,7 @@
 #include <mutex>
 #include <numbers>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -35,6 +38,12 @@ constexpr int kShadowMapSize = 1024;
 constexpr int kNoiseSize = 256;
 constexpr float kNear = 0.05F;
 constexpr float kFar = 500.0F;
+// How many views a submission draws at most (their cameras' uniform block, 208 bytes a view, is
+// within the 16 KiB every driver allows), and the memory their layers may take (ids, flow, depth,
+// depth buffer: 20 bytes a pixel); further views go to further submissions.
+constexpr std::size_t kMaxViewsPerSubmission = 16;
+constexpr std::size_t kLayerBytes = 64U << 20U;
+constexpr std::size_t kLayerBytesPerPixel = 20;
 
 // EGL gives every renderer of the process the same display, and one eglTerminate ends it for
 // all: renderers count their uses of a display, and the last one to go terminates it.
@@ -72,8 +81,9 @@ GLuint compile(GLenum type, std::initializer_list<const char*> sources, const ch
   return shader;
 }
 
-GLuint link(const char* vertex, std::initializer_list<const char*> fragment, const char* name) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, {vertex}, name);
+GLuint link(std::initializer_list<const char*> vertex, std::initializer_list<const char*> fragment,
+            const char* name) {
+  const GLuint vs = compile(GL_VERTEX_SHADER, vertex, name);
   const GLuint fs = compile(GL_FRAGMENT_SHADER, fragment, name);
   const GLuint program = glCreateProgram();
   glAttachShader(program, vs);
@@ -91,6 +101,19 @@ GLuint link(const char* vertex, std::initializer_list<const char*> fragment, con
                              " does not link: " + log.data());
   }
   return program;
+}
+
+bool has_extension(const char* name) {
+  GLint count = 0;
+  glGetIntegerv(GL_NUM_EXTENSIONS, &count);
+  for (GLint k = 0; k < count; ++k) {
+    if (std::strcmp(
+            reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, static_cast<GLuint>(k))),
+            name) == 0) {
+      return true;
+    }
+  }
+  return false;
 }
 
 struct Vertex {
@@ -392,9 +415,8 @@ struct ShadowUniforms {
 };
 
 struct GeometryUniforms {
-  GLint world_to_camera;
-  GLint projection;
-  GLint camera_omega;
+  GLint body_count;
+  GLint first_view;
 };
 
 // The view's frustum as planes in the world frame, for leaving out bodies it cannot see: a
@@ -432,33 +454,43 @@ class Frustum {
   std::array<Eigen::Vector4d, 5> planes_;
 };
 
-// The id that marks a body not to draw in this view (its own camera's, or out of view).
+// The id that marks a body not to draw in a view (its own camera's, or out of view).
 constexpr std::int32_t kHiddenId = std::numeric_limits<std::int32_t>::min();
-constexpr GLint kPoseTextureUnit = 2;
-constexpr GLint kIdTextureUnit = 3;
+// The geometry program's buffer textures' units, in GeometryBatch::Table's order, and its
+// cameras' uniform block's binding.
+constexpr GLint kFirstTableUnit = 2;
+constexpr GLuint kCameraBlockBinding = 0;
 
-// Every body of a world and the ground in one vertex and index buffer, drawn by one call: each
-// vertex names its body, whose model matrix, velocity relative to the camera and id the vertex
-// shader reads from buffer textures filled for each view. A view is one draw and two small
-// uploads, however many bodies; a body out of view is marked hidden rather than drawn.
+// Every body of a world and the ground in one vertex and index buffer, drawn by one instanced
+// call for all the views of a submission: each vertex names its body, each instance its view.
+// The vertex shader reads the views' cameras from a uniform block, and the bodies' model
+// matrices and, per view and body, the velocity relative to the camera and the id from buffer
+// textures, all filled for the submission (shaders::kGeometryVertex). A body out of a view is
+// marked hidden in that view.
 struct GeometryBatch {
   struct BatchVertex {
     float position[3];
     std::int32_t body;
   };
+  // A view's camera as the uniform block's std140 layout has it: world to camera, projection,
+  // the ground's model, then ω.
+  using CameraBlock = std::array<float, 52>;
+  enum Table { models, velocities, ids, table_count };
 
   GLuint vao = 0;
   GLuint vbo = 0;
   GLuint ebo = 0;
-  GLuint pose_buffer = 0;
-  GLuint pose_texture = 0;
-  GLuint id_buffer = 0;
-  GLuint id_texture = 0;
+  std::array<GLuint, table_count> buffers{};
+  std::array<GLuint, table_count> textures{};
+  GLuint camera_buffer = 0;
   GLsizei index_count = 0;
   std::uint64_t world_serial = 0;  // the world whose bodies the buffers hold; 0: none yet
-  // This view's bodies: the model matrix's columns and the relative velocity (RGBA texels).
-  std::vector<std::array<float, 20>> poses;
-  std::vector<std::int32_t> ids;
+  std::vector<std::array<float, 16>> model_texels;  // per body but the ground
+  // Per view; the block has room for every view a submission may draw.
+  std::array<CameraBlock, kMaxViewsPerSubmission> cameras{};
+  std::size_t view_count = 0;
+  std::vector<std::array<float, 4>> velocity_texels;  // per view and body, the ground included
+  std::vector<std::int32_t> id_texels;                // per view and body, the ground included
   std::vector<BatchVertex> vertices;
   std::vector<GLuint> indices;
 
@@ -466,10 +498,9 @@ struct GeometryBatch {
     glGenVertexArrays(1, &vao);
     glGenBuffers(1, &vbo);
     glGenBuffers(1, &ebo);
-    glGenBuffers(1, &pose_buffer);
-    glGenBuffers(1, &id_buffer);
-    glGenTextures(1, &pose_texture);
-    glGenTextures(1, &id_texture);
+    glGenBuffers(table_count, buffers.data());
+    glGenTextures(table_count, textures.data());
+    glGenBuffers(1, &camera_buffer);
     glBindVertexArray(vao);
     glBindBuffer(GL_ARRAY_BUFFER, vbo);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
@@ -482,17 +513,16 @@ struct GeometryBatch {
   }
 
   void release() {
-    glDeleteTextures(1, &id_texture);
-    glDeleteTextures(1, &pose_texture);
-    glDeleteBuffers(1, &id_buffer);
-    glDeleteBuffers(1, &pose_buffer);
+    glDeleteBuffers(1, &camera_buffer);
+    glDeleteTextures(table_count, textures.data());
+    glDeleteBuffers(table_count, buffers.data());
     glDeleteBuffers(1, &ebo);
     glDeleteBuffers(1, &vbo);
     glDeleteVertexArrays(1, &vao);
   }
 
-  // The bodies' shapes in drawing order, once per world: bodies are added and removed only
-  // with a new world.
+  // The bodies' shapes in drawing order, the ground last, once per world: bodies are added and
+  // removed only with a new world.
   void build(std::uint64_t serial, const std::vector<const Shape*>& shapes) {
     vertices.clear();
     indices.clear();
@@ -515,32 +545,57 @@ struct GeometryBatch {
     world_serial = serial;
   }
 
-  void add(const Eigen::Matrix4f& model, const Eigen::Vector3f& relative_velocity,
-           std::int32_t id) {
-    std::array<float, 20> pose{};
-    std::copy(model.data(), model.data() + 16, pose.begin());
-    std::copy(relative_velocity.data(), relative_velocity.data() + 3, pose.begin() + 16);
-    poses.push_back(pose);
-    ids.push_back(id);
+  void clear() {
+    model_texels.clear();
+    view_count = 0;
+    velocity_texels.clear();
+    id_texels.clear();
   }
 
-  void draw() const {
-    upload(pose_buffer, pose_texture, GL_RGBA32F, kPoseTextureUnit, poses);
-    upload(id_buffer, id_texture, GL_R32I, kIdTextureUnit, ids);
+  void add_body(const Eigen::Matrix4f& model) {
+    std::copy(model.data(), model.data() + 16, model_texels.emplace_back().begin());
+  }
+
+  void add_view(const Eigen::Matrix4f& world_to_camera, const Eigen::Matrix4f& projection,
+                const Eigen::Matrix4f& ground_model, const Eigen::Vector3d& omega) {
+    CameraBlock& texels = cameras.at(view_count++);
+    std::copy(world_to_camera.data(), world_to_camera.data() + 16, texels.begin());
+    std::copy(projection.data(), projection.data() + 16, texels.begin() + 16);
+    std::copy(ground_model.data(), ground_model.data() + 16, texels.begin() + 32);
+    const Eigen::Vector3f w = omega.cast<float>();
+    std::copy(w.data(), w.data() + 3, texels.begin() + 48);
+  }
+
+  void add_seen(const Eigen::Vector3f& relative_velocity, std::int32_t id) {
+    velocity_texels.push_back(
+        {relative_velocity.x(), relative_velocity.y(), relative_velocity.z(), 0.0F});
+    id_texels.push_back(id);
+  }
+
+  void upload() const {
+    upload_table(models, GL_RGBA32F, model_texels);
+    upload_table(velocities, GL_RGBA32F, velocity_texels);
+    upload_table(ids, GL_R32I, id_texels);
+    glBindBuffer(GL_UNIFORM_BUFFER, camera_buffer);
+    glBufferData(GL_UNIFORM_BUFFER, sizeof cameras, cameras.data(), GL_STREAM_DRAW);
+    glBindBufferBase(GL_UNIFORM_BUFFER, kCameraBlockBinding, camera_buffer);
+  }
+
+  // `views` instances from the first one, the uniform u_first_view's.
+  void draw(GLsizei views) const {
     glBindVertexArray(vao);
-    glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
+    glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, views);
     glBindVertexArray(0);
   }
 
   template <typename Row>
-  static void upload(GLuint buffer, GLuint texture, GLenum format, GLint unit,
-                     const std::vector<Row>& rows) {
-    glBindBuffer(GL_TEXTURE_BUFFER, buffer);
+  void upload_table(Table table, GLenum format, const std::vector<Row>& rows) const {
+    glBindBuffer(GL_TEXTURE_BUFFER, buffers[table]);
     glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(rows.size() * sizeof(Row)), rows.data(),
                  GL_STREAM_DRAW);
-    glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
-    glBindTexture(GL_TEXTURE_BUFFER, texture);
-    glTexBuffer(GL_TEXTURE_BUFFER, format, buffer);
+    glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(kFirstTableUnit + table));
+    glBindTexture(GL_TEXTURE_BUFFER, textures[table]);
+    glTexBuffer(GL_TEXTURE_BUFFER, format, buffers[table]);
   }
 };
 
@@ -598,6 +653,16 @@ struct Renderer::Impl {
   std::array<GLuint, 5> renderbuffers{};  // color, id, flow, depth, depth-stencil
   int fbo_width = 0;
   int fbo_height = 0;
+  // The geometry channels of a submission's views, a layer each: the textures (id, flow, depth,
+  // depth buffer), a framebuffer of all their layers and one of a single layer (to read a view
+  // back, or to draw it where views are drawn one by one).
+  bool layered = false;  // a submission's views drawn by one call (ViewSubmission)
+  std::array<GLuint, 4> layer_textures{};
+  GLuint layered_fbo = 0;
+  GLuint layer_fbo = 0;
+  int layers_width = 0;
+  int layers_height = 0;
+  int layer_count = 0;
   GLuint shadow_fbo = 0;
   GLuint shadow_texture = 0;
   GLuint noise_texture_id = 0;
@@ -615,6 +680,9 @@ struct Renderer::Impl {
       batch.release();
       glDeleteRenderbuffers(static_cast<GLsizei>(renderbuffers.size()), renderbuffers.data());
       glDeleteFramebuffers(1, &fbo);
+      glDeleteTextures(static_cast<GLsizei>(layer_textures.size()), layer_textures.data());
+      glDeleteFramebuffers(1, &layered_fbo);
+      glDeleteFramebuffers(1, &layer_fbo);
       glDeleteTextures(1, &shadow_texture);
       glDeleteTextures(1, &noise_texture_id);
       glDeleteFramebuffers(1, &shadow_fbo);
@@ -703,26 +771,41 @@ struct Renderer::Impl {
                   ", " + reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   }
 
-  void create_resources() {
-    scene_program = link(
-        shaders::kSceneVertex,
-        {shaders::kFragmentHeader, shaders::kGeometryOutputs, shaders::kSceneFragment}, "scene");
-    shadow_program = link(shaders::kShadowVertex, {shaders::kShadowFragment}, "shadow");
-    geometry_program =
-        link(shaders::kGeometryVertex,
-             {shaders::kFragmentHeader, shaders::kGeometryOutputs, shaders::kGeometryFragment},
-             "geometry");
+  // Whether views are drawn layered: where asked, or by default on a GPU, where the driver can.
+  static bool draws_layered(ViewSubmission submission) {
+    if (submission == ViewSubmission::per_view ||
+        !has_extension("GL_ARB_shader_viewport_layer_array")) {
+      return false;
+    }
+    const std::string renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const bool software = renderer.starts_with("llvmpipe") || renderer.starts_with("softpipe");
+    return submission == ViewSubmission::layered || !software;
+  }
+
+  void create_resources(ViewSubmission submission) {
+    layered = draws_layered(submission);
+    scene_program =
+        link({shaders::kSceneVertex},
+             {shaders::kVersion, shaders::kGeometryOutputs, shaders::kSceneFragment}, "scene");
+    shadow_program = link({shaders::kShadowVertex}, {shaders::kShadowFragment}, "shadow");
+    const std::string defines = "#define MAX_VIEWS " + std::to_string(kMaxViewsPerSubmission) +
+                                (layered ? "\n#define LAYERED\n" : "\n");
+    geometry_program = link(
+        {shaders::kVersion, defines.c_str(), shaders::kGeometryVertex},
+        {shaders::kVersion, shaders::kGeometryOutputs, shaders::kGeometryFragment}, "geometry");
     scene = scene_uniforms(scene_program);
     shadow = {
         .model = glGetUniformLocation(shadow_program, "u_model"),
         .light_view_projection = glGetUniformLocation(shadow_program, "u_light_view_projection")};
     auto at = [this](const char* name) { return glGetUniformLocation(geometry_program, name); };
-    geometry = {.world_to_camera = at("u_world_to_camera"),
-                .projection = at("u_projection"),
-                .camera_omega = at("u_camera_omega")};
+    geometry = {.body_count = at("u_body_count"), .first_view = at("u_first_view")};
     glUseProgram(geometry_program);
-    glUniform1i(at("u_poses"), kPoseTextureUnit);
-    glUniform1i(at("u_ids"), kIdTextureUnit);
+    const char* tables[] = {"u_models", "u_velocities", "u_ids"};
+    for (int table = 0; table < GeometryBatch::table_count; ++table) {
+      glUniform1i(at(tables[table]), kFirstTableUnit + table);
+    }
+    glUniformBlockBinding(geometry_program, glGetUniformBlockIndex(geometry_program, "Cameras"),
+                          kCameraBlockBinding);
     glUniform1i(at("u_hidden_id"), kHiddenId);
     // The samplers' texture units never change.
     glUseProgram(scene_program);
@@ -762,6 +845,8 @@ struct Renderer::Impl {
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
     glGenFramebuffers(1, &fbo);
+    glGenFramebuffers(1, &layered_fbo);
+    glGenFramebuffers(1, &layer_fbo);
     check_gl("creating the renderer's resources");
   }
 
@@ -975,48 +1060,71 @@ struct Renderer::Impl {
     return pose;
   }
 
-  void render(const World& world, const View& view, RenderChannels channels, RenderedView& out) {
+  void make_current() {
     if (!eglBindAPI(EGL_OPENGL_API) ||
         !eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
       throw std::runtime_error(
           egl_error("eglMakeCurrent (a renderer is used by two threads at once)"));
     }
-    const base::CameraIntrinsics k = view.intrinsics();
-    const bool lit = channels == RenderChannels::all;
-    if (lit) {
-      render_shadow_map(world);
+  }
+
+  // The context and EGL's state of this thread are released after each render: a renderer may be
+  // used, or destroyed, on another thread, and a worker thread that ends after the last renderer
+  // (a thread pool's, at exit) must not have EGL free its state then.
+  static void release_thread() { eglReleaseThread(); }
+
+  void render(const World& world, const View& view, RenderChannels channels, RenderedView& out) {
+    if (channels == RenderChannels::geometry) {
+      RenderedView* const target = &out;
+      render_geometry(world, std::span(&view, 1), std::span(&target, 1));
+      return;
     }
+    make_current();
+    const base::CameraIntrinsics k = view.intrinsics();
+    render_shadow_map(world);
     resize(k.width_px, k.height_px);
     const CameraPose pose = camera_pose(view, k);
-
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glViewport(0, 0, k.width_px, k.height_px);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDisable(GL_CULL_FACE);
-    const GLenum draw_buffers[] = {lit ? GLenum{GL_COLOR_ATTACHMENT0} : GLenum{GL_NONE},
-                                   GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
+    set_view_state(k);
+    const GLenum draw_buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
                                    GL_COLOR_ATTACHMENT3};
     glDrawBuffers(4, draw_buffers);
-    const std::array<GLint, 4> no_id = {servo::kSkyId, 0, 0, 0};
-    const std::array<float, 4> zero = {0, 0, 0, 0};
-    const std::array<float, 4> infinite = {std::numeric_limits<float>::infinity(), 0, 0, 0};
-    const float far_depth = 1.0F;
-    glClearBufferiv(GL_COLOR, 1, no_id.data());
-    glClearBufferfv(GL_COLOR, 2, zero.data());
-    glClearBufferfv(GL_COLOR, 3, infinite.data());
-    glClearBufferfv(GL_DEPTH, 0, &far_depth);
-    if (lit) {
-      draw_lit(world, view, pose);
-    } else {
-      draw_geometry(world, view, pose);
-    }
+    clear_geometry();
+    draw_lit(world, view, pose);
     check_gl("rendering the view");
-    read_back(k, pose.omega, lit, out);
-    // The context and EGL's state of this thread are released after each render: a renderer
-    // may be used, or destroyed, on another thread, and a worker thread that ends after the
-    // last renderer (a thread pool's, at exit) must not have EGL free its state then.
-    eglReleaseThread();
+    out.image.create(k.height_px, k.width_px, CV_8UC3);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, k.width_px, k.height_px, GL_BGR, GL_UNSIGNED_BYTE, out.image.data);
+    read_geometry(k, pose.omega, out);
+    release_thread();
+  }
+
+  void render_geometry(const World& world, std::span<const View> views,
+                       std::span<RenderedView* const> out) {
+    if (views.size() != out.size()) {
+      throw std::invalid_argument("Renderer::render_geometry: " + std::to_string(views.size()) +
+                                  " views but " + std::to_string(out.size()) + " outputs");
+    }
+    make_current();
+    // A submission per run of views of the same size (a world's cameras usually all are), of
+    // at most kMaxViewsPerSubmission views and kLayerBytes.
+    for (std::size_t first = 0; first < views.size();) {
+      const CameraSpec& camera = views[first].camera;
+      const std::size_t layer_bytes = kLayerBytesPerPixel *
+                                      static_cast<std::size_t>(camera.width_px) *
+                                      static_cast<std::size_t>(camera.height_px);
+      const std::size_t last =
+          first + std::clamp(kLayerBytes / layer_bytes, std::size_t{1}, kMaxViewsPerSubmission);
+      std::size_t end = first + 1;
+      while (end < views.size() && end < last && views[end].camera.width_px == camera.width_px &&
+             views[end].camera.height_px == camera.height_px) {
+        ++end;
+      }
+      draw_layers(world, views.subspan(first, end - first), out.subspan(first, end - first));
+      first = end;
+    }
+    release_thread();
   }
 
   // The lit scene: colour, shaded by the sun (with its shadow map) and the point lights, beside
@@ -1078,15 +1186,123 @@ struct Renderer::Impl {
     draw(ground, ground_model(world, view), spec.ground, servo::kGroundId, Eigen::Vector3d::Zero());
   }
 
-  // Ids, flow and depth only, for synthetic perception: no lights, no shadow map, no texture.
-  // The bodies in the lit scene's order, then the ground, as one batch.
-  void draw_geometry(const World& world, const View& view, const CameraPose& pose) {
+  static void set_view_state(const base::CameraIntrinsics& k) {
+    glViewport(0, 0, k.width_px, k.height_px);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);
+  }
+
+  // Draw buffers 1–3 (ids, flow, depth) and the depth buffer of the bound framebuffer, as a view
+  // of nothing but sky.
+  static void clear_geometry() {
+    const std::array<GLint, 4> no_id = {servo::kSkyId, 0, 0, 0};
+    const std::array<float, 4> zero = {0, 0, 0, 0};
+    const std::array<float, 4> infinite = {std::numeric_limits<float>::infinity(), 0, 0, 0};
+    const float far_depth = 1.0F;
+    glClearBufferiv(GL_COLOR, 1, no_id.data());
+    glClearBufferfv(GL_COLOR, 2, zero.data());
+    glClearBufferfv(GL_COLOR, 3, infinite.data());
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+  }
+
+  // The layered textures for `count` views of width × height. They only grow in layers at a
+  // size, so that submissions of fewer views (agents that reached their goals) reuse them.
+  void resize_layers(int width, int height, int count) {
+    if (width == layers_width && height == layers_height && count <= layer_count) {
+      return;
+    }
+    if (layer_textures[0] != 0) {
+      glDeleteTextures(static_cast<GLsizei>(layer_textures.size()), layer_textures.data());
+    }
+    glGenTextures(static_cast<GLsizei>(layer_textures.size()), layer_textures.data());
+    const std::array<std::array<GLenum, 3>, 4> formats = {
+        {{GL_R32I, GL_RED_INTEGER, GL_INT},
+         {GL_RG32F, GL_RG, GL_FLOAT},
+         {GL_R32F, GL_RED, GL_FLOAT},
+         {GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_FLOAT}}};
+    glBindFramebuffer(GL_FRAMEBUFFER, layered_fbo);
+    for (std::size_t k = 0; k < layer_textures.size(); ++k) {
+      glBindTexture(GL_TEXTURE_2D_ARRAY, layer_textures[k]);
+      glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, static_cast<GLint>(formats[k][0]), width, height, count,
+                   0, formats[k][1], formats[k][2], nullptr);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+      glFramebufferTexture(GL_FRAMEBUFFER, layer_attachment(k), layer_textures[k], 0);
+    }
+    set_geometry_draw_buffers();
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+      throw std::runtime_error("OpenGL: the layered " + std::to_string(width) + "x" +
+                               std::to_string(height) + "x" + std::to_string(count) +
+                               " framebuffer is incomplete");
+    }
+    check_gl("allocating the layered framebuffer");
+    layers_width = width;
+    layers_height = height;
+    layer_count = count;
+  }
+
+  // The layer textures' attachments: ids, flow and depth at 1–3, as in the lit framebuffer.
+  static GLenum layer_attachment(std::size_t texture) {
+    return texture < 3 ? GL_COLOR_ATTACHMENT1 + static_cast<GLenum>(texture) : GL_DEPTH_ATTACHMENT;
+  }
+
+  static void set_geometry_draw_buffers() {
+    const GLenum draw_buffers[] = {GL_NONE, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
+                                   GL_COLOR_ATTACHMENT3};
+    glDrawBuffers(4, draw_buffers);
+  }
+
+  // Binds the framebuffer of layer `layer` alone.
+  void bind_layer(int layer) {
+    glBindFramebuffer(GL_FRAMEBUFFER, layer_fbo);
+    for (std::size_t k = 0; k < layer_textures.size(); ++k) {
+      glFramebufferTextureLayer(GL_FRAMEBUFFER, layer_attachment(k), layer_textures[k], 0, layer);
+    }
+    set_geometry_draw_buffers();
+  }
+
+  // Ids, flow and depth of views of one size, for synthetic perception: no lights, no shadow map,
+  // no texture. One instanced draw for all of them where they are drawn layered, else one draw
+  // per view.
+  void draw_layers(const World& world, std::span<const View> views,
+                   std::span<RenderedView* const> out) {
+    const base::CameraIntrinsics k = views.front().intrinsics();
+    const auto count = static_cast<int>(views.size());
+    resize_layers(k.width_px, k.height_px, count);
+    set_view_state(k);
     glUseProgram(geometry_program);
-    glUniformMatrix4fv(geometry.world_to_camera, 1, GL_FALSE, pose.world_to_camera.data());
-    glUniformMatrix4fv(geometry.projection, 1, GL_FALSE, pose.projection.data());
-    glUniform3f(geometry.camera_omega, static_cast<float>(pose.omega.x()),
-                static_cast<float>(pose.omega.y()), static_cast<float>(pose.omega.z()));
-    collect_items(world, view.self);
+    fill_batch(world, views, k);
+    if (layered) {
+      glBindFramebuffer(GL_FRAMEBUFFER, layered_fbo);
+      clear_geometry();
+      glUniform1i(geometry.first_view, 0);
+      batch.draw(count);
+    } else {
+      for (int v = 0; v < count; ++v) {
+        bind_layer(v);
+        clear_geometry();
+        glUniform1i(geometry.first_view, v);
+        batch.draw(1);
+      }
+    }
+    check_gl("rendering the views");
+    for (int v = 0; v < count; ++v) {
+      const View& view = views[static_cast<std::size_t>(v)];
+      bind_layer(v);
+      RenderedView& target = *out[static_cast<std::size_t>(v)];
+      read_geometry(k, servo::camera_angular_velocity(view.turn_rate, view.camera.pitch_rad),
+                    target);
+      target.image.release();
+    }
+  }
+
+  // The batch's tables for these views: the bodies' poses, and per view its camera and what it
+  // sees of each body, the ground last, in the lit scene's order.
+  void fill_batch(const World& world, std::span<const View> views,
+                  const base::CameraIntrinsics& k) {
+    collect_items(world, std::nullopt);
     if (batch.world_serial != world.serial()) {
       batch_shapes.clear();
       for (const DrawItem& item : items) {
@@ -1095,20 +1311,28 @@ struct Renderer::Impl {
       batch_shapes.push_back(&ground_positions);
       batch.build(world.serial(), batch_shapes);
     }
-    const Frustum frustum(pose.projection, pose.world_to_camera);
-    batch.poses.clear();
-    batch.ids.clear();
-    auto add = [&](const Eigen::Matrix4f& model, std::int32_t id, const Eigen::Vector3d& velocity) {
-      batch.add(model, (pose.rotation * (velocity - pose.velocity_mps)).cast<float>(), id);
-    };
+    batch.clear();
     for (const DrawItem& item : items) {
-      // Both unit meshes lie within [-1, 1]² × [0, 1].
-      const bool seen =
-          !item.hidden && frustum.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5});
-      add(item.model, seen ? item.id : kHiddenId, item.velocity_mps);
+      batch.add_body(item.model);
     }
-    add(ground_model(world, view), servo::kGroundId, Eigen::Vector3d::Zero());
-    batch.draw();
+    for (const View& view : views) {
+      const CameraPose pose = camera_pose(view, k);
+      batch.add_view(pose.world_to_camera, pose.projection, ground_model(world, view), pose.omega);
+      const Frustum frustum(pose.projection, pose.world_to_camera);
+      auto relative = [&pose](const Eigen::Vector3d& velocity) {
+        return (pose.rotation * (velocity - pose.velocity_mps)).cast<float>().eval();
+      };
+      for (const DrawItem& item : items) {
+        const bool own_body = view.self && item.id == agent_render_id(*view.self);
+        // Both unit meshes lie within [-1, 1]² × [0, 1].
+        const bool seen =
+            !own_body && frustum.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5});
+        batch.add_seen(relative(item.velocity_mps), seen ? item.id : kHiddenId);
+      }
+      batch.add_seen(relative(Eigen::Vector3d::Zero()), servo::kGroundId);
+    }
+    glUniform1i(geometry.body_count, static_cast<GLint>(items.size() + 1));
+    batch.upload();
   }
 
   static Eigen::Matrix4f ground_model(const World& world, const View& view) {
@@ -1116,19 +1340,14 @@ struct Renderer::Impl {
     return model_matrix(view.position_m, 0.0, {size, size, 1.0});
   }
 
-  void read_back(const base::CameraIntrinsics& k, const Eigen::Vector3d& omega, bool lit,
-                 RenderedView& out) {
+  // The geometry channels from the bound framebuffer's attachments 1–3; the sky, at infinite
+  // depth, gets the flow of the camera's rotation alone.
+  static void read_geometry(const base::CameraIntrinsics& k, const Eigen::Vector3d& omega,
+                            RenderedView& out) {
     out.object_ids.create(k.height_px, k.width_px, CV_32SC1);
     out.flow.create(k.height_px, k.width_px, CV_32FC2);
     out.depth_m.create(k.height_px, k.width_px, CV_32FC1);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    if (lit) {
-      out.image.create(k.height_px, k.width_px, CV_8UC3);
-      glReadBuffer(GL_COLOR_ATTACHMENT0);
-      glReadPixels(0, 0, k.width_px, k.height_px, GL_BGR, GL_UNSIGNED_BYTE, out.image.data);
-    } else {
-      out.image.release();
-    }
     glReadBuffer(GL_COLOR_ATTACHMENT1);
     glReadPixels(0, 0, k.width_px, k.height_px, GL_RED_INTEGER, GL_INT, out.object_ids.data);
     glReadBuffer(GL_COLOR_ATTACHMENT2);
@@ -1136,7 +1355,6 @@ struct Renderer::Impl {
     glReadBuffer(GL_COLOR_ATTACHMENT3);
     glReadPixels(0, 0, k.width_px, k.height_px, GL_RED, GL_FLOAT, out.depth_m.data);
     check_gl("reading the view back");
-    // The sky is at infinite depth: only the camera's rotation moves it.
     for (int row = 0; row < k.height_px; ++row) {
       const auto* ids = out.object_ids.ptr<std::int32_t>(row);
       auto* flow = out.flow.ptr<cv::Vec2f>(row);
@@ -1172,11 +1390,11 @@ base::CameraIntrinsics View::intrinsics() const {
                                                      camera.hfov_rad);
 }
 
-std::unique_ptr<Renderer> Renderer::create() {
+std::unique_ptr<Renderer> Renderer::create(ViewSubmission submission) {
   auto impl = std::make_unique<Impl>();
   impl->open_display();
   impl->create_context();
-  impl->create_resources();
+  impl->create_resources(submission);
   eglReleaseThread();
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
@@ -1187,6 +1405,11 @@ Renderer::~Renderer() = default;
 void Renderer::render(const World& world, const View& view, RenderedView& out,
                       RenderChannels channels) {
   impl_->render(world, view, channels, out);
+}
+
+void Renderer::render_geometry(const World& world, std::span<const View> views,
+                               std::span<RenderedView* const> out) {
+  impl_->render_geometry(world, views, out);
 }
 
 const std::string& Renderer::description() const {

@@ -1,28 +1,28 @@
 #pragma once
 
 // GLSL 3.30 core sources of the renderer's programs. A fragment shader is compiled from
-// kFragmentHeader, then kGeometryOutputs, then its own source: the lit scene writes its colour
+// kVersion, then kGeometryOutputs, then its own source: the lit scene writes its colour
 // beside the geometry channels, the geometry program the channels alone.
 namespace flowsteer::sim_camera::shaders {
 
-inline constexpr const char* kFragmentHeader = "#version 330 core\n";
+inline constexpr const char* kVersion = "#version 330 core\n";
 
 // The channels synthetic perception reads: the object's id, the flow and the depth.
 // relative_velocity: the object's minus the camera's, optical frame, m/s.
+// camera_omega: the camera's angular velocity, optical frame, rad/s.
 inline constexpr const char* kGeometryOutputs = R"(
 in vec3 v_camera;
-uniform vec3 u_camera_omega;  // angular velocity of the camera, optical frame, rad/s
 layout(location = 1) out int o_id;
 layout(location = 2) out vec2 o_flow;
 layout(location = 3) out float o_depth;
 
-void write_geometry(int id, vec3 relative_velocity) {
+void write_geometry(int id, vec3 relative_velocity, vec3 camera_omega) {
   o_id = id;
   // CGF Eq. 1 at the point seen through this pixel: translation over depth, plus rotation.
   float z = v_camera.z;
   vec2 p = v_camera.xy / z;
   vec3 v = relative_velocity;
-  vec3 w = u_camera_omega;
+  vec3 w = camera_omega;
   vec2 translation = vec2(v.x - p.x * v.z, v.y - p.y * v.z) / z;
   vec2 rotation = vec2(p.x * p.y * w.x - (1.0 + p.x * p.x) * w.y + p.y * w.z,
                        (1.0 + p.y * p.y) * w.x - p.x * p.y * w.y - p.x * w.z);
@@ -63,6 +63,7 @@ uniform float u_pattern_scale;
 uniform float u_pattern_contrast;
 uniform int u_id;
 uniform vec3 u_relative_velocity;  // object minus camera, optical frame, m/s
+uniform vec3 u_camera_omega;       // the camera's angular velocity, optical frame, rad/s
 uniform float u_ambient;
 uniform vec3 u_sun_direction;  // towards the sun, world frame
 uniform float u_sun_intensity;
@@ -123,47 +124,75 @@ void main() {
   float texture_factor = 1.0 - u_pattern_contrast + u_pattern_contrast * pattern_value(v_world, n);
   vec3 linear = u_albedo * texture_factor * light;
   o_color = vec4(pow(clamp(linear, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
-  write_geometry(u_id, u_relative_velocity);
+  write_geometry(u_id, u_relative_velocity, u_camera_omega);
 }
 )";
 
-// Geometry only: no lights, no texture, no colour written. Every body is in one batch; each
-// vertex names its body, whose model matrix and velocity relative to the camera (five RGBA
-// texels) and id this view's buffer textures hold. A body whose id is u_hidden_id is not seen:
-// its vertices go behind the near plane.
-inline constexpr const char* kGeometryVertex = R"(#version 330 core
+// Geometry only: no lights, no texture, no colour written. Every body is in one batch, and
+// every view of a submission is one instance of it, drawn into its own layer of the framebuffer:
+// each vertex names its body, each instance its view. Per view, the uniform block holds the
+// camera and the ground's model matrix (the ground follows the camera); per body, a buffer
+// texture holds its model matrix (four RGBA texels); per view and body, two more hold the body's
+// velocity relative to the camera and its id, or u_hidden_id where the view does not see it: its
+// vertices then go behind the near plane. Compiled after "#version", the definition of
+// MAX_VIEWS (the most views of a submission) and, where the views of a submission are drawn
+// by one call, that of LAYERED; without it each view is drawn on its own, into a framebuffer of
+// its layer alone, as instance 0 of u_first_view.
+inline constexpr const char* kGeometryVertex = R"(
+#ifdef LAYERED
+#extension GL_ARB_shader_viewport_layer_array : require
+#endif
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in int a_body;
-uniform samplerBuffer u_poses;
+struct Camera {
+  mat4 world_to_camera;  // to the optical frame: x right, y down, z forward
+  mat4 projection;
+  mat4 ground_model;
+  vec4 omega;  // the camera's angular velocity, optical frame, rad/s
+};
+layout(std140) uniform Cameras { Camera u_cameras[MAX_VIEWS]; };
+uniform samplerBuffer u_models;
+uniform samplerBuffer u_velocities;
 uniform isamplerBuffer u_ids;
 uniform int u_hidden_id;
-uniform mat4 u_world_to_camera;
-uniform mat4 u_projection;
+uniform int u_body_count;  // the ground last
+uniform int u_first_view;
 out vec3 v_camera;
 flat out int v_id;
 flat out vec3 v_relative_velocity;
+flat out vec3 v_camera_omega;
+
 void main() {
-  v_id = texelFetch(u_ids, a_body).r;
-  int texel = 5 * a_body;
-  v_relative_velocity = texelFetch(u_poses, texel + 4).xyz;
+  int view = u_first_view + gl_InstanceID;
+#ifdef LAYERED
+  gl_Layer = gl_InstanceID;
+#endif
+  int seen = view * u_body_count + a_body;
+  v_id = texelFetch(u_ids, seen).r;
+  v_relative_velocity = texelFetch(u_velocities, seen).xyz;
+  v_camera_omega = u_cameras[view].omega.xyz;
   if (v_id == u_hidden_id) {
     v_camera = vec3(0.0);
     gl_Position = vec4(0.0, 0.0, -2.0, 1.0);
     return;
   }
-  mat4 model = mat4(texelFetch(u_poses, texel), texelFetch(u_poses, texel + 1),
-                    texelFetch(u_poses, texel + 2), texelFetch(u_poses, texel + 3));
+  int texel = 4 * a_body;
+  mat4 model = a_body == u_body_count - 1
+                   ? u_cameras[view].ground_model
+                   : mat4(texelFetch(u_models, texel), texelFetch(u_models, texel + 1),
+                          texelFetch(u_models, texel + 2), texelFetch(u_models, texel + 3));
   // As the scene program computes it, so that both give the same channels to the last bit.
   vec4 world = model * vec4(a_position, 1.0);
-  v_camera = (u_world_to_camera * world).xyz;
-  gl_Position = u_projection * vec4(v_camera, 1.0);
+  v_camera = (u_cameras[view].world_to_camera * world).xyz;
+  gl_Position = u_cameras[view].projection * vec4(v_camera, 1.0);
 }
 )";
 
 inline constexpr const char* kGeometryFragment = R"(
 flat in int v_id;
 flat in vec3 v_relative_velocity;
-void main() { write_geometry(v_id, v_relative_velocity); }
+flat in vec3 v_camera_omega;
+void main() { write_geometry(v_id, v_relative_velocity, v_camera_omega); }
 )";
 
 inline constexpr const char* kShadowVertex = R"(#version 330 core

@@ -2,9 +2,7 @@
 
 namespace flowsteer::sim_camera {
 
-void render_frame(Renderer& renderer, const World& world, std::size_t agent,
-                  RenderChannels channels, RenderedView& view, camera_io::Frame& frame) {
-  renderer.render(world, View::of_agent(world, agent), view, channels);
+void point_frame_at(const RenderedView& view, const World& world, camera_io::Frame& frame) {
   frame.image = view.image;
   frame.timestamp_s = world.time_s();
   frame.sim = camera_io::SimChannels{view.depth_m, view.object_ids, view.flow};
@@ -17,7 +15,8 @@ SimCamera::SimCamera(const World& world, Renderer& renderer, std::size_t agent)
       intrinsics_(View::of_agent(world, agent).intrinsics()) {}
 
 camera_io::ReadStatus SimCamera::read(camera_io::Frame& frame, double) {
-  render_frame(renderer_, world_, agent_, RenderChannels::all, view_, frame);
+  renderer_.render(world_, View::of_agent(world_, agent_), view_, RenderChannels::all);
+  point_frame_at(view_, world_, frame);
   frame.sequence = sequence_++;
   return camera_io::ReadStatus::ok;
 }

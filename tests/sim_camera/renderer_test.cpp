@@ -1,8 +1,14 @@
 #include "flowsteer/sim_camera/renderer.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <numbers>
+#include <ranges>
+#include <set>
+#include <stdexcept>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -179,6 +185,72 @@ TEST(Renderer, ShadowedGroundIsDarkerByTheAmbientRatio) {
   // Lit: ambient + sun·sin(45°); shadowed: ambient alone.
   const double expected = 0.25 / (0.25 + 0.6 * std::sin(45.0 * kDeg));
   EXPECT_NEAR(luminance(shadow_row) / luminance(lit_row), expected, 0.03);
+}
+
+bool same_bits(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() &&
+         std::memcmp(a.data, b.data, a.total() * a.elemSize()) == 0;
+}
+
+// Agents on a circle, each looking across it past a wall. The first two cameras are so large
+// that a submission holds one of their views only, the third's is smaller than the others',
+// and the 20 others are more than a submission draws: five submissions of views of one size.
+TEST(Renderer, ViewsRenderedTogetherAreTheViewsRenderedOneByOne) {
+  WorldSpec spec;
+  spec.lighting.sun = SunLight{0.5, 40.0 * kDeg, 0.6F, true};
+  constexpr int kAgents = 23;
+  for (int k = 0; k < kAgents; ++k) {
+    const double angle = 2.0 * std::numbers::pi * k / kAgents;
+    const Eigen::Vector2d start = 6.0 * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    spec.agents.push_back(observer(start, angle + std::numbers::pi + 0.2, 1.0 + 0.02 * k));
+  }
+  for (const std::size_t i : {0, 1}) {
+    spec.agents[i].camera.width_px = 2048;
+    spec.agents[i].camera.height_px = 1024;
+  }
+  spec.agents[2].camera.width_px = 96;
+  spec.agents[2].camera.height_px = 64;
+  spec.obstacles = {box({0.0, 2.0}, {3.0, 0.3}, 2.0)};
+  World world(spec);
+  std::vector<View> views;
+  for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+    View view = View::of_agent(world, i);
+    view.turn_rate = 0.01 * static_cast<double>(i) - 0.1;
+    views.push_back(view);
+  }
+  std::vector<RenderedView> alone(views.size());
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    renderer().render(world, views[i], alone[i], RenderChannels::all);
+  }
+  for (const ViewSubmission submission : {ViewSubmission::layered, ViewSubmission::per_view}) {
+    SCOPED_TRACE(submission == ViewSubmission::layered ? "layered" : "per view");
+    const std::unique_ptr<Renderer> batch_renderer = Renderer::create(submission);
+    std::vector<RenderedView> together(views.size());
+    std::vector<RenderedView*> targets;
+    for (RenderedView& out : together) {
+      targets.push_back(&out);
+    }
+    batch_renderer->render_geometry(world, views, targets);
+    int walls_seen = 0;
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      SCOPED_TRACE("view " + std::to_string(i));
+      EXPECT_TRUE(together[i].image.empty());
+      EXPECT_TRUE(same_bits(together[i].object_ids, alone[i].object_ids));
+      EXPECT_TRUE(same_bits(together[i].flow, alone[i].flow));
+      EXPECT_TRUE(same_bits(together[i].depth_m, alone[i].depth_m));
+      // What the views show: other agents, never the viewer itself.
+      const std::set<std::int32_t> seen(together[i].object_ids.begin<std::int32_t>(),
+                                        together[i].object_ids.end<std::int32_t>());
+      EXPECT_FALSE(seen.contains(agent_render_id(i)));
+      EXPECT_TRUE(std::ranges::any_of(
+          std::views::iota(std::size_t{0}, views.size()),
+          [&](std::size_t j) { return j != i && seen.contains(agent_render_id(j)); }));
+      walls_seen += seen.contains(obstacle_render_id(0)) ? 1 : 0;
+    }
+    EXPECT_GE(walls_seen, 2);
+    const std::vector<RenderedView*> too_few(targets.begin(), targets.end() - 1);
+    EXPECT_THROW(batch_renderer->render_geometry(world, views, too_few), std::invalid_argument);
+  }
 }
 
 TEST(SimCamera, DeliversFramesWithSimulatorChannels) {

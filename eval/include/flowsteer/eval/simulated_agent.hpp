@@ -28,6 +28,15 @@ class SimulatedAgent {
   // each stage took, the rendering included.
   const servo::ControlOutput& step(sim_camera::Renderer& renderer, pipeline::StageTimes& times);
 
+  // Whether the camera draws the geometry channels alone: then the agent's view may be rendered
+  // with other agents' in one submission (Renderer::render_geometry of view() into
+  // rendered_view()), and think() run on it in place of step().
+  bool renders_geometry_only() const { return channels_ == sim_camera::RenderChannels::geometry; }
+  sim_camera::View view() const { return sim_camera::View::of_agent(world_, agent_); }
+  sim_camera::RenderedView& rendered_view() { return view_; }
+  // Runs the brain on rendered_view(), rendered at the world's current state in `render_ms`.
+  const servo::ControlOutput& think(double render_ms, pipeline::StageTimes& times);
+
   const camera_io::Frame& frame() const { return frame_; }
   const pipeline::Brain& brain() const { return brain_; }
   const base::CameraIntrinsics& intrinsics() const { return intrinsics_; }

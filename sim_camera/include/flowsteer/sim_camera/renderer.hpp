@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <span>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -44,6 +45,15 @@ struct RenderedView {
 // Takes effect before the process's first renderer only; an LP_NUM_THREADS the user set is kept.
 void rasterize_on_calling_threads();
 
+// How Renderer::render_geometry submits views of one size: all of them by one draw call, each
+// into its own layer of one framebuffer (what suits a GPU: one submission and one stall for all
+// the views), or by one draw call per view into a framebuffer of its layer alone, sharing the
+// uploads (what suits Mesa's software rasteriser, llvmpipe, which rasterises a layered draw's
+// views about half as fast). `automatic` draws layered on a GPU whose driver lets the vertex
+// shader choose the layer (GL_ARB_shader_viewport_layer_array), per view otherwise; `layered`
+// where the driver lacks it is per view too.
+enum class ViewSubmission { automatic, layered, per_view };
+
 // A headless OpenGL 3.3 renderer through EGL: Mesa's surfaceless platform (llvmpipe on a
 // machine without a GPU) or, where there is one, the GPU through the device platform. It draws
 // lit, shadowed, procedurally textured worlds and, per pixel, the synthetic flow of CGF Eq. 1
@@ -53,7 +63,7 @@ class Renderer {
  public:
   // Throws std::runtime_error saying what failed when no EGL display or OpenGL 3.3 context can
   // be had.
-  static std::unique_ptr<Renderer> create();
+  static std::unique_ptr<Renderer> create(ViewSubmission submission = ViewSubmission::automatic);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
@@ -62,6 +72,14 @@ class Renderer {
   // The geometry channels are the same to the last bit whichever `channels` draws them.
   void render(const World& world, const View& view, RenderedView& out,
               RenderChannels channels = RenderChannels::all);
+
+  // Renders the geometry channels of several views of the world as it is now: *out[k] is what
+  // render(world, views[k], *out[k], RenderChannels::geometry) gives, to the last bit. The views
+  // of one size are drawn as ViewSubmission says, up to 16 at a time, with one upload of the
+  // world and the cameras and one make-current for all: a crowd's step is a few submissions
+  // rather than one per agent. Throws std::invalid_argument when the spans' sizes differ.
+  void render_geometry(const World& world, std::span<const View> views,
+                       std::span<RenderedView* const> out);
 
   // What EGL and OpenGL report, e.g. "OpenGL 4.5 (Core Profile) Mesa 22.3.6, llvmpipe".
   const std::string& description() const;

@@ -8,11 +8,10 @@
 
 namespace flowsteer::sim_camera {
 
-// Renders `agent`'s view of the world as it is now into `view`, and points `frame` at it: the
-// image (empty when only the geometry channels are drawn) and the simulator's exact channels,
-// stamped with the world's time. The frame's sequence number is the caller's.
-void render_frame(Renderer& renderer, const World& world, std::size_t agent,
-                  RenderChannels channels, RenderedView& view, camera_io::Frame& frame);
+// Points `frame` at `view`, rendered from the world as it is now: the image (empty when only the
+// geometry channels were drawn) and the simulator's exact channels, stamped with the world's
+// time. The frame's sequence number is the caller's.
+void point_frame_at(const RenderedView& view, const World& world, camera_io::Frame& frame);
 
 // An agent's head camera in the simulated world, as a FrameSource: each read renders the world
 // as it is now and carries the simulator's exact channels (depth, ids, flow) with the image.
