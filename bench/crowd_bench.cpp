@@ -4,7 +4,8 @@
 //   crowd_bench [--steps N] [--agents 1,10,...] [--resolutions 64,128,...] [--threads 1,2,...]
 // Prints one row per configuration: world steps per second, wall milliseconds per agent-step
 // (the step's wall time over its agents), the mean render and perception+control milliseconds
-// of one agent's step as its thread saw them, peak RSS, and CGF Fig. 14's per-agent update time
+// of one agent's step as its thread saw them (the render: its share of the submissions its
+// thread drew its view in), peak RSS, and CGF Fig. 14's per-agent update time
 // at that resolution (UE4 on a Quadro M2000M) beside them.
 #include <sys/resource.h>
 #include <sys/wait.h>
