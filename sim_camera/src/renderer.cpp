@@ -454,6 +454,16 @@ class Frustum {
   std::array<Eigen::Vector4d, 5> planes_;
 };
 
+// What one draw needs: the shape, its pose and size, how it looks, who it is and how it moves.
+struct DrawItem {
+  const Mesh* mesh;
+  bool hidden;  // from this view: its own camera's body (it still casts a shadow)
+  Eigen::Matrix4f model;
+  Material material;  // a copy: moving obstacles' poses are temporaries
+  std::int32_t id;
+  Eigen::Vector3d velocity_mps;  // world frame
+};
+
 // The id that marks a body not to draw in a view (its own camera's, or out of view).
 constexpr std::int32_t kHiddenId = std::numeric_limits<std::int32_t>::min();
 // The geometry program's buffer textures' units, in GeometryBatch::Table's order, and its
@@ -545,15 +555,19 @@ struct GeometryBatch {
     world_serial = serial;
   }
 
-  void clear() {
-    model_texels.clear();
+  void clear_views() {
     view_count = 0;
     velocity_texels.clear();
     id_texels.clear();
   }
 
-  void add_body(const Eigen::Matrix4f& model) {
-    std::copy(model.data(), model.data() + 16, model_texels.emplace_back().begin());
+  // The bodies' poses, once for all the submissions of a world state.
+  void upload_bodies(const std::vector<DrawItem>& items) {
+    model_texels.clear();
+    for (const DrawItem& item : items) {
+      std::copy(item.model.data(), item.model.data() + 16, model_texels.emplace_back().begin());
+    }
+    upload_table(models, GL_RGBA32F, model_texels);
   }
 
   void add_view(const Eigen::Matrix4f& world_to_camera, const Eigen::Matrix4f& projection,
@@ -572,8 +586,7 @@ struct GeometryBatch {
     id_texels.push_back(id);
   }
 
-  void upload() const {
-    upload_table(models, GL_RGBA32F, model_texels);
+  void upload_views() const {
     upload_table(velocities, GL_RGBA32F, velocity_texels);
     upload_table(ids, GL_R32I, id_texels);
     glBindBuffer(GL_UNIFORM_BUFFER, camera_buffer);
@@ -616,16 +629,6 @@ struct PointUniforms {
     position[3 * k + 2] = static_cast<float>(position_m.z());
   }
   bool operator==(const PointUniforms&) const = default;
-};
-
-// What one draw needs: the shape, its pose and size, how it looks, who it is and how it moves.
-struct DrawItem {
-  const Mesh* mesh;
-  bool hidden;  // from this view: its own camera's body (it still casts a shadow)
-  Eigen::Matrix4f model;
-  Material material;  // a copy: moving obstacles' poses are temporaries
-  std::int32_t id;
-  Eigen::Vector3d velocity_mps;  // world frame
 };
 
 }  // namespace
@@ -1107,6 +1110,8 @@ struct Renderer::Impl {
                                   " views but " + std::to_string(out.size()) + " outputs");
     }
     make_current();
+    glUseProgram(geometry_program);
+    set_bodies(world);
     // A submission per run of views of the same size (a world's cameras usually all are), of
     // at most kMaxViewsPerSubmission views and kLayerBytes.
     for (std::size_t first = 0; first < views.size();) {
@@ -1272,8 +1277,7 @@ struct Renderer::Impl {
     const auto count = static_cast<int>(views.size());
     resize_layers(k.width_px, k.height_px, count);
     set_view_state(k);
-    glUseProgram(geometry_program);
-    fill_batch(world, views, k);
+    set_views(world, views, k);
     if (layered) {
       glBindFramebuffer(GL_FRAMEBUFFER, layered_fbo);
       clear_geometry();
@@ -1298,10 +1302,9 @@ struct Renderer::Impl {
     }
   }
 
-  // The batch's tables for these views: the bodies' poses, and per view its camera and what it
-  // sees of each body, the ground last, in the lit scene's order.
-  void fill_batch(const World& world, std::span<const View> views,
-                  const base::CameraIntrinsics& k) {
+  // The batch's bodies as the world now has them, in the lit scene's order, the ground last:
+  // their shapes once per world, their poses once per call of render_geometry.
+  void set_bodies(const World& world) {
     collect_items(world, std::nullopt);
     if (batch.world_serial != world.serial()) {
       batch_shapes.clear();
@@ -1311,10 +1314,13 @@ struct Renderer::Impl {
       batch_shapes.push_back(&ground_positions);
       batch.build(world.serial(), batch_shapes);
     }
-    batch.clear();
-    for (const DrawItem& item : items) {
-      batch.add_body(item.model);
-    }
+    batch.upload_bodies(items);
+    glUniform1i(geometry.body_count, static_cast<GLint>(items.size() + 1));
+  }
+
+  // A submission's views: per view its camera and what it sees of each body set_bodies holds.
+  void set_views(const World& world, std::span<const View> views, const base::CameraIntrinsics& k) {
+    batch.clear_views();
     for (const View& view : views) {
       const CameraPose pose = camera_pose(view, k);
       batch.add_view(pose.world_to_camera, pose.projection, ground_model(world, view), pose.omega);
@@ -1331,8 +1337,7 @@ struct Renderer::Impl {
       }
       batch.add_seen(relative(Eigen::Vector3d::Zero()), servo::kGroundId);
     }
-    glUniform1i(geometry.body_count, static_cast<GLint>(items.size() + 1));
-    batch.upload();
+    batch.upload_views();
   }
 
   static Eigen::Matrix4f ground_model(const World& world, const View& view) {
