@@ -117,7 +117,9 @@ TEST(RobotProcessTest, ReportsTheExitStatus) {
 TEST(RobotProcessTest, StopInterruptsAndKillsWhatIgnoresTheInterrupt) {
   RobotProcess polite({"/bin/sleep", "30"});
   EXPECT_EQ(polite.stop(5.0), 128 + SIGINT);
-  RobotProcess stubborn({"/bin/sh", "-c", "trap '' INT; sleep 30"});
+  // exec: the ignored SIGINT carries over to sleep, and no orphan outlives the kill holding the
+  // test's output open (ctest waited the 30 s for it).
+  RobotProcess stubborn({"/bin/sh", "-c", "trap '' INT; exec sleep 30"});
   ::usleep(200000);  // the shell has set its trap
   EXPECT_EQ(stubborn.stop(0.3), 128 + SIGKILL);
 }

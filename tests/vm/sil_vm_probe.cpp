@@ -3,16 +3,22 @@
 // vivid's looped capture node and the simulated ODrive pair on vcan0. The first run goes to its
 // end; in the second, vivid's capture node goes mid-run ("Disconnect": the camera unplugged,
 // which takes vivid's output node with it).
-// Prints for each run "PROBE <run>-start T", "PROBE <run>-fault T" (the second),
-// "PROBE <run>-exit STATUS", and what flowsteer sil printed and wrote as
+// Before them, the emulated CPU's pace: the launch file's timeouts follow it (pace_launch_file).
+// Prints "PROBE pace-step-s S", "PROBE timeout-scale F", "PROBE camera-timeout-s T",
+// "PROBE watchdog-timeout-s T"; for each run "PROBE <run>-start T", "PROBE <run>-fault T" (the
+// second), "PROBE <run>-exit STATUS", and what flowsteer sil printed and wrote as
 // "PROBE <run>-<file>-<k> LINE" (log, sil.json, trajectories.csv, robot.log).
 
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
 
@@ -25,6 +31,75 @@ namespace {
 using flowsteer::base::monotonic_now_s;
 using flowsteer::vm_test::realtime_s;
 
+// The launch file's camera timeout (`timeout_s: 1.0`, a view every 0.1 s with room for a late
+// one) and watchdog timeout, and how many of the pace's steps the camera's must cover: the
+// robot's first perception passes run while the emulator still translates their code, and took
+// 4-5 times the later ones' time (588 ms against a mean of 127 ms under a two-core load).
+constexpr double kCameraTimeoutS = 1.0;
+constexpr double kWatchdogTimeoutS = 0.6;
+constexpr double kStepsPerCameraTimeout = 6.0;
+constexpr int kPaceSteps = 20;
+
+// Seconds per step of `flowsteer sim` on the test's scenario here (summary.json's mean per
+// agent step, without the process's start): a view rendered and perceived, what the loop's
+// simulator and robot do between them for each view.
+double measure_step_s() {
+  const pid_t pid = flowsteer::vm_test::start_logged(
+      "/tmp/pace.log", {"/bin/flowsteer", "sim", "/sil/scenario.yaml", "--steps",
+                        std::to_string(kPaceSteps).c_str(), "--out", "/tmp/pace"});
+  int raw = 0;
+  ::waitpid(pid, &raw, 0);
+  std::ostringstream text;
+  if (!WIFEXITED(raw) || WEXITSTATUS(raw) != 0) {
+    text << std::ifstream("/tmp/pace.log").rdbuf();
+    throw std::runtime_error("the pace run (flowsteer sim) failed: " + text.str());
+  }
+  text << std::ifstream("/tmp/pace/summary.json").rdbuf();
+  const std::string summary = text.str();
+  const std::string key = "\"total\": ";
+  const std::size_t at = summary.find(key, summary.find("\"per_agent_step_ms\""));
+  if (at == std::string::npos) {
+    throw std::runtime_error("the pace run's summary.json has no per_agent_step_ms total");
+  }
+  return 1e-3 * std::atof(summary.c_str() + at + key.size());
+}
+
+// Replaces the one occurrence of `from` in `text` by `to`.
+void replace_once(std::string& text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  if (at == std::string::npos || text.find(from, at + 1) != std::string::npos) {
+    throw std::runtime_error("/sil/launch.yaml: expected '" + from + "' once");
+  }
+  text.replace(at, from.size(), to);
+}
+
+// /sil/launch.yaml with its camera and watchdog timeouts stretched by the factor by which the
+// emulated CPU, on a loaded host, is too slow for them: the world runs on the wall clock and
+// drops the views its renderer cannot give in time, and a robot that saw one picture for its
+// whole timeout would stop, as it should on a real camera that froze. The runs check where the
+// robot goes and how it stops when its camera goes, not how fast the host is.
+std::string pace_launch_file() {
+  const double step_s = measure_step_s();
+  const double scale = std::max(1.0, kStepsPerCameraTimeout * step_s / kCameraTimeoutS);
+  std::ifstream in("/sil/launch.yaml");
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string launch = text.str();
+  const auto number = [](double value) {
+    std::ostringstream out;
+    out << value;
+    return out.str();
+  };
+  replace_once(launch, "timeout_s: 1.0 ", "timeout_s: " + number(scale * kCameraTimeoutS) + " ");
+  replace_once(launch, "watchdog: {timeout_s: 0.6,",
+               "watchdog: {timeout_s: " + number(scale * kWatchdogTimeoutS) + ",");
+  std::ofstream("/tmp/launch.yaml") << launch;
+  std::printf("PROBE pace-step-s %.4f\nPROBE timeout-scale %.3f\n", step_s, scale);
+  std::printf("PROBE camera-timeout-s %.3f\nPROBE watchdog-timeout-s %.3f\n",
+              scale * kCameraTimeoutS, scale * kWatchdogTimeoutS);
+  return "/tmp/launch.yaml";
+}
+
 void print_file(const std::string& run, const std::string& name, const std::string& path) {
   std::ifstream in(path);
   std::string line;
@@ -34,14 +109,14 @@ void print_file(const std::string& run, const std::string& name, const std::stri
 }
 
 // One run; `fault_after_s` > 0 fails the capture stream that long after the world starts.
-void run_case(const std::string& run, double fault_after_s) {
+void run_case(const std::string& run, const std::string& launch, double fault_after_s) {
   const std::string out = "/tmp/" + run;
   const std::string log_path = "/tmp/" + run + ".log";
   std::printf("PROBE %s-start %.6f\n", run.c_str(), realtime_s());
   std::fflush(stdout);
   const pid_t pid = flowsteer::vm_test::start_logged(
-      log_path, {"/bin/flowsteer", "sil", "/sil/scenario.yaml", "/sil/launch.yaml", "--robot",
-                 "robot", "--output", "/dev/video1", "--out", out.c_str()});
+      log_path, {"/bin/flowsteer", "sil", "/sil/scenario.yaml", launch.c_str(), "--robot", "robot",
+                 "--output", "/dev/video1", "--out", out.c_str()});
   const double start_s = monotonic_now_s();
   bool faulted = fault_after_s <= 0.0;
   int raw = 0;
@@ -68,8 +143,9 @@ void run_case(const std::string& run, double fault_after_s) {
 }
 
 int run() {
-  run_case("clean", 0.0);
-  run_case("fault", 4.0);
+  const std::string launch = pace_launch_file();
+  run_case("clean", launch, 0.0);
+  run_case("fault", launch, 4.0);
   std::printf("PROBE done\n");
   return 0;
 }
