@@ -58,8 +58,14 @@ apt_download() {
   fi
 }
 
+# The folder of what the VM tests keep between build folders (CMake takes its vm-kernel/ from
+# here too).
+flowsteer_cache_dir() {
+  echo "${FLOWSTEER_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/flowsteer}"
+}
+
 deb_cache_dir() {
-  echo "${FLOWSTEER_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/flowsteer}/debs"
+  echo "$(flowsteer_cache_dir)/debs"
 }
 
 # deb_verify FILE SHA256: whether FILE has that SHA256 (the archive's for it); says why not on

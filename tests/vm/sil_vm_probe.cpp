@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -64,13 +65,18 @@ double measure_step_s() {
   return 1e-3 * std::atof(summary.c_str() + at + key.size());
 }
 
-// Replaces the one occurrence of `from` in `text` by `to`.
-void replace_once(std::string& text, const std::string& from, const std::string& to) {
-  const std::size_t at = text.find(from);
-  if (at == std::string::npos || text.find(from, at + 1) != std::string::npos) {
-    throw std::runtime_error("/sil/launch.yaml: expected '" + from + "' once");
+// Replaces the one `key` followed by `value_s` as the launch file writes it (one decimal) by the
+// key and `scale` times the value.
+void stretch(std::string& launch, const std::string& key, double value_s, double scale) {
+  std::ostringstream from;
+  from << key << std::fixed << std::setprecision(1) << value_s;
+  const std::size_t at = launch.find(from.str());
+  if (at == std::string::npos || launch.find(from.str(), at + 1) != std::string::npos) {
+    throw std::runtime_error("/sil/launch.yaml: expected '" + from.str() + "' once");
   }
-  text.replace(at, from.size(), to);
+  std::ostringstream to;
+  to << key << scale * value_s;
+  launch.replace(at, from.str().size(), to.str());
 }
 
 // /sil/launch.yaml with its camera and watchdog timeouts stretched by the factor by which the
@@ -85,14 +91,8 @@ std::string pace_launch_file() {
   std::ostringstream text;
   text << in.rdbuf();
   std::string launch = text.str();
-  const auto number = [](double value) {
-    std::ostringstream out;
-    out << value;
-    return out.str();
-  };
-  replace_once(launch, "timeout_s: 1.0 ", "timeout_s: " + number(scale * kCameraTimeoutS) + " ");
-  replace_once(launch, "watchdog: {timeout_s: 0.6,",
-               "watchdog: {timeout_s: " + number(scale * kWatchdogTimeoutS) + ",");
+  stretch(launch, "timeout_s: ", kCameraTimeoutS, scale);
+  stretch(launch, "watchdog: {timeout_s: ", kWatchdogTimeoutS, scale);
   std::ofstream("/tmp/launch.yaml") << launch;
   std::printf("PROBE pace-step-s %.4f\nPROBE timeout-scale %.3f\n", step_s, scale);
   std::printf("PROBE camera-timeout-s %.3f\nPROBE watchdog-timeout-s %.3f\n",
