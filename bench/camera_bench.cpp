@@ -16,7 +16,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "flowsteer/camera_io/replay_source.hpp"
-#include "flowsteer/launch/robot_brain.hpp"
+#include "flowsteer/robot/robot_brain.hpp"
 
 namespace {
 
@@ -123,13 +123,13 @@ void BM_CaptureToCommand640x480(benchmark::State& state) {
   controller.spec.use_depth = false;
   std::ostringstream log;
   std::unique_ptr<ReplaySource> source;
-  std::unique_ptr<flowsteer::launch::RobotBrain> brain;
+  std::unique_ptr<flowsteer::robot::RobotBrain> brain;
   Frame frame;
   // A fresh recording needs a first frame before there is flow; that frame is not timed.
   const auto restart = [&] {
     source = std::make_unique<ReplaySource>(options(true));
-    brain = std::make_unique<flowsteer::launch::RobotBrain>(
-        source->intrinsics(), flowsteer::launch::robot_brain_config(perception, controller), log);
+    brain = std::make_unique<flowsteer::robot::RobotBrain>(
+        source->intrinsics(), flowsteer::robot::robot_brain_config(perception, controller), log);
     source->read(frame, 0.1);
     brain->step({frame, {0.3, 0.0}, 0.1, 5.0});
   };

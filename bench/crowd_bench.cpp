@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 
 namespace {
@@ -65,12 +65,12 @@ struct Row {
     if (threads != 1 && agents > 1) {
       sim_camera::rasterize_on_calling_threads();  // as flowsteer sim does
     }
-    eval::SimOptions options;
+    sim::SimOptions options;
     options.steps = steps;
     options.threads = threads;
     options.write_outputs = false;
     std::ostringstream log;
-    const eval::SimResult result = eval::run_simulation(ring(agents, resolution), options, log);
+    const sim::SimResult result = sim::run_simulation(ring(agents, resolution), options, log);
     const pipeline::StageTimes& t = result.per_agent_step_ms;
     const Row row{result.world_steps_per_s, t.render, t.total - t.render};
     if (write(fd, &row, sizeof row) != static_cast<ssize_t>(sizeof row)) {

@@ -22,8 +22,8 @@
 #include <benchmark/benchmark.h>
 
 #include "flowsteer/config/scenario_file.hpp"
-#include "flowsteer/eval/simulated_agent.hpp"
-#include "flowsteer/launch/robot_brain.hpp"
+#include "flowsteer/sim/simulated_agent.hpp"
+#include "flowsteer/robot/robot_brain.hpp"
 #include "flowsteer/sim_camera/sim_camera.hpp"
 
 namespace {
@@ -65,7 +65,7 @@ void run_steps(benchmark::State& state, int resolution, const servo::PerceptionC
   const sim_camera::WorldSpec spec = room(resolution, perception);
   const auto renderer = sim_camera::Renderer::create();
   std::optional<sim_camera::World> world;
-  std::optional<eval::SimulatedAgent> pipeline;
+  std::optional<sim::SimulatedAgent> pipeline;
   pipeline::StageTimes times;
   pipeline::StageTimes sum;
   int step = kSteps;
@@ -164,7 +164,7 @@ void RobotStepNumerical(benchmark::State& state) {
   controller.preferred_speed_mps = agent.preferred_speed_mps;
   controller.robot_width_m = 2.0 * agent.radius_m;
   std::ostringstream log;
-  std::unique_ptr<launch::RobotBrain> brain;
+  std::unique_ptr<robot::RobotBrain> brain;
   const auto step = [&](const RecordedStep& s) {
     return brain->step({s.frame, s.measured, s.goal_bearing_rad, s.goal_distance_m});
   };
@@ -174,8 +174,8 @@ void RobotStepNumerical(benchmark::State& state) {
     if (next == steps.size()) {
       // A fresh brain; its first frame (no flow yet) is not timed.
       state.PauseTiming();
-      brain = std::make_unique<launch::RobotBrain>(
-          recording.intrinsics, launch::robot_brain_config(perception_section, controller), log);
+      brain = std::make_unique<robot::RobotBrain>(
+          recording.intrinsics, robot::robot_brain_config(perception_section, controller), log);
       step(steps.front());
       next = 1;
       state.ResumeTiming();

@@ -61,7 +61,7 @@ std::vector<CaseFile> builtin_suite() {
   std::vector<CaseFile> files;
   for (const auto& [name, text] : builtin::kSuite) {
     files.push_back(
-        {std::filesystem::path(name).stem().string(), std::string("launch/suite/") + name, text});
+        {std::filesystem::path(name).stem().string(), std::string("config/suite/") + name, text});
   }
   return files;
 }

@@ -10,7 +10,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "flowsteer/base/config_error.hpp"
-#include "flowsteer/eval/output_files.hpp"
+#include "flowsteer/base/output_files.hpp"
+#include "flowsteer/sim/outputs.hpp"
 #include "run_choices.hpp"
 
 namespace flowsteer::eval {
@@ -107,7 +108,7 @@ std::vector<servo::SteeringModel> parse_controllers(const std::vector<std::strin
 CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptions& options,
                           std::ostream& log) {
   check_controllers(options.controllers);
-  std::optional<OutputDir> out;
+  std::optional<base::OutputDir> out;
   if (options.write_outputs) {
     out.emplace(options.out_dir);
   }
@@ -127,7 +128,7 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
     for (sim_camera::AgentSpec& a : spec.agents) {
       a.controller.model = controller;
     }
-    SimOptions sim;
+    sim::SimOptions sim;
     sim.resolution = options.resolution;
     sim.steps = options.steps;
     sim.write_outputs = options.write_outputs;
@@ -135,9 +136,9 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
       sim.out_dir = out->staging_path(name);
     }
     log << "flowsteer compare: " << world.name << " with " << name << "\n";
-    ControllerRun run{controller, run_simulation(spec, sim, log),
+    ControllerRun run{controller, sim::run_simulation(spec, sim, log),
                       std::vector<int>(kTurnRateBins, 0)};
-    for (const AgentResult& a : run.result.agents) {
+    for (const sim::AgentResult& a : run.result.agents) {
       for (const double w : a.turn_rates) {
         if (std::abs(w) >= kStillTurnRate) {
           const double at = (w + max_turn_rate) / (2.0 * max_turn_rate) * kTurnRateBins;
@@ -151,11 +152,11 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
 
   if (out) {
     const std::vector<CompareRow> rows = compare_table(result);
-    CsvTable table({"controller", "collisions", "goals_reached", "agents", "mean_time_to_goal_s",
+    base::CsvTable table({"controller", "collisions", "goals_reached", "agents", "mean_time_to_goal_s",
                     "mean_path_length_m", "min_clearance_m", "path_length_vs_geometric",
                     "min_clearance_vs_geometric_m"});
     for (const CompareRow& r : rows) {
-      const RunSummary& s = r.summary;
+      const sim::RunSummary& s = r.summary;
       table.add({std::string(servo::to_string(r.controller))},
                 {static_cast<double>(s.collisions), static_cast<double>(s.goals_reached),
                  static_cast<double>(s.agents), s.mean_time_to_goal_s, s.mean_path_length_m,
@@ -163,14 +164,14 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
     }
     table.write(out->staging_path("compare.csv"));
 
-    CsvTable agents({"controller", "agent", "reached_goal", "time_to_goal_s", "path_length_m",
+    base::CsvTable agents({"controller", "agent", "reached_goal", "time_to_goal_s", "path_length_m",
                      "min_clearance_m", "collisions"});
     std::vector<std::string> histogram_header = {"omega_low", "omega_high"};
     std::vector<cv::Mat> topviews;
     std::vector<cv::Mat> histograms;
     double max_share = 1e-9;
     for (const ControllerRun& run : result.runs) {
-      for (const AgentResult& a : run.result.agents) {
+      for (const sim::AgentResult& a : run.result.agents) {
         agents.add({std::string(servo::to_string(run.controller)), a.name},
                    {a.reached_goal ? 1.0 : 0.0, a.reached_goal ? a.time_to_goal_s : kNaN,
                     a.path_length_m, a.min_clearance_m, static_cast<double>(a.collisions)});
@@ -187,7 +188,7 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
       }
     }
     agents.write(out->staging_path("compare_agents.csv"));
-    CsvTable turn_rates(histogram_header);
+    base::CsvTable turn_rates(histogram_header);
     for (int k = 0; k < kTurnRateBins; ++k) {
       std::vector<double> row = {result.turn_rate_edges[static_cast<std::size_t>(k)],
                                  result.turn_rate_edges[static_cast<std::size_t>(k) + 1]};
@@ -202,8 +203,8 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
           with_title(draw_histogram(run.turn_rate_counts, result.turn_rate_edges, max_share),
                      std::string(servo::to_string(run.controller)) + ": turn rate"));
     }
-    write_image(out->staging_path("topviews.png"), side_by_side(topviews));
-    write_image(out->staging_path("turn_rates.png"), side_by_side(histograms));
+    sim::write_image(out->staging_path("topviews.png"), side_by_side(topviews));
+    sim::write_image(out->staging_path("turn_rates.png"), side_by_side(histograms));
     out->commit();
   }
   return result;
@@ -212,7 +213,7 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
 std::vector<CompareRow> compare_table(const CompareResult& result) {
   std::vector<CompareRow> rows;
   for (const ControllerRun& run : result.runs) {
-    rows.push_back({run.controller, summarize(run.result), 0.0, 0.0});
+    rows.push_back({run.controller, sim::summarize(run.result), 0.0, 0.0});
   }
   const auto reference = std::find_if(
       rows.begin(), rows.end(), [](const CompareRow& r) { return r.controller == kReference; });
@@ -246,7 +247,7 @@ void print_compare_table(const std::vector<CompareRow>& rows, std::ostream& out)
     out << std::setw(width) << text.str();
   };
   for (const CompareRow& r : rows) {
-    const RunSummary& s = r.summary;
+    const sim::RunSummary& s = r.summary;
     out << std::left << std::setw(15) << servo::to_string(r.controller) << std::right
         << std::setw(11) << s.collisions << std::setw(8)
         << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents));

@@ -6,8 +6,8 @@
 #include <memory>
 #include <sstream>
 
-#include "flowsteer/eval/output_files.hpp"
-#include "flowsteer/eval/simulated_agent.hpp"
+#include "flowsteer/base/output_files.hpp"
+#include "flowsteer/sim/simulated_agent.hpp"
 #include "flowsteer/pipeline/perception.hpp"
 #include "flowsteer/servo/analytic_scene.hpp"
 
@@ -120,7 +120,7 @@ std::vector<MethodRun> start_runs(std::span<const servo::FlowMethod> methods,
 }
 
 // Each agent steps on its own controller; `commands` gets what each commands.
-void step_agents(std::vector<std::unique_ptr<SimulatedAgent>>& agents,
+void step_agents(std::vector<std::unique_ptr<sim::SimulatedAgent>>& agents,
                  sim_camera::Renderer& renderer, std::vector<std::pair<double, double>>& commands) {
   for (std::size_t i = 0; i < agents.size(); ++i) {
     pipeline::StageTimes times;
@@ -233,13 +233,13 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
                             std::ostream& log, std::vector<FlowEvalRow>& rows) {
   const sim_camera::WorldSpec spec = at_resolution(world_spec, resolution);
   sim_camera::World world(spec);
-  std::vector<std::unique_ptr<SimulatedAgent>> agents;
+  std::vector<std::unique_ptr<sim::SimulatedAgent>> agents;
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
     // Agent 0's images are what the estimators are measured on.
-    agents.push_back(std::make_unique<SimulatedAgent>(
+    agents.push_back(std::make_unique<sim::SimulatedAgent>(
         world, i, i == 0 ? sim_camera::RenderChannels::all : sim_camera::RenderChannels::geometry));
   }
-  pipeline::PerceptionOptions truth_options = brain_config(spec.agents[0]).perception;
+  pipeline::PerceptionOptions truth_options = sim::brain_config(spec.agents[0]).perception;
   truth_options.dark_regions = false;
   truth_options.use_depth = true;
   const base::CameraIntrinsics& k = agents[0]->intrinsics();
@@ -315,8 +315,8 @@ void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
 
 void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
                            const std::filesystem::path& out_dir) {
-  OutputDir out(out_dir);
-  CsvTable csv({"method", "segmentation", "resolution", "frames", "endpoint_error_px",
+  base::OutputDir out(out_dir);
+  base::CsvTable csv({"method", "segmentation", "resolution", "frames", "endpoint_error_px",
                 "valid_fraction", "approaching_objects", "missed_objects", "small_objects",
                 "object_recall_mean", "region_purity_mean", "phantom_objects", "foe_error_median",
                 "ttc_relative_error_median", "ms_per_frame"});
@@ -332,7 +332,7 @@ void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
   csv.write(out.staging_path("flow_eval.csv"));
   std::ostringstream table;
   print_flow_table(rows, table);
-  write_text(out.staging_path("flow_eval.txt"), table.str());
+  base::write_text(out.staging_path("flow_eval.txt"), table.str());
   out.commit();
 }
 

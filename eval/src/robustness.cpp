@@ -7,7 +7,7 @@
 #include <string>
 
 #include "flowsteer/base/config_error.hpp"
-#include "flowsteer/eval/output_files.hpp"
+#include "flowsteer/base/output_files.hpp"
 #include "process_pool.hpp"
 #include "run_choices.hpp"
 #include "suite_files.hpp"
@@ -24,12 +24,12 @@ std::string method_name(const std::optional<Method>& method) {
   return method ? std::string(servo::to_string(*method)) : std::string("scenario");
 }
 
-void write_tables(const std::vector<RobustnessRun>& runs, OutputDir& out) {
-  CsvTable csv({"flow", "segmentation", "resolution", "collisions", "goals_reached",
+void write_tables(const std::vector<RobustnessRun>& runs, base::OutputDir& out) {
+  base::CsvTable csv({"flow", "segmentation", "resolution", "collisions", "goals_reached",
                 "agents_with_goal", "mean_time_to_goal_s", "mean_path_length_m", "min_clearance_m",
                 "clean"});
   for (const RobustnessRun& r : runs) {
-    const RunSummary& s = r.summary;
+    const sim::RunSummary& s = r.summary;
     csv.add(
         {method_name(r.flow), method_name(r.segmentation)},
         {static_cast<double>(r.resolution), static_cast<double>(s.collisions),
@@ -39,7 +39,7 @@ void write_tables(const std::vector<RobustnessRun>& runs, OutputDir& out) {
   csv.write(out.staging_path("robustness.csv"));
   std::ostringstream table;
   print_robustness_table(runs, table);
-  write_text(out.staging_path("robustness.txt"), table.str());
+  base::write_text(out.staging_path("robustness.txt"), table.str());
   out.commit();
 }
 
@@ -59,16 +59,16 @@ std::vector<RobustnessRun> planned_runs(const sim_camera::WorldSpec& world,
 }
 
 // The run as `flowsteer sim` with its overrides, without files or progress lines.
-RunSummary run_once(const sim_camera::WorldSpec& world, const RobustnessRun& run,
+sim::RunSummary run_once(const sim_camera::WorldSpec& world, const RobustnessRun& run,
                     std::optional<int> steps) {
-  SimOptions sim;
+  sim::SimOptions sim;
   sim.resolution = run.resolution;
   sim.steps = steps;
   sim.flow = run.flow;
   sim.segmentation = run.segmentation;
   sim.write_outputs = false;
   std::ostream quiet(nullptr);
-  return summarize(run_simulation(world, sim, quiet));
+  return sim::summarize(sim::run_simulation(world, sim, quiet));
 }
 
 }  // namespace
@@ -97,7 +97,7 @@ std::vector<RobustnessRun> evaluate_robustness(const sim_camera::WorldSpec& worl
                                                const RobustnessOptions& options,
                                                std::ostream& log) {
   std::vector<RobustnessRun> runs = planned_runs(world, options);
-  std::optional<OutputDir> out;
+  std::optional<base::OutputDir> out;
   if (options.write_outputs) {
     out.emplace(options.out_dir);
   }
@@ -135,7 +135,7 @@ void print_robustness_table(const std::vector<RobustnessRun>& runs, std::ostream
       << std::setw(15) << "min_clearance" << std::setw(7) << "clean"
       << "\n";
   for (const RobustnessRun& r : runs) {
-    const RunSummary& s = r.summary;
+    const sim::RunSummary& s = r.summary;
     std::ostringstream clearance;
     clearance << std::fixed << std::setprecision(2) << s.min_clearance_m << " m";
     out << std::left << std::setw(15) << method_name(r.flow) << std::setw(17)

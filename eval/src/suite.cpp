@@ -82,7 +82,7 @@ void check_switched_off(const SuiteOptions& options) {
 }
 
 // The case under the configuration, run as `flowsteer sim` runs it, its files into `folder`.
-RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& configuration,
+sim::RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& configuration,
                     const SuiteOptions& options, const std::filesystem::path& folder) {
   sim_camera::WorldSpec world = suite_case.world;
   for (sim_camera::AgentSpec& agent : world.agents) {
@@ -90,9 +90,9 @@ RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& confi
     agent.controller.law = configuration.law.value_or(agent.controller.law);
   }
   if (configuration.without) {
-    switch_off(world, *configuration.without);
+    sim::switch_off(world, *configuration.without);
   }
-  SimOptions sim;
+  sim::SimOptions sim;
   sim.out_dir = folder;
   sim.resolution = configuration.resolution;
   sim.steps = options.steps;
@@ -100,7 +100,7 @@ RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& confi
   sim.segmentation = configuration.segmentation;
   sim.depth = configuration.depth;
   std::ostream quiet(nullptr);
-  return summarize(run_simulation(world, sim, quiet));
+  return sim::summarize(sim::run_simulation(world, sim, quiet));
 }
 
 // "[#####     ] 12/48 runs, 3 not clean (1 failed), 4 min left", redrawn, or a line per run.
@@ -147,7 +147,7 @@ class SuiteProgress {
 // Copies each run's top view to topviews/ and keeps or drops its folder as options ask; a
 // failed run's folder gets its error. Both folders are made even when empty, so that they replace
 // those of an earlier suite in the same output folder.
-void file_runs(const std::vector<SuiteRun>& runs, KeepRuns keep, OutputDir& out) {
+void file_runs(const std::vector<SuiteRun>& runs, KeepRuns keep, base::OutputDir& out) {
   const std::filesystem::path runs_dir = out.staging_path("runs");
   std::filesystem::create_directories(runs_dir);
   std::filesystem::create_directories(out.staging_path("topviews"));
@@ -163,7 +163,7 @@ void file_runs(const std::vector<SuiteRun>& runs, KeepRuns keep, OutputDir& out)
       std::filesystem::remove_all(folder);
     } else if (run.failed()) {
       std::filesystem::create_directories(folder);
-      write_text(folder / "error.txt", run.error + "\n");
+      base::write_text(folder / "error.txt", run.error + "\n");
     }
   }
 }
@@ -348,7 +348,7 @@ SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& o
                            {},
                            ""});
   }
-  OutputDir out(
+  base::OutputDir out(
       options.out_dir);  // before the first run: a folder that cannot be written fails now
   const std::filesystem::path runs_dir = out.staging_path("runs");
   const base::Stopwatch clock;
@@ -378,7 +378,7 @@ SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& o
 SuiteResult merge_suite_shards(const std::vector<std::filesystem::path>& shard_dirs,
                                const std::filesystem::path& out_dir) {
   SuiteResult merged = join_shards(shard_dirs);
-  OutputDir out(out_dir);
+  base::OutputDir out(out_dir);
   for (const char* folder : {"topviews", "runs"}) {
     std::filesystem::create_directories(out.staging_path(folder));
     for (const std::filesystem::path& dir : shard_dirs) {
@@ -420,7 +420,7 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
       table << run.error << "\n";
       continue;
     }
-    const RunSummary& s = run.summary;
+    const sim::RunSummary& s = run.summary;
     table << std::setw(10) << s.collisions << std::setw(11) << s.obstacle_collisions << std::setw(8)
           << (std::to_string(s.goals_reached) + "/" + std::to_string(s.agents_with_goal()))
           << std::setw(15) << measure(s.min_clearance_m, " m") << std::setw(14)

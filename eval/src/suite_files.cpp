@@ -12,6 +12,7 @@
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
+#include "flowsteer/sim/outputs.hpp"
 
 namespace flowsteer::eval {
 
@@ -189,7 +190,7 @@ cv::Mat contact_sheet(const std::vector<SuiteRun>& runs, const std::filesystem::
 
 }  // namespace
 
-std::string summary_fields(const RunSummary& s) {
+std::string summary_fields(const sim::RunSummary& s) {
   const double values[kScoreColumns] = {static_cast<double>(s.agents),
                                         static_cast<double>(s.goals_reached),
                                         static_cast<double>(s.agents_with_goal()),
@@ -207,12 +208,12 @@ std::string summary_fields(const RunSummary& s) {
     if (k > 0) {
       fields += ',';
     }
-    fields += format_csv_number(values[k]);
+    fields += base::format_csv_number(values[k]);
   }
   return fields;
 }
 
-RunSummary parse_summary_fields(const std::string& text, const std::string& source) {
+sim::RunSummary parse_summary_fields(const std::string& text, const std::string& source) {
   const std::vector<std::string> cells = split(text, ',');
   if (cells.size() != kScoreColumns) {
     throw std::runtime_error(source + ": expected " + std::to_string(kScoreColumns) +
@@ -220,7 +221,7 @@ RunSummary parse_summary_fields(const std::string& text, const std::string& sour
   }
   auto integer = [&](std::size_t k) { return parse_cell(cells[k], parse_int, source); };
   auto real = [&](std::size_t k) { return parse_cell(cells[k], parse_double, source); };
-  RunSummary s;
+  sim::RunSummary s;
   s.agents = integer(0);
   s.goals_reached = integer(1);
   s.followers = s.agents - integer(2);
@@ -236,17 +237,17 @@ RunSummary parse_summary_fields(const std::string& text, const std::string& sour
   return s;
 }
 
-void write_suite_files(const SuiteResult& result, OutputDir& out) {
+void write_suite_files(const SuiteResult& result, base::OutputDir& out) {
   std::string csv = std::string(kHeader) + "\n";
   for (const SuiteRun& run : result.runs) {
     csv += csv_row(run) + "\n";
   }
-  write_text(out.staging_path("suite.csv"), csv);
+  base::write_text(out.staging_path("suite.csv"), csv);
   std::ostringstream table;
   print_suite_table(result.runs, table);
-  write_text(out.staging_path("suite.txt"), table.str());
-  write_text(out.staging_path("suite.json"), suite_json(result));
-  write_image(out.staging_path("contact_sheet.png"),
+  base::write_text(out.staging_path("suite.txt"), table.str());
+  base::write_text(out.staging_path("suite.json"), suite_json(result));
+  sim::write_image(out.staging_path("contact_sheet.png"),
               contact_sheet(result.runs, out.staging_path("topviews")));
 }
 

@@ -12,7 +12,7 @@
 #include "flowsteer/calibration/camera_mount.hpp"
 #include "flowsteer/calibration/intrinsics.hpp"
 #include "flowsteer/calibration/mount.hpp"
-#include "flowsteer/eval/output_files.hpp"
+#include "flowsteer/base/output_files.hpp"
 
 namespace flowsteer::launch {
 
@@ -100,7 +100,7 @@ void run_calibrate_capture(const CaptureCommand& command, camera_io::FrameSource
   out << report;
   print_model(result.model, out);
 
-  eval::OutputDir dir(command.out_dir);
+  base::OutputDir dir(command.out_dir);
   for (std::size_t i = 0; i < capture.views.size(); ++i) {
     const std::filesystem::path path = dir.staging_path(views[i].name);
     if (!cv::imwrite(path.string(), capture.views[i].image)) {
@@ -110,7 +110,7 @@ void run_calibrate_capture(const CaptureCommand& command, camera_io::FrameSource
   calibration::write_camera_info(
       dir.staging_path("camera_info.yaml"),
       calibration::CameraInfo::monocular(command.camera_name, result.model));
-  eval::write_text(dir.staging_path("report.txt"), report);
+  base::write_text(dir.staging_path("report.txt"), report);
   dir.commit();
   out << "wrote " << capture.views.size() << " views, camera_info.yaml and report.txt into "
       << command.out_dir.string() << "\n";

@@ -63,7 +63,7 @@ struct Cone {
   // (on the ground, a segment). Where the image cuts it, its hidden part may be nearer than what
   // is seen, and the nearer end's depth is taken instead. Not the outline (contact_time.hpp): for
   // the goal's rule a person standing at the next goal, nearer by the front of their body, is
-  // not in the way of the last step to the agent's own (NAVIGATION.md, session 28).
+  // not in the way of the last step to the agent's own.
   double nearest_m() const {
     if (cut) {
       return std::min(depth[0], depth[1]);
@@ -253,8 +253,7 @@ class ThreatCones {
   // too, it no longer closed the gap between itself and a neighbour, and `bottleneck`,
   // `doorway_two_way`, `corridor_pillar` and `hallway_two_way` were clean on 20 of their 40 suite
   // runs against 38. Without depths its outline is a guess from τ, and numerical flow's static
-  // regions kept in the groups took DIS flow at 128² from 15 to 11 clean cases: it is left out
-  // (docs/NAVIGATION.md, session 31).
+  // regions kept in the groups took DIS flow at 128² from 15 to 11 clean cases: it is left out.
   static bool passed_clear(const ObjectFeatures& object, const AgentState& agent,
                            const AvoidanceOptions& options, double kept_width_m) {
     const std::optional<Eigen::Vector2d> velocity =

@@ -58,7 +58,7 @@ class AvoidanceTerm final : public CostTerm {
   explicit AvoidanceTerm(const AvoidanceOptions& options) : options_(options) {}
   std::string_view name() const override { return "avoidance"; }
 
-  // CGF Eq. 9 and 10; the gradient sign follows DESIGN.md ("Signs"), not the printed Eq. 17.
+  // CGF Eq. 9 and 10; the gradient sign follows docs/CONVENTIONS.md ("Signs"), not the printed Eq. 17.
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {

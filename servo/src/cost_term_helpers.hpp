@@ -78,7 +78,7 @@ inline DepthScale depth_scale(const ObjectFeatures& object, const AgentState& ag
 // agent's speed at its nearest point's depth. Not the mean depth: the fit of a wall along the
 // path leans on its near pixels, and its τ is a third of the mean depth over the agent's speed.
 // Not with a camera's depth from the ground: numerical flow's τ errs by more than the ratio
-// allows, walls came out moving, and DIS flow lost (docs/NAVIGATION.md, session 36).
+// allows, walls came out moving, and DIS flow lost.
 inline bool stands_still(const ObjectFeatures& object, const AgentState& agent,
                          const AvoidanceOptions& options) {
   if (!object.fit.static_foe) {

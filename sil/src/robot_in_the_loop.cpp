@@ -11,7 +11,7 @@
 
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/camera_io/v4l2_camera.hpp"
-#include "flowsteer/eval/output_files.hpp"
+#include "flowsteer/base/output_files.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "vivid_loop.hpp"
 
@@ -224,7 +224,7 @@ drivers::BodyVelocity RobotInTheLoop::wheel_motion(double now_s, double dt) {
   return drivers::from_wheels({wheel_radps[0], wheel_radps[1]}, link_.geometry);
 }
 
-void RobotInTheLoop::finish(eval::OutputDir* out) {
+void RobotInTheLoop::finish(base::OutputDir* out) {
   if (robot_) {
     report_.output_frame_rate_hz = static_cast<double>(output_->frames_shown() - first_frame_) /
                                    (base::monotonic_now_s() - start_s_);
@@ -238,7 +238,7 @@ void RobotInTheLoop::finish(eval::OutputDir* out) {
   }
   const std::string robot_log = read_robot_log();
   if (out != nullptr) {
-    eval::write_text(out->staging_path("robot.log"), robot_log);
+    base::write_text(out->staging_path("robot.log"), robot_log);
     write_report(out->staging_path("sil.json"));
   }
   std::error_code ignored;
@@ -265,25 +265,25 @@ std::string RobotInTheLoop::read_robot_log() {
 void RobotInTheLoop::write_report(const std::filesystem::path& path) const {
   const auto latency = [](const LatencyStats& s) {
     return "{\"count\": " + std::to_string(s.count) +
-           ", \"mean_ms\": " + eval::json_number(s.mean_ms) +
-           ", \"max_ms\": " + eval::json_number(s.max_ms) + "}";
+           ", \"mean_ms\": " + base::json_number(s.mean_ms) +
+           ", \"max_ms\": " + base::json_number(s.max_ms) + "}";
   };
   const SilReport& r = report_;
   std::ostringstream json;
   json << "{\n  \"robot_exit_status\": " << r.robot_exit_status
        << ",\n  \"robot_ended_itself\": " << (r.robot_ended_itself ? "true" : "false")
-       << ",\n  \"robot_end_time_s\": " << eval::json_number(r.robot_end_time_s)
-       << ",\n  \"robot_stop_position_m\": [" << eval::json_number(r.robot_stop_position_m.x())
-       << ", " << eval::json_number(r.robot_stop_position_m.y())
+       << ",\n  \"robot_end_time_s\": " << base::json_number(r.robot_end_time_s)
+       << ",\n  \"robot_stop_position_m\": [" << base::json_number(r.robot_stop_position_m.x())
+       << ", " << base::json_number(r.robot_stop_position_m.y())
        << "],\n  \"capture_to_command\": " << latency(r.capture_to_command)
        << ",\n  \"command_to_motion\": " << latency(r.command_to_motion)
        << ",\n  \"views_shown\": " << r.views_shown << ",\n  \"views_dropped\": " << r.views_dropped
-       << ",\n  \"max_behind_ms\": " << eval::json_number(r.max_behind_ms)
-       << ",\n  \"output_error\": " << eval::json_string(r.output_error)
-       << ",\n  \"loop_error_levels\": " << eval::json_number(r.loop_error_levels)
-       << ",\n  \"wait_for_robot_s\": " << eval::json_number(r.wait_for_robot_s)
-       << ",\n  \"output_frame_rate_hz\": " << eval::json_number(r.output_frame_rate_hz) << "\n}\n";
-  eval::write_text(path, json.str());
+       << ",\n  \"max_behind_ms\": " << base::json_number(r.max_behind_ms)
+       << ",\n  \"output_error\": " << base::json_string(r.output_error)
+       << ",\n  \"loop_error_levels\": " << base::json_number(r.loop_error_levels)
+       << ",\n  \"wait_for_robot_s\": " << base::json_number(r.wait_for_robot_s)
+       << ",\n  \"output_frame_rate_hz\": " << base::json_number(r.output_frame_rate_hz) << "\n}\n";
+  base::write_text(path, json.str());
 }
 
 }  // namespace flowsteer::sil

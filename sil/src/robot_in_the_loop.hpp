@@ -12,7 +12,7 @@
 #include "flowsteer/drivers/command_stage.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
 #include "flowsteer/drivers/simulated_odrive.hpp"
-#include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sil/sil.hpp"
 #include "robot_process.hpp"
 
@@ -32,10 +32,10 @@ struct RobotLink {
   double startup_timeout_s = 30.0;
 };
 
-// The AgentDriver of `flowsteer sil`: shows the agent's view on the output device at each step's
+// The sim::AgentDriver of `flowsteer sil`: shows the agent's view on the output device at each step's
 // time, and moves the agent by the simulated ODrive's wheel velocities. The robot process starts
 // at the first step, and the world waits until it has activated its drive.
-class RobotInTheLoop final : public eval::AgentDriver {
+class RobotInTheLoop final : public sim::AgentDriver {
  public:
   // Connects vivid's loop and opens the output device and the CAN interface (the robot starts at
   // the first step); throws std::runtime_error saying what is missing.
@@ -43,7 +43,7 @@ class RobotInTheLoop final : public eval::AgentDriver {
 
   base::Command step(const sim_camera::World& world, sim_camera::Renderer& renderer) override;
   bool finished() const override { return report_.robot_ended_itself; }
-  void finish(eval::OutputDir* out) override;
+  void finish(base::OutputDir* out) override;
 
   const SilReport& report() const { return report_; }
 

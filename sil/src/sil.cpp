@@ -112,7 +112,7 @@ SilResult run_sil(const sim_camera::WorldSpec& world, const SilOptions& options,
   link.startup_timeout_s = options.startup_timeout_s;
   RobotInTheLoop driver(std::move(link), log);
 
-  eval::SimOptions sim;
+  sim::SimOptions sim;
   sim.out_dir = options.out_dir;
   sim.steps = options.steps;
   // The other agents on this thread only: the robot process needs the other cores.
@@ -120,7 +120,7 @@ SilResult run_sil(const sim_camera::WorldSpec& world, const SilOptions& options,
   sim.driver = &driver;
   sim.driven_agent = agent;
   SilResult result;
-  result.sim = eval::run_simulation(spec, sim, log);
+  result.sim = sim::run_simulation(spec, sim, log);
   result.report = driver.report();
   return result;
 }

@@ -2,10 +2,11 @@
 # it. Run as `cmake -DSOURCE_DIR=<tree> -P check_layering.cmake`; it prints every violation, as
 # file:line or CMakeLists.txt and the module it reaches, and fails when there is one.
 
-# What each module may use besides itself. Data flows camera -> flow -> features -> control ->
-# drive: the stages (camera_io, servo, drivers) know only base; pipeline joins camera and servo;
-# the simulator, the experiments, the file readers, the simulator in the loop and launch sit
-# above.
+# What each module may use besides itself, lower floors first. Data flows camera -> flow ->
+# features -> control -> drive: the stages (camera_io, servo, drivers) know only base; pipeline
+# joins camera and servo into the Brain; the simulator runs Brains in a rendered world and the
+# evaluations measure its runs; the file readers, the robot's loop, the simulator in the loop
+# and the command sit above.
 set(allowed_base "")
 set(allowed_camera_io base)
 set(allowed_servo base)
@@ -13,11 +14,15 @@ set(allowed_drivers base)
 set(allowed_calibration base camera_io)
 set(allowed_sim_camera base camera_io servo)
 set(allowed_pipeline base camera_io servo)
-set(allowed_eval base camera_io servo sim_camera pipeline)
+set(allowed_sim base camera_io servo sim_camera pipeline)
+set(allowed_eval base camera_io servo sim_camera pipeline sim)
 set(allowed_config base camera_io servo sim_camera drivers calibration)
-set(allowed_sil base camera_io servo sim_camera drivers calibration pipeline eval config)
-set(allowed_launch base camera_io servo sim_camera drivers calibration pipeline eval config sil)
-set(modules base camera_io servo drivers calibration sim_camera pipeline eval config sil launch)
+set(allowed_robot base camera_io servo drivers calibration pipeline config)
+set(allowed_sil base camera_io servo sim_camera drivers calibration pipeline sim config)
+set(allowed_launch base camera_io servo sim_camera drivers calibration pipeline sim eval config
+    robot sil)
+set(modules base camera_io servo drivers calibration sim_camera pipeline sim eval config robot sil
+    launch)
 
 cmake_policy(VERSION 3.25)
 

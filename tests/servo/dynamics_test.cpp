@@ -1,5 +1,5 @@
 // Pins the feature dynamics of dynamics.hpp against finite differences of a two-body
-// simulation (DESIGN.md, "Signs").
+// simulation (docs/CONVENTIONS.md, "Signs").
 #include "flowsteer/servo/dynamics.hpp"
 
 #include <cmath>

@@ -1,6 +1,6 @@
 // flowsteer sil's checks before anything runs (a machine without vivid, a launch file or
 // scenario the loop cannot take: each refused with what is wrong, nothing written) and the robot
-// process it starts and stops. The loop itself runs in the VM (tests/launch/sil_vm_test.cpp).
+// process it starts and stops. The loop itself runs in the VM (tests/sil/sil_vm_test.cpp).
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 // ended four ways while it drives: SIGINT, SIGTERM, the camera unplugged (vivid's "Disconnect")
 // and the CAN interface taken down. For each it prints, as "PROBE key value" lines, the
 // CLOCK_REALTIME of the fault (candump's clock), how and when flowsteer exited and what it said,
-// and for the CAN interface when flowsteer reported the dead bus; tests/launch/robot_vm_test.cpp
+// and for the CAN interface when flowsteer reported the dead bus; tests/robot/robot_vm_test.cpp
 // checks those against candump's record of the bus.
 
 #include <net/if.h>

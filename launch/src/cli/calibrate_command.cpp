@@ -5,7 +5,7 @@
 
 #include "commands.hpp"
 #include "flowsteer/launch/calibrate.hpp"
-#include "flowsteer/launch/camera_source.hpp"
+#include "flowsteer/robot/camera_source.hpp"
 
 namespace flowsteer::cli {
 
@@ -61,7 +61,7 @@ Subcommand add_capture(CLI::App& calibrate) {
   return {capture, [command] {
             launch::CaptureCommand c = command->capture;
             c.min_views = std::min(c.min_views, c.capture.views);
-            const auto source = launch::open_camera(command->device);
+            const auto source = robot::open_camera(command->device);
             launch::run_calibrate_capture(c, *source, std::cout, std::cerr);
             return 0;
           }};

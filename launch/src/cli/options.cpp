@@ -4,7 +4,7 @@
 
 #include "commands.hpp"
 #include "flowsteer/config/scenario_file.hpp"
-#include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim/simulation.hpp"
 
 namespace flowsteer::cli {
 
@@ -92,7 +92,7 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
     agent.controller.law = law.value_or(agent.controller.law);
   }
   if (without) {
-    eval::switch_off(world, *without);
+    sim::switch_off(world, *without);
   }
   return world;
 }
@@ -107,7 +107,7 @@ void one_value_per_use(CLI::App& command) {
 
 void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
   command.add_option("scenario_file", choice.file,
-                     "scenario YAML (see launch/scenarios/room.yaml)");
+                     "scenario YAML (see config/scenarios/room.yaml)");
   command.add_option("--scenario", choice.name,
                      "a built-in scenario (flowsteer scenarios lists them)");
   command.add_option("--steersuite", choice.steersuite, "a SteerSuite test case (XML)");

@@ -5,7 +5,7 @@
 
 #include "commands.hpp"
 #include "flowsteer/config/robot_launch.hpp"
-#include "flowsteer/launch/robot_commands.hpp"
+#include "flowsteer/robot/robot_commands.hpp"
 
 namespace flowsteer::cli {
 
@@ -27,25 +27,25 @@ void install_stop_handlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-int run_robot(const launch::RunCommand& command) {
+int run_robot(const robot::RunCommand& command) {
   install_stop_handlers();
-  const launch::RobotLoopResult result =
-      launch::run_robot_command(command, g_stop_requested, std::cerr);
+  const robot::RobotLoopResult result =
+      robot::run_robot_command(command, g_stop_requested, std::cerr);
   // After a camera timeout the base was stopped; the run still failed at what it was asked to do.
-  return result.reason == launch::StopReason::camera_timeout ? 3 : 0;
+  return result.reason == robot::StopReason::camera_timeout ? 3 : 0;
 }
 
 struct ReplayCommand {
-  launch::ReplayCommand replay;
+  robot::ReplayCommand replay;
   std::string flow = "dis_medium";
 };
 
 int run_replay(const ReplayCommand& command) {
-  launch::ReplayCommand replay = command.replay;
+  robot::ReplayCommand replay = command.replay;
   // run_replay_command refuses synthetic flow, saying why.
   replay.flow =
       flow_method_option("--flow", command.flow, "method", config::numerical_flow_method_names());
-  const launch::ReplaySummary summary = launch::run_replay_command(replay, std::cerr);
+  const robot::ReplaySummary summary = robot::run_replay_command(replay, std::cerr);
   std::cout << "replay " << replay.video << " -> " << replay.out_dir << ": " << summary.frames
             << " frames (" << summary.blind_frames << " without flow), " << summary.object_rows
             << " object rows, " << summary.mean_step_ms
@@ -56,7 +56,7 @@ int run_replay(const ReplayCommand& command) {
 }  // namespace
 
 Subcommand add_run(CLI::App& app) {
-  auto command = std::make_shared<launch::RunCommand>();
+  auto command = std::make_shared<robot::RunCommand>();
   CLI::App* run = app.add_subcommand(
       "run",
       "The robot's loop from a launch file: camera -> flow -> features -> controller -> drive "
@@ -73,7 +73,7 @@ Subcommand add_run(CLI::App& app) {
 
 Subcommand add_replay(CLI::App& app) {
   auto command = std::make_shared<ReplayCommand>();
-  launch::ReplayCommand& r = command->replay;
+  robot::ReplayCommand& r = command->replay;
   CLI::App* replay = app.add_subcommand(
       "replay",
       "The pipeline on a recorded video without a drive: features.csv, commands.csv and "

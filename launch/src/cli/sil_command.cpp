@@ -21,7 +21,7 @@ struct SilCommand {
 };
 
 void print_report(const sil::SilResult& result, const std::string& robot, std::ostream& out) {
-  const eval::RunSummary summary = eval::summarize(result.sim);
+  const sim::RunSummary summary = sim::summarize(result.sim);
   const sil::SilReport& r = result.report;
   char line[512];
   std::snprintf(line, sizeof line,

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
-#include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 
 namespace flowsteer::cli {
@@ -32,11 +32,11 @@ std::string measure(double value, const char* unit) {
   return text;
 }
 
-void print_summary(const eval::SimResult& result, std::ostream& out) {
+void print_summary(const sim::SimResult& result, std::ostream& out) {
   out << "scenario " << result.scenario << ": " << result.steps << " steps, "
       << measure(result.duration_s, "s") << " simulated, " << result.collisions.size()
       << " collisions\n";
-  for (const eval::AgentResult& a : result.agents) {
+  for (const sim::AgentResult& a : result.agents) {
     out << "  " << a.name << ": "
         << (a.reached_goal ? "reached its goal in " + measure(a.time_to_goal_s, "s")
             : a.final_distance_to_leader_m >= 0.0
@@ -60,7 +60,7 @@ void print_summary(const eval::SimResult& result, std::ostream& out) {
 
 int run_sim(const SimCommand& command) {
   const sim_camera::WorldSpec world = load_world("sim", command.scenario);
-  eval::SimOptions options;
+  sim::SimOptions options;
   options.out_dir = command.out_dir;
   options.resolution = command.resolution;
   options.steps = command.steps;
@@ -81,7 +81,7 @@ int run_sim(const SimCommand& command) {
   options.progress_bar = isatty(STDERR_FILENO) != 0;
   std::cerr << "flowsteer sim: " << world.name << " (" << world.agents.size() << " agents) -> "
             << command.out_dir << "\n";
-  print_summary(eval::run_simulation(world, options, std::cerr), std::cout);
+  print_summary(sim::run_simulation(world, options, std::cerr), std::cout);
   return 0;
 }
 

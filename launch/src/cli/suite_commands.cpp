@@ -128,7 +128,7 @@ Subcommand add_eval_suite(CLI::App& eval) {
       "parallel worker processes and score the runs (docs/EVAL_SUITE.md)");
   suite->add_option("path", command->paths,
                     "case files (.xml SteerSuite, .yaml scenario) or folders of them (default: "
-                    "the project's suite, launch/suite/)");
+                    "the project's suite, config/suite/)");
   suite->add_option("--flow", command->flows,
                     "every agent's flow (default: the case's); repeat for several: " +
                         servo::flow_method_names());

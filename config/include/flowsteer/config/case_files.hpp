@@ -21,7 +21,7 @@ struct CaseFile {
 // or cannot be read, a file of another kind, or a folder without a case.
 std::vector<CaseFile> read_case_files(const std::vector<std::filesystem::path>& paths);
 
-// The project's own suite: launch/suite/, compiled in so that it runs from any folder.
+// The project's own suite: config/suite/, compiled in so that it runs from any folder.
 std::vector<CaseFile> builtin_suite();
 
 // The case's world, read by its extension: .xml as a SteerSuite test case, .yaml or .yml as a

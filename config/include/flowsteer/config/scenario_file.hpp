@@ -11,7 +11,7 @@ namespace flowsteer::config {
 
 // Scenario files (YAML) describe a world for `flowsteer sim`: lights, obstacles, moving
 // obstacles, agents with their goals or leader, controller and camera. The format is documented
-// in launch/scenarios/room.yaml. Errors throw base::ConfigError with the file, line, column and
+// in config/scenarios/room.yaml. Errors throw base::ConfigError with the file, line, column and
 // field.
 sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::string& source_name);
 sim_camera::WorldSpec load_scenario(const std::string& path);

@@ -14,7 +14,7 @@ struct WheelGeometry {
 };
 
 // Body velocity of the base in the controller's terms: forward speed and the turn rate ω about
-// the camera's y axis, positive to the right (DESIGN.md).
+// the camera's y axis, positive to the right (docs/CONVENTIONS.md).
 struct BodyVelocity {
   double speed_mps = 0.0;
   double turn_rate = 0.0;  // rad/s, positive turns right

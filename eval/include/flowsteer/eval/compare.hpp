@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::eval {
@@ -18,7 +18,7 @@ std::vector<servo::SteeringModel> parse_controllers(const std::vector<std::strin
 struct CompareOptions {
   std::vector<servo::SteeringModel> controllers;  // in the order of the outputs
   std::filesystem::path out_dir = "flowsteer_compare";
-  std::optional<int> resolution;  // as SimOptions
+  std::optional<int> resolution;  // as sim::SimOptions
   std::optional<int> steps;
   bool write_outputs = true;
 };
@@ -27,7 +27,7 @@ struct CompareOptions {
 // non-zero adaptations, |ω| >= kStillTurnRate, are counted).
 struct ControllerRun {
   servo::SteeringModel controller;
-  SimResult result;
+  sim::SimResult result;
   std::vector<int> turn_rate_counts;  // per bin of CompareResult::turn_rate_edges
 };
 
@@ -52,7 +52,7 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
 // among the controllers (NaN otherwise): they separate what perception adds from the control law.
 struct CompareRow {
   servo::SteeringModel controller;
-  RunSummary summary;
+  sim::RunSummary summary;
   double path_length_vs_reference = 0.0;  // mean path length / the reference's − 1
   double min_clearance_vs_reference_m = 0.0;
 };

@@ -5,7 +5,7 @@
 #include <ostream>
 #include <vector>
 
-#include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/sim_camera/world.hpp"
@@ -32,7 +32,7 @@ struct RobustnessRun {
   std::optional<servo::FlowMethod> flow;  // empty: the scenario's own
   std::optional<servo::SegmentationMethod> segmentation;
   int resolution = 0;
-  RunSummary summary;
+  sim::RunSummary summary;
 };
 
 // The resolutions a run over `world` uses: options.resolutions, or the default around the

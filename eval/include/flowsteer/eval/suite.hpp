@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/servo/steering.hpp"
 #include "flowsteer/sim_camera/world_spec.hpp"
 
@@ -74,7 +74,7 @@ struct SuiteRun {
   std::size_t index = 0;  // in the whole suite's list: case-major, configurations in order
   std::string case_name;
   SuiteConfiguration configuration;
-  RunSummary summary;  // empty when the run failed
+  sim::RunSummary summary;  // empty when the run failed
   std::string error;   // why the run failed (its exception, or how its process ended)
   bool failed() const { return !error.empty(); }
   bool clean() const { return !failed() && summary.clean(); }

@@ -64,7 +64,7 @@ class FlowField {
 };
 
 // Angular velocity of the camera, in the camera frame, for an agent turning at turn_rate_cy
-// (rad/s, positive turns right, DESIGN.md) with its camera pitched down by pitch_rad.
+// (rad/s, positive turns right, docs/CONVENTIONS.md) with its camera pitched down by pitch_rad.
 Eigen::Vector3d camera_angular_velocity(double turn_rate_cy, double pitch_rad);
 
 // Flow that a rotation of the camera alone gives at normalised point (x, y).

@@ -18,12 +18,12 @@ enum class SteeringModel { vision, geometric, motion_energy };
 // The navigation function of CGF §6.3: towards goals, or after a leader.
 enum class NavigationKind { goal_reaching, following };
 // The navigation function that models vision and geometric descend: the papers' as published
-// (with DESIGN.md's sign corrections), kept exactly so that comparisons with the papers stay
+// (with docs/CONVENTIONS.md's sign corrections), kept exactly so that comparisons with the papers stay
 // honest, or the project's own law (docs/NAVIGATION.md), the default; mig2019 is cgf2019 with
 // MIG 2019's weights, dark regions included.
 enum class NavigationLaw { flowsteer, cgf2019, mig2019 };
-// One mechanism of the flowsteer law, switched off for an ablation (docs/NAVIGATION.md, "Where
-// the flowsteer law stands"): its braking and anticipation terms (weights 0), the passing
+// One mechanism of the flowsteer law, switched off for an ablation (docs/NAVIGATION.md,
+// "Ablation"): its braking and anticipation terms (weights 0), the passing
 // convention (no side preferred), commitment to the side taken (no band, no hold at rest),
 // static objects passed clear left out of the cost (kept in), giving way to fast crossers (never),
 // the speed limit (none), the implicit gradient step (CGF Eq. 15's explicit step), the margin
@@ -96,7 +96,7 @@ struct ControllerConfig {
   double max_turn_rate = 1.0;
   // Law flowsteer, goal reaching: the fastest it lets the agent go, as a multiple of its
   // preferred speed (>= 1). Without a limit, the clearance term's way to widen a gap by speeding
-  // up took agents in circle_20 to 2.5 m/s for 1.3 (docs/NAVIGATION.md, session 31).
+  // up took agents in circle_20 to 2.5 m/s for 1.3 (docs/NAVIGATION.md, "Approach speed").
   double max_speed_ratio = 1.1;
   // Use the depths the features carry: the renderer's per pixel with its flow; a camera's, those
   // of the ground where objects stand on it (FeatureOptions::ground_mount). False: MIG's

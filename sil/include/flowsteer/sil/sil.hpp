@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "flowsteer/eval/simulation.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/world_spec.hpp"
 
 namespace flowsteer::sil {
@@ -60,7 +60,7 @@ struct SilReport {
 };
 
 struct SilResult {
-  eval::SimResult sim;
+  sim::SimResult sim;
   SilReport report;
 };
 

@@ -1,0 +1,33 @@
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "flowsteer/sim/simulated_agent.hpp"
+#include "flowsteer/sim/simulation.hpp"
+#include "flowsteer/sim_camera/world.hpp"
+
+namespace flowsteer::sim {
+
+// What a run writes besides its tables (base/output_files.hpp): summary.json, images, the
+// agents' overlays and the top view.
+
+void write_summary_json(const std::filesystem::path& path, const SimResult& result);
+
+// Writes `image` to `path` in the format its extension names, or throws std::runtime_error
+// naming the file.
+void write_image(const std::filesystem::path& path, const cv::Mat& image);
+
+// An agent's view beside its colour-coded derotated flow, with its features drawn
+// (pipeline::draw_overlay).
+cv::Mat draw_overlay(const SimulatedAgent& agent);
+
+// The world from above (CGF Fig. 5): obstacles, paths coloured per agent, goals, collisions.
+cv::Mat draw_topview(const sim_camera::World& world,
+                     const std::vector<std::vector<Eigen::Vector2d>>& paths,
+                     const std::vector<sim_camera::Collision>& collisions);
+
+}  // namespace flowsteer::sim

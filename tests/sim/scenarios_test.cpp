@@ -1,0 +1,421 @@
+// The scenarios of the papers, run headless with synthetic flow at a small resolution, and the
+// files `flowsteer sim` reads and writes.
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "flowsteer/base/config_error.hpp"
+#include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/sim/outputs.hpp"
+#include "flowsteer/sim/simulation.hpp"
+
+namespace flowsteer::sim {
+namespace {
+
+using namespace flowsteer::config;
+
+SimResult run(const std::string& scenario, int resolution = 64) {
+  SimOptions options;
+  options.resolution = resolution;
+  options.write_outputs = false;
+  std::ostringstream log;
+  return run_simulation(builtin_scenario(scenario), options, log);
+}
+
+std::string error_of(const std::string& yaml) {
+  try {
+    parse_scenario(yaml, "scenario.yaml");
+  } catch (const base::ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no error for:\n" << yaml;
+  return "";
+}
+
+class GoalScenario : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(GoalScenario, EveryAgentReachesItsGoalWithoutCollision) {
+  const SimResult result = run(GetParam());
+  EXPECT_EQ(result.collisions.size(), 0U);
+  for (const AgentResult& a : result.agents) {
+    EXPECT_TRUE(a.reached_goal) << a.name;
+    EXPECT_EQ(a.collisions, 0) << a.name;
+    EXPECT_GT(a.min_clearance_m, 0.0) << a.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Papers, GoalScenario,
+                         ::testing::Values("room", "circle6", "crossing", "street"));
+
+// The street is a real test of avoidance: agents that ignore what they see are hit by cars.
+// What a real camera has: flow computed from the images (DIS) and objects found in that flow
+// alone, at the scenario's own resolution (128²): at 64² the room's far obstacles are a few
+// pixels of flow and the comparison would be with a coarser problem than the scenario poses.
+//
+// In `crossing` the agents wait for their first flow (blind, they do not set off: the Brain's
+// rule, the robot's), and the route that follows ends with an agent walking into two of its group
+// already standing at their goals: CGF's goal term near a goal outweighs the avoidance of a
+// standing agent (issue 21). That collision is tolerated there, and only that one: every goal is
+// reached, and walking agents never touch.
+struct NumericalFlowCase {
+  const char* scenario;
+  bool tolerate_hitting_agents_at_their_goal;
+};
+
+class NumericalFlowScenario : public ::testing::TestWithParam<NumericalFlowCase> {};
+
+// Whether one of the two agents of a collision already stood at its goal.
+bool with_agent_at_its_goal(const SimResult& result, const sim_camera::Collision& c) {
+  const auto standing = [&](std::size_t agent) {
+    const AgentResult& a = result.agents[agent];
+    return a.reached_goal && a.time_to_goal_s <= c.time_s;
+  };
+  return c.other_agent && (standing(c.agent) || standing(*c.other_agent));
+}
+
+TEST_P(NumericalFlowScenario, DisFlowAndFlowSegmentationReachEveryGoalWithoutCollision) {
+  SimOptions options;
+  options.write_outputs = false;
+  options.flow = servo::FlowMethod::dis_medium;
+  options.segmentation = servo::SegmentationMethod::flow_graph_fast;
+  std::ostringstream log;
+  const SimResult result = run_simulation(builtin_scenario(GetParam().scenario), options, log);
+  for (const AgentResult& a : result.agents) {
+    EXPECT_TRUE(a.reached_goal) << a.name;
+  }
+  for (const sim_camera::Collision& c : result.collisions) {
+    EXPECT_TRUE(GetParam().tolerate_hitting_agents_at_their_goal &&
+                with_agent_at_its_goal(result, c))
+        << result.agents[c.agent].name << " with " << c.with << " at t = " << c.time_s << " s";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Papers, NumericalFlowScenario,
+                         ::testing::Values(NumericalFlowCase{"room", false},
+                                           NumericalFlowCase{"crossing", true}),
+                         [](const auto& info) { return std::string(info.param.scenario); });
+
+TEST(Scenarios, StreetCarsHitAgentsThatDoNotAvoid) {
+  sim_camera::WorldSpec street = builtin_scenario("street");
+  for (auto& a : street.agents) {  // no term that avoids: clearance, braking, anticipation
+    a.controller.gamma = 0.0;
+    a.controller.braking = 0.0;
+    a.controller.anticipation = 0.0;
+  }
+  SimOptions options;
+  options.resolution = 48;
+  options.write_outputs = false;
+  std::ostringstream log;
+  const SimResult blind = run_simulation(street, options, log);
+  int with_cars = 0;
+  for (const auto& c : blind.collisions) {
+    with_cars += c.body == sim_camera::Body::moving ? 1 : 0;
+  }
+  EXPECT_GE(with_cars, 2);
+}
+
+class FollowScenario : public ::testing::TestWithParam<const char*> {};
+
+// Following matches the leader's velocity (CGF Eq. 18), not a distance: the followers must keep
+// up with the leader to its last waypoint, without collisions.
+TEST_P(FollowScenario, FollowersKeepUpWithTheLeader) {
+  const SimResult result = run(GetParam());
+  EXPECT_EQ(result.collisions.size(), 0U);
+  ASSERT_TRUE(result.agents.front().reached_goal);
+  for (std::size_t i = 1; i < result.agents.size(); ++i) {
+    const AgentResult& a = result.agents[i];
+    EXPECT_GE(a.final_distance_to_leader_m, 0.0) << a.name;
+    EXPECT_LT(a.final_distance_to_leader_m, 8.0) << a.name;
+    EXPECT_GT(a.path_length_m, 0.6 * result.agents.front().path_length_m) << a.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Papers, FollowScenario, ::testing::Values("follow", "follow_obstacles"));
+
+TEST(Scenarios, EveryBuiltinOneLoadsAndRuns) {
+  const auto all = builtin_scenarios();
+  EXPECT_EQ(all.size(), 12U);
+  for (const auto& s : all) {
+    SimOptions options;
+    options.resolution = 32;
+    options.steps = 3;
+    options.write_outputs = false;
+    std::ostringstream log;
+    const SimResult r = run_simulation(builtin_scenario(s.name), options, log);
+    EXPECT_EQ(r.steps, 3) << s.name;
+    EXPECT_FALSE(s.description.empty()) << s.name;
+  }
+}
+
+// Agents are stepped in parallel, each on its own brain and the calling thread's renderer: the
+// number of threads must change nothing, to the last bit.
+void expect_same_runs(const sim_camera::WorldSpec& world, SimOptions options) {
+  options.write_outputs = false;
+  std::ostringstream log;
+  options.threads = 1;
+  const SimResult one = run_simulation(world, options, log);
+  options.threads = 3;
+  const SimResult three = run_simulation(world, options, log);
+  EXPECT_EQ(three.threads, 3);
+  ASSERT_EQ(one.agents.size(), three.agents.size());
+  EXPECT_EQ(one.collisions.size(), three.collisions.size());
+  for (std::size_t i = 0; i < one.agents.size(); ++i) {
+    EXPECT_EQ(one.agents[i].turn_rates, three.agents[i].turn_rates) << world.name << " agent " << i;
+    EXPECT_EQ(one.agents[i].positions_m, three.agents[i].positions_m)
+        << world.name << " agent " << i;
+  }
+}
+
+TEST(SimThreads, ACrowdMovesTheSameOnOneAndThreeThreads) {
+  SimOptions options;
+  options.resolution = 48;
+  options.steps = 80;
+  expect_same_runs(load_steersuite(FLOWSTEER_SUITE_DIR "/circle_8.xml").world, options);
+}
+
+TEST(SimThreads, NumericalFlowGivesTheSameRunOnOneAndThreeThreads) {
+  SimOptions options;
+  options.resolution = 64;
+  options.steps = 20;
+  options.flow = servo::FlowMethod::dis_fast;
+  options.segmentation = servo::SegmentationMethod::flow_graph_fast;
+  expect_same_runs(builtin_scenario("room"), options);
+}
+
+TEST(Scenarios, UnknownNameListsTheKnownOnes) {
+  try {
+    builtin_scenario("hallway");
+    FAIL() << "expected an error";
+  } catch (const base::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("room"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScenarioFile, ErrorsNameFileLineAndField) {
+  EXPECT_EQ(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], radius_m: -1}\n"),
+            "scenario.yaml:2:45: agents[0].radius_m: must be positive, got -1");
+  EXPECT_NE(error_of("agents: [").find("scenario.yaml:"), std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0]}\n").find("agents[0].goal: missing"),
+            std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [1, 1], speed: 2}\n")
+                .find("agents[0].speed: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], leader: 0}\n").find("agents[0].leader"),
+            std::string::npos);
+  // An agent that starts inside an obstacle.
+  EXPECT_NE(error_of("obstacles:\n  - {position: [0, 0], size: [2, 2]}\n"
+                     "agents:\n  - {start: [0.5, 0], goal: [5, 0]}\n")
+                .find("starts inside obstacle 0"),
+            std::string::npos);
+  EXPECT_NE(error_of("obstacles: 3\nagents:\n  - {start: [0, 0], goal: [4, 0]}\n")
+                .find("scenario.yaml:1:12: obstacles: expected a list"),
+            std::string::npos);
+  EXPECT_NE(error_of("moving:\n  - {waypoints: [[0, 0], [0, 0]], loop: true}\n"
+                     "agents:\n  - {start: [5, 5], goal: [6, 6]}\n")
+                .find("waypoints 0 and 1 are the same point"),
+            std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], leader: 1}\n  - {start: [3, 0], leader: 0}\n")
+                .find("its chain of leaders is a loop"),
+            std::string::npos);
+  EXPECT_NE(error_of("name: [a]\nagents:\n  - {start: [0, 0], goal: [4, 0]}\n")
+                .find("name: expected a text"),
+            std::string::npos);
+  EXPECT_NE(error_of("moving:\n  - {waypoints: [[0, 0]], speed_mps: 1}\n"
+                     "agents:\n  - {start: [5, 5], goal: [6, 6]}\n")
+                .find("moving[0].waypoints: needs at least two"),
+            std::string::npos);
+}
+
+TEST(ScenarioFile, FollowersFollowWithBetaOneUnlessToldOtherwise) {
+  const auto w = parse_scenario(
+      "agents:\n  - {start: [0, 0], goal: [9, 0]}\n  - {start: [-3, 0], leader: 0}\n"
+      "  - {start: [-6, 0], leader: 1, controller: {beta: 0.3}}\n",
+      "scenario.yaml");
+  EXPECT_EQ(w.agents[1].controller.kind, servo::NavigationKind::following);
+  EXPECT_DOUBLE_EQ(servo::navigation_weights(w.agents[1].controller).beta, 1.0);
+  EXPECT_EQ(w.agents[2].controller.kind, servo::NavigationKind::following);
+  EXPECT_DOUBLE_EQ(*w.agents[2].controller.beta, 0.3);
+}
+
+TEST(ScenarioFile, AnticipationIsTheFlowsteerLawsOnly) {
+  const auto w = parse_scenario(
+      "controller: {law: flowsteer}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n"
+      "  - {start: [0, 2], goal: [9, 2], controller: {law: flowsteer, anticipation: 0}}\n",
+      "scenario.yaml");
+  EXPECT_DOUBLE_EQ(servo::navigation_weights(w.agents[0].controller).anticipation, 1.0);
+  EXPECT_DOUBLE_EQ(servo::navigation_weights(w.agents[1].controller).anticipation, 0.0);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
+                     "controller: {law: cgf2019, anticipation: 1}}\n")
+                .find("anticipation: only for law: flowsteer"),
+            std::string::npos);
+}
+
+// An ablation in a scenario file: the flowsteer law with one mechanism switched off, by name.
+TEST(ScenarioFile, AMechanismOfTheFlowsteerLawIsSwitchedOffByName) {
+  const auto w = parse_scenario(
+      "agents:\n  - {start: [0, 0], goal: [9, 0], controller: {without: passed_clear}}\n"
+      "  - {start: [0, 2], goal: [9, 2]}\n",
+      "scenario.yaml");
+  EXPECT_EQ(w.agents[0].controller.without, servo::LawMechanism::passed_clear);
+  EXPECT_EQ(w.agents[1].controller.without, servo::LawMechanism::none);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], controller: {without: brake}}\n")
+                .find("without: expected one of none, braking"),
+            std::string::npos);
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
+                     "controller: {law: cgf2019, without: braking}}\n")
+                .find("without: only for law: flowsteer"),
+            std::string::npos);
+}
+
+// The flowsteer law's speed limit is a multiple of the preferred speed, never below it; the
+// papers' laws have none.
+TEST(ScenarioFile, MaxSpeedRatioIsTheFlowsteerLawsOnlyAndAtLeastOne) {
+  const auto w = parse_scenario(
+      "agents:\n  - {start: [0, 0], goal: [9, 0], controller: {max_speed_ratio: 1.5}}\n",
+      "scenario.yaml");
+  EXPECT_DOUBLE_EQ(w.agents[0].controller.max_speed_ratio, 1.5);
+  EXPECT_EQ(
+      error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
+               "controller: {max_speed_ratio: 0.8}}\n"),
+      "scenario.yaml:2:65: agents[0].controller.max_speed_ratio: must be at least 1, got 0.8");
+  EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
+                     "controller: {law: cgf2019, max_speed_ratio: 2}}\n")
+                .find("max_speed_ratio: only for law: flowsteer"),
+            std::string::npos);
+}
+
+TEST(SteerSuite, TestCaseBecomesAWorld) {
+  const sim_camera::WorldSpec w = load_steersuite(FLOWSTEER_CORRIDOR_CASE).world;
+  EXPECT_EQ(w.name, "corridor");
+  ASSERT_EQ(w.obstacles.size(), 2U);
+  // SteerSuite z ∈ [3, 4] is world y ∈ [−4, −3].
+  EXPECT_NEAR(w.obstacles[0].centre_m.y(), -3.5, 1e-12);
+  EXPECT_NEAR(w.obstacles[0].size_m.x(), 12.0, 1e-12);
+  EXPECT_NEAR(w.obstacles[0].height_m, 1.5, 1e-12);
+  ASSERT_EQ(w.agents.size(), 5U);
+  EXPECT_EQ(w.agents[0].name, "west");
+  EXPECT_NEAR(w.agents[0].start_m.y(), -1.0, 1e-12);
+  EXPECT_NEAR(w.agents[0].radius_m, 0.3, 1e-12);
+  EXPECT_NEAR(w.agents[0].preferred_speed_mps, 1.2, 1e-12);
+  ASSERT_EQ(w.agents[0].goals.size(), 1U);
+  EXPECT_NEAR(w.agents[0].goals[0].x(), 9.0, 1e-12);
+  EXPECT_NEAR(std::cos(w.agents[1].heading_rad), -1.0, 1e-12);  // facing −x
+  for (std::size_t i = 2; i < 5; ++i) {
+    EXPECT_GE(w.agents[i].start_m.x(), -16.0);
+    EXPECT_LE(w.agents[i].start_m.x(), -12.0);
+    EXPECT_LE(std::abs(w.agents[i].start_m.y()), 2.0);
+  }
+  // The same file gives the same world: random placements are seeded.
+  const sim_camera::WorldSpec again = load_steersuite(FLOWSTEER_CORRIDOR_CASE).world;
+  EXPECT_EQ(again.agents[3].start_m, w.agents[3].start_m);
+}
+
+TEST(SteerSuite, MalformedFilesAreRejectedWithTheirLine) {
+  auto error_of_xml = [](const std::string& xml) -> std::string {
+    try {
+      parse_steersuite(xml, "case.xml");
+    } catch (const base::ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of_xml("<SteerBenchTestCase><header>").find("case.xml:"), std::string::npos);
+  EXPECT_NE(error_of_xml("<Other/>").find("<SteerBenchTestCase>"), std::string::npos);
+  const std::string no_position =
+      "<SteerBenchTestCase>\n<header><worldBounds><xmin>-5</xmin><xmax>5</xmax><ymin>0</ymin>"
+      "<ymax>0</ymax><zmin>-5</zmin><zmax>5</zmax></worldBounds></header>\n<agent>\n"
+      "<initialConditions><radius>0.5</radius><direction><x>1</x><y>0</y><z>0</z></direction>"
+      "</initialConditions>\n</agent>\n</SteerBenchTestCase>";
+  EXPECT_NE(error_of_xml(no_position).find("case.xml:4:"), std::string::npos)
+      << error_of_xml(no_position);
+  EXPECT_NE(error_of_xml(no_position).find("missing <position>"), std::string::npos);
+}
+
+TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("flowsteer_sim_test_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  SimOptions options;
+  options.out_dir = dir;
+  options.resolution = 32;
+  options.steps = 10;
+  options.video = true;
+  std::ostringstream log;
+  const SimResult r = run_simulation(builtin_scenario("crossing"), options, log);
+  EXPECT_EQ(r.steps, 10);
+  for (const char* file : {"trajectories.csv", "costs.csv", "topview.png", "summary.json",
+                           "agent_0.mp4", "agent_5.mp4"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
+  }
+  std::ifstream trajectories(dir / "trajectories.csv");
+  std::string header;
+  std::getline(trajectories, header);
+  EXPECT_EQ(header, "t,agent,x,y,heading,v,a_c,omega");
+  int rows = 0;
+  for (std::string line; std::getline(trajectories, line);) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, 10 * 6);
+  std::ifstream costs(dir / "costs.csv");
+  std::getline(costs, header);
+  EXPECT_EQ(header, "t,agent,heading,approach_speed,clearance,braking,anticipation,total");
+  std::stringstream summary;
+  summary << std::ifstream(dir / "summary.json").rdbuf();
+  for (const char* key : {"\"reached_goal\"", "\"time_to_goal_s\"", "\"path_length_m\"",
+                          "\"min_clearance_m\"", "\"collisions\"", "\"collisions_total\"",
+                          "\"per_agent_step_ms\"", "\"render\"", "\"features\"", "\"total\""}) {
+    EXPECT_NE(summary.str().find(key), std::string::npos) << key;
+  }
+  const cv::Mat top = cv::imread((dir / "topview.png").string());
+  EXPECT_GT(top.cols, 100);
+  // Nothing left behind but the outputs.
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) {
+    ++entries;
+  }
+  EXPECT_EQ(entries, 10);
+  std::filesystem::remove_all(dir);
+}
+
+// A 2 m wide corridor, 20 m long: far narrower than the caption under its top view.
+TEST(SimOutputs, TopviewOfANarrowWorldIsWideEnoughForItsCaption) {
+  sim_camera::WorldSpec spec;
+  spec.name = "narrow";
+  for (const double x : {-1.0, 1.0}) {
+    sim_camera::Solid wall;
+    wall.centre_m = {x, 0.0};
+    wall.size_m = {0.1, 20.0};
+    spec.obstacles.push_back(wall);
+  }
+  sim_camera::AgentSpec walker;
+  walker.start_m = {0.0, -9.0};
+  walker.goals = {{0.0, 9.0}};
+  spec.agents.push_back(walker);
+  const sim_camera::World world(spec);
+  const cv::Mat top = draw_topview(world, {{walker.start_m}}, {});
+  // 900 px for the 23 m of the corridor and its margins: 39 px a metre, the corridor ~200 px.
+  const cv::Size caption = cv::getTextSize("narrow  t = 0.0 s  collisions: 0  (1 m = 39 px)",
+                                           cv::FONT_HERSHEY_SIMPLEX, 0.55, 1, nullptr);
+  EXPECT_GE(top.cols, caption.width + 8);
+  // The caption's last dark pixel is inside the image, not at its edge.
+  cv::Mat strip;
+  cv::cvtColor(top.rowRange(top.rows - 30, top.rows), strip, cv::COLOR_BGR2GRAY);
+  int rightmost = -1;
+  for (int col = 0; col < strip.cols; ++col) {
+    if (cv::countNonZero(strip.col(col) < 128) > 0) {
+      rightmost = col;
+    }
+  }
+  EXPECT_GT(rightmost, 0);
+  EXPECT_LT(rightmost, top.cols - 4);
+}
+
+}  // namespace
+}  // namespace flowsteer::sim
