@@ -22,8 +22,8 @@
 #include <benchmark/benchmark.h>
 
 #include "flowsteer/config/scenario_file.hpp"
-#include "flowsteer/sim/simulated_agent.hpp"
 #include "flowsteer/robot/robot_brain.hpp"
+#include "flowsteer/sim/simulated_agent.hpp"
 #include "flowsteer/sim_camera/sim_camera.hpp"
 
 namespace {
@@ -49,7 +49,7 @@ sim_camera::WorldSpec room(int resolution, const servo::PerceptionConfig& percep
 
 // Every agent keeps its speed and heading.
 void coast(sim_camera::World& world) {
-  world.step(std::vector<std::pair<double, double>>(world.agents().size(), {0.0, 0.0}));
+  world.step(std::vector<base::Command>(world.agents().size()));
 }
 
 void report(benchmark::State& state, const pipeline::StageTimes& sum) {

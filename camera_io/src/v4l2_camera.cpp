@@ -157,7 +157,7 @@ void V4l2Camera::open_device() {
     const int error = errno;
     throw std::runtime_error("cannot open camera " + device_ + ": " + std::strerror(error));
   }
-  fd_ = v4l2::DeviceFd(fd);
+  fd_ = base::UniqueFd(fd);
   v4l2_capability cap{};
   if (!try_ioctl(fd, VIDIOC_QUERYCAP, &cap)) {
     const int error = errno;
@@ -436,7 +436,7 @@ void V4l2Camera::stop() {
     failure = errno_message(device_, "VIDIOC_REQBUFS(0)", errno);
   }
   converter_.reset();
-  fd_ = v4l2::DeviceFd();
+  fd_ = base::UniqueFd();
   if (!failure.empty()) {
     throw std::runtime_error(failure);
   }

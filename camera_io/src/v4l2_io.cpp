@@ -49,23 +49,6 @@ void checked_ioctl(int fd, unsigned long request, void* arg, const char* name,
   }
 }
 
-DeviceFd::~DeviceFd() {
-  if (fd_ >= 0) {
-    // The descriptor is gone even when close() reports an error; retrying could close another.
-    ::close(fd_);
-  }
-}
-
-DeviceFd& DeviceFd::operator=(DeviceFd&& other) noexcept {
-  if (this != &other) {
-    if (fd_ >= 0) {
-      ::close(fd_);
-    }
-    fd_ = std::exchange(other.fd_, -1);
-  }
-  return *this;
-}
-
 Mapping::~Mapping() {
   if (data_ != nullptr) {
     ::munmap(data_, length_);

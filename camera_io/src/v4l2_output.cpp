@@ -40,7 +40,7 @@ struct V4l2Output::Impl {
   }
 
   void open_device() {
-    fd = v4l2::DeviceFd(::open(device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC));
+    fd = base::UniqueFd(::open(device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC));
     if (fd.get() < 0) {
       throw_errno(device, "open", errno);
     }
@@ -146,7 +146,7 @@ struct V4l2Output::Impl {
   }
 
   std::string device;
-  v4l2::DeviceFd fd;
+  base::UniqueFd fd;
   int width = 0;
   int height = 0;
   std::uint32_t bytes_per_line = 0;

@@ -225,7 +225,7 @@ DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
   return s;
 }
 
-std::unique_ptr<drivers::Base> make_base(const DriveSection& section) {
+std::unique_ptr<drivers::MobileBase> make_base(const DriveSection& section) {
   std::unique_ptr<drivers::Drive> drive = std::visit(
       [](const auto& config) -> std::unique_ptr<drivers::Drive> {
         using C = std::decay_t<decltype(config)>;
@@ -240,7 +240,7 @@ std::unique_ptr<drivers::Base> make_base(const DriveSection& section) {
         }
       },
       section.drive);
-  return std::make_unique<drivers::Base>(std::move(drive), section.stage);
+  return std::make_unique<drivers::MobileBase>(std::move(drive), section.stage);
 }
 
 }  // namespace flowsteer::config

@@ -7,9 +7,9 @@
 #include <sstream>
 
 #include "flowsteer/base/output_files.hpp"
-#include "flowsteer/sim/simulated_agent.hpp"
 #include "flowsteer/pipeline/perception.hpp"
 #include "flowsteer/servo/analytic_scene.hpp"
+#include "flowsteer/sim/simulated_agent.hpp"
 
 namespace flowsteer::eval {
 
@@ -121,11 +121,11 @@ std::vector<MethodRun> start_runs(std::span<const servo::FlowMethod> methods,
 
 // Each agent steps on its own controller; `commands` gets what each commands.
 void step_agents(std::vector<std::unique_ptr<sim::SimulatedAgent>>& agents,
-                 sim_camera::Renderer& renderer, std::vector<std::pair<double, double>>& commands) {
+                 sim_camera::Renderer& renderer, std::vector<base::Command>& commands) {
   for (std::size_t i = 0; i < agents.size(); ++i) {
     pipeline::StageTimes times;
     const servo::ControlOutput& out = agents[i]->step(renderer, times);
-    commands[i] = {out.command.accel_mps2, out.command.turn_rate};
+    commands[i] = out.command;
   }
 }
 
@@ -253,7 +253,7 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
 
   log << "flow evaluation: " << spec.name << " at " << resolution << "x" << resolution << ", "
       << options.frames << " frames\n";
-  std::vector<std::pair<double, double>> commands(spec.agents.size());
+  std::vector<base::Command> commands(spec.agents.size());
   for (int frame = 0; frame < options.frames && !world.finished(); ++frame) {
     step_agents(agents, renderer, commands);
     const camera_io::Frame& view = agents[0]->frame();
@@ -317,9 +317,9 @@ void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
                            const std::filesystem::path& out_dir) {
   base::OutputDir out(out_dir);
   base::CsvTable csv({"method", "segmentation", "resolution", "frames", "endpoint_error_px",
-                "valid_fraction", "approaching_objects", "missed_objects", "small_objects",
-                "object_recall_mean", "region_purity_mean", "phantom_objects", "foe_error_median",
-                "ttc_relative_error_median", "ms_per_frame"});
+                      "valid_fraction", "approaching_objects", "missed_objects", "small_objects",
+                      "object_recall_mean", "region_purity_mean", "phantom_objects",
+                      "foe_error_median", "ttc_relative_error_median", "ms_per_frame"});
   for (const FlowEvalRow& r : rows) {
     csv.add(
         {std::string(servo::to_string(r.method)), std::string(servo::to_string(r.segmentation))},

@@ -7,10 +7,10 @@
 #include <stdexcept>
 #include <streambuf>
 
+#include "flowsteer/base/output_files.hpp"
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/camera_io/replay_source.hpp"
 #include "flowsteer/config/robot_launch.hpp"
-#include "flowsteer/base/output_files.hpp"
 #include "flowsteer/pipeline/overlay.hpp"
 #include "flowsteer/robot/robot_brain.hpp"
 
@@ -95,7 +95,7 @@ RobotLoopResult run_robot_command(const RunCommand& command,
     events << "flowsteer run: " << warning << "\n";
   }
   const std::unique_ptr<camera_io::FrameSource> camera = config::make_camera(launch.camera);
-  std::unique_ptr<drivers::Base> robot_base;
+  std::unique_ptr<drivers::MobileBase> robot_base;
   if (launch.drive) {
     robot_base = config::make_base(*launch.drive);
   }
@@ -204,7 +204,7 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
                  {seq, frame.timestamp_s, static_cast<double>(brain.objects().size()),
                   bearing.value_or(nan), c.accel_mps2, c.turn_rate, brain.output().cost});
     video->write(pipeline::draw_overlay(frame.image, brain.perception().flow(), brain.objects(),
-                                    source.intrinsics(), bearing));
+                                        source.intrinsics(), bearing));
   }
   video->release();
   features.write(out.staging_path("features.csv"));

@@ -25,7 +25,7 @@ bool moving(const drivers::BodyVelocity& measured) {
 // camera gone, a perception failure) the log says the base was stopped before the error shows.
 class BaseStopper {
  public:
-  BaseStopper(drivers::Base* robot_base, std::ostream& log)
+  BaseStopper(drivers::MobileBase* robot_base, std::ostream& log)
       : base_(robot_base), log_(log), exceptions_(std::uncaught_exceptions()) {}
   ~BaseStopper() {
     if (base_ == nullptr || base_->lifecycle() != drivers::Lifecycle::active) {
@@ -46,7 +46,7 @@ class BaseStopper {
   BaseStopper& operator=(const BaseStopper&) = delete;
 
  private:
-  drivers::Base* base_;
+  drivers::MobileBase* base_;
   std::ostream& log_;
   int exceptions_;
 };
@@ -98,7 +98,7 @@ const char* stop_reason_name(StopReason reason) {
   return "?";
 }
 
-RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* robot_base,
+RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::MobileBase* robot_base,
                                FrameHandler& brain, const RobotLoopOptions& options,
                                const std::atomic<bool>& stop_requested, std::ostream& log) {
   RobotLoopResult result;

@@ -7,7 +7,7 @@
 #include <string>
 #include <utility>
 
-#include "flowsteer/servo/analytic_scene.hpp"
+#include "flowsteer/servo/segmentation.hpp"
 
 namespace flowsteer::servo {
 

@@ -244,8 +244,8 @@ class SimulationRun {
     for (std::size_t i = 0; i < loops_.size(); ++i) {
       const sim_camera::AgentState& s = world_.agents()[i];
       trajectories_.push_back({world_.time_s(), static_cast<double>(i), s.position_m.x(),
-                               s.position_m.y(), s.yaw_rad, s.speed_mps, commands_[i].first,
-                               commands_[i].second});
+                               s.position_m.y(), s.yaw_rad, s.speed_mps, commands_[i].accel_mps2,
+                               commands_[i].turn_rate});
       paths_[i].push_back(s.position_m);
     }
     world_.step(commands_);
@@ -378,7 +378,7 @@ class SimulationRun {
   void record(std::size_t i) {
     AgentLoop& loop = loops_[i];
     const servo::ControlOutput& output = loop.agent->brain().output();
-    commands_[i] = {output.command.accel_mps2, output.command.turn_rate};
+    commands_[i] = output.command;
     loop.result.turn_rates.push_back(output.command.turn_rate);
     sum_ += loop.times;
     ++agent_steps_;
@@ -386,7 +386,8 @@ class SimulationRun {
     if (options_.video && out_) {
       if (!loop.video) {
         loop.video = pipeline::open_video(out_->staging_path("agent_" + std::to_string(i) + ".mp4"),
-                                pipeline::overlay_size(loop.agent->frame().image.size()), 1.0 / spec_.step_s);
+                                          pipeline::overlay_size(loop.agent->frame().image.size()),
+                                          1.0 / spec_.step_s);
       }
       loop.video->write(draw_overlay(*loop.agent));
     }
@@ -397,7 +398,7 @@ class SimulationRun {
   void drive(std::size_t i) {
     const base::Command command = options_.driver->step(world_, *renderers_.local());
     if (!world_.agents()[i].reached_goal) {
-      commands_[i] = {command.accel_mps2, command.turn_rate};
+      commands_[i] = command;
       loops_[i].result.turn_rates.push_back(command.turn_rate);
     }
   }
@@ -457,7 +458,7 @@ class SimulationRun {
   std::vector<sim_camera::View> batch_views_;
   std::vector<sim_camera::RenderedView*> batch_out_;
   std::vector<std::vector<Eigen::Vector2d>> paths_;
-  std::vector<std::pair<double, double>> commands_;
+  std::vector<base::Command> commands_;
   std::vector<TrajectoryRow> trajectories_;
   CostLog costs_;
   std::vector<sim_camera::Collision> collisions_;

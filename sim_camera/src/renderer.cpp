@@ -26,8 +26,8 @@
 
 #include <Eigen/Geometry>
 
-#include "flowsteer/servo/analytic_scene.hpp"
 #include "flowsteer/servo/flow_field.hpp"
+#include "flowsteer/servo/segmentation.hpp"
 #include "shaders.hpp"
 
 namespace flowsteer::sim_camera {

@@ -155,9 +155,9 @@ Solid World::moving_now(std::size_t moving) const {
   return body;
 }
 
-void World::step(const std::vector<std::pair<double, double>>& accel_and_turn) {
-  if (accel_and_turn.size() != agents_.size()) {
-    throw std::invalid_argument("world step: " + std::to_string(accel_and_turn.size()) +
+void World::step(const std::vector<base::Command>& commands) {
+  if (commands.size() != agents_.size()) {
+    throw std::invalid_argument("world step: " + std::to_string(commands.size()) +
                                 " commands for " + std::to_string(agents_.size()) + " agents");
   }
   const double dt = spec_.step_s;
@@ -169,9 +169,8 @@ void World::step(const std::vector<std::pair<double, double>>& accel_and_turn) {
       s.turn_rate = 0.0;
       continue;
     }
-    const auto [accel, turn] = accel_and_turn[i];
-    s.turn_rate = turn;
-    s.speed_mps = std::clamp(s.speed_mps + dt * accel, 0.0, a.max_speed_mps);
+    s.turn_rate = commands[i].turn_rate;
+    s.speed_mps = std::clamp(s.speed_mps + dt * commands[i].accel_mps2, 0.0, a.max_speed_mps);
     s.coast(dt);
   }
   for (std::size_t k = 0; k < moving_.size(); ++k) {

@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "flowsteer/drivers/unique_fd.hpp"
+#include "flowsteer/base/unique_fd.hpp"
 
 namespace flowsteer::drivers::testing {
 
@@ -56,8 +56,8 @@ class Pty {
   }
 
  private:
-  UniqueFd master_;
-  UniqueFd slave_;
+  base::UniqueFd master_;
+  base::UniqueFd slave_;
   std::string slave_path_;
 };
 

@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "flowsteer/drivers/base.hpp"
+#include "flowsteer/drivers/mobile_base.hpp"
 #include "pty_board.hpp"
 
 namespace flowsteer::drivers {
@@ -49,7 +49,8 @@ CommandStageConfig stage_config() {
 // closed), then expects the next update to fail at once, saying the port hung up and that the
 // stop could not be sent, and the base to be left failed. Prints the time from the hang-up to
 // the error.
-void expect_hang_up_fails_the_base(Base& base, Board& board, Pty& pty, const std::string& port) {
+void expect_hang_up_fails_the_base(MobileBase& base, Board& board, Pty& pty,
+                                   const std::string& port) {
   base.configure();
   base.activate(now_s());
   base.command({0.2, 0.3}, now_s());
@@ -168,7 +169,7 @@ TEST(ArduinoBridge, PositiveTurnRateDrivesTheLeftWheelForward) {
   Pty pty;
   ArduinoBoard board(pty);
   board.start();
-  Base base(std::make_unique<ArduinoBridgeDrive>(arduino_config(pty)), stage_config());
+  MobileBase base(std::make_unique<ArduinoBridgeDrive>(arduino_config(pty)), stage_config());
   base.configure();
   base.activate(now_s());
   base.command({0.0, 0.5}, now_s());  // turn right on the spot
@@ -204,7 +205,7 @@ TEST(ArduinoBridge, GarbledReplyStopsTheBase) {
   ArduinoBoard board(pty);
   board.mode = ArduinoBoard::Mode::garble_motion;
   board.start();
-  Base base(std::make_unique<ArduinoBridgeDrive>(arduino_config(pty)), stage_config());
+  MobileBase base(std::make_unique<ArduinoBridgeDrive>(arduino_config(pty)), stage_config());
   base.configure();
   base.activate(now_s());
   base.command({0.0, 0.5}, now_s());
@@ -220,7 +221,7 @@ TEST(ArduinoBridge, PortGoneMidRunIsAClearErrorAndFailsTheBase) {
   Pty pty;
   ArduinoBoard board(pty);
   board.start();
-  Base base(std::make_unique<ArduinoBridgeDrive>(arduino_config(pty)), stage_config());
+  MobileBase base(std::make_unique<ArduinoBridgeDrive>(arduino_config(pty)), stage_config());
   expect_hang_up_fails_the_base(base, board, pty, pty.slave_path());
 }
 
@@ -439,7 +440,7 @@ TEST(RoboClaw, ReplyWithBadCrcIsAClearErrorAndStopsTheBase) {
   Pty pty;
   RoboClawBoard board(pty);
   board.start();
-  Base base(std::make_unique<RoboClawDrive>(roboclaw_config(pty)), stage_config());
+  MobileBase base(std::make_unique<RoboClawDrive>(roboclaw_config(pty)), stage_config());
   base.configure();
   base.activate(now_s());
   base.command({0.0, 0.5}, now_s());
@@ -465,7 +466,7 @@ TEST(RoboClaw, PortGoneMidRunIsAClearErrorAndFailsTheBase) {
   Pty pty;
   RoboClawBoard board(pty);
   board.start();
-  Base base(std::make_unique<RoboClawDrive>(roboclaw_config(pty)), stage_config());
+  MobileBase base(std::make_unique<RoboClawDrive>(roboclaw_config(pty)), stage_config());
   expect_hang_up_fails_the_base(base, board, pty, pty.slave_path());
 }
 

@@ -85,7 +85,7 @@ TEST(GeometricReference, ComputesNoFlow) {
     vision.step(*renderer, vision_times);
     EXPECT_EQ(geometric_times.flow, 0.0);
     EXPECT_GT(vision_times.flow, 0.0);
-    world.step(std::vector<std::pair<double, double>>(spec.agents.size(), {0.0, 0.0}));
+    world.step(std::vector<base::Command>(spec.agents.size()));
   }
   EXPECT_EQ(geometric.brain().perception().status(), servo::FlowStatus::no_previous_frame);
   EXPECT_EQ(vision.brain().perception().status(), servo::FlowStatus::ok);

@@ -17,9 +17,9 @@
 #include "flowsteer/camera_io/replay_source.hpp"
 #include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/config/scenario_file.hpp"
-#include "flowsteer/sim/simulated_agent.hpp"
-#include "flowsteer/robot/robot_brain.hpp"
 #include "flowsteer/pipeline/perception.hpp"
+#include "flowsteer/robot/robot_brain.hpp"
+#include "flowsteer/sim/simulated_agent.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 #include "robot_launch_errors.hpp"
@@ -121,7 +121,7 @@ TEST(RobotBrain, BlindFramesBrakeAndHoldTheGoalHeading) {
   controller.spec.max_accel_mps2 = 0.7;
   std::ostringstream log;
   robot::RobotBrain brain(base::CameraIntrinsics::from_horizontal_fov(160, 120, 1.0),
-                           robot::robot_brain_config({}, controller), log);
+                          robot::robot_brain_config({}, controller), log);
   const drivers::BodyVelocity moving{0.4, 0.0};
   const double goal_right_rad = 0.3;
 
@@ -207,11 +207,11 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
     cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('F', 'F', 'V', '1'),
                            1.0 / spec.step_s, {256, 256});
     ASSERT_TRUE(writer.isOpened()) << "OpenCV cannot write FFV1 to " << video;
-    std::vector<std::pair<double, double>> commands(1);
+    std::vector<base::Command> commands(1);
     for (int f = 0; f < kFrames; ++f) {
       pipeline::StageTimes times;
       const servo::ControlOutput& out = agent.step(*renderer, times);
-      commands[0] = {out.command.accel_mps2, out.command.turn_rate};
+      commands[0] = out.command;
       const sim_camera::AgentState& state = world.agents()[0];
       camera_io::Frame frame = agent.frame();
       frame.sim.reset();  // as a camera would give it
@@ -292,7 +292,7 @@ std::vector<Recorded> record_simulated_agent(sim_camera::WorldSpec spec, int fra
   // The recorded frames are replayed: the lit image is what a camera would give.
   sim::SimulatedAgent agent(world, 0, sim_camera::RenderChannels::all);
   std::vector<Recorded> recorded;
-  std::vector<std::pair<double, double>> commands(spec.agents.size(), {0.0, 0.0});
+  std::vector<base::Command> commands(spec.agents.size());
   for (int f = 0; f < frames; ++f) {
     const sim_camera::AgentState state = world.agents()[0];
     pipeline::StageTimes times;
@@ -306,7 +306,7 @@ std::vector<Recorded> record_simulated_agent(sim_camera::WorldSpec spec, int fra
     r.frame.image = r.frame.image.clone();
     r.frame.sim.reset();  // as a camera gives it
     recorded.push_back(std::move(r));
-    commands[0] = {out.command.accel_mps2, out.command.turn_rate};
+    commands[0] = out.command;
     world.step(commands);
   }
   return recorded;
@@ -369,7 +369,7 @@ TEST(OneBrain, TheGeometricModelNeedsTheSimulatorsGeometry) {
   std::ostringstream log;
   try {
     robot::RobotBrain robot(base::CameraIntrinsics::from_horizontal_fov(64, 64, 1.0),
-                             robot::robot_brain_config({}, controller), log);
+                            robot::robot_brain_config({}, controller), log);
     FAIL() << "a robot ran the geometric model";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("exact geometry"), std::string::npos) << e.what();

@@ -139,7 +139,7 @@ class StallingCamera : public camera_io::FrameSource {
   base::CameraIntrinsics intrinsics_;
 };
 
-std::unique_ptr<drivers::Base> sim_base() {
+std::unique_ptr<drivers::MobileBase> sim_base() {
   const config::RobotLaunch l = parse_robot_launch(
       "camera: {type: replay, replay: {path: x.avi}}\n"
       "drive: {type: sim, loop_rate_hz: 50, watchdog: {timeout_s: 0.3, ramp_s: 0.1}}\n"
@@ -252,8 +252,7 @@ TEST(RobotLoop, ACameraErrorStopsTheBaseBeforeItIsReported) {
   ForwardBrain brain;
   std::atomic<bool> stop{false};
   std::ostringstream log;
-  EXPECT_THROW(robot::run_robot_loop(camera, base.get(), brain, {}, stop, log),
-               std::runtime_error);
+  EXPECT_THROW(robot::run_robot_loop(camera, base.get(), brain, {}, stop, log), std::runtime_error);
   EXPECT_EQ(base->lifecycle(), drivers::Lifecycle::inactive);
   EXPECT_TRUE(base->stage().emergency_stopped());
 }

@@ -240,7 +240,7 @@ Trace walk(const sim_camera::WorldSpec& spec) {
                  object.status == servo::MotionStatus::approaching);
     }
     trace.obstacle_visible.push_back(visible);
-    world.step({{out.command.accel_mps2, out.command.turn_rate}});
+    world.step({out.command});
     trace.collisions += static_cast<int>(world.new_collisions().size());
   }
   trace.reached_goal = world.agents()[0].reached_goal;

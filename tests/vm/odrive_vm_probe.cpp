@@ -1,5 +1,5 @@
 // Runs inside the test VM (tests/vm/run_can_vm.sh): a simulated pair of ODrive axes and the
-// ODrive CAN drive behind a Base on vcan0, through activate, a velocity stream, commands that
+// ODrive CAN drive behind a MobileBase on vcan0, through activate, a velocity stream, commands that
 // cease (the watchdog must stop the wheels), deactivate, an axis error and a lost heartbeat. It
 // prints what it did as "PROBE key value" lines with CLOCK_REALTIME stamps, the clock candump
 // stamps frames with; the host test checks those against candump's capture of the bus.
@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "flowsteer/base/clock.hpp"
-#include "flowsteer/drivers/base.hpp"
+#include "flowsteer/drivers/mobile_base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
 #include "flowsteer/drivers/simulated_odrive.hpp"
 #include "probe_support.hpp"
@@ -30,7 +30,8 @@ constexpr std::uint8_t kRightNode = 5;
 // command first. Returns the realtime of the last command sent; `commanded` gets the state
 // the last update after a command returned.
 template <typename Command>
-double run_loop(Base& base, double duration_s, Command command, BaseState* commanded = nullptr) {
+double run_loop(MobileBase& base, double duration_s, Command command,
+                BaseState* commanded = nullptr) {
   double last_command_realtime_s = 0.0;
   const double start_s = monotonic_now_s();
   for (double next_s = start_s; monotonic_now_s() - start_s < duration_s; next_s += kLoopPeriodS) {
@@ -50,7 +51,7 @@ double run_loop(Base& base, double duration_s, Command command, BaseState* comma
 
 // Drives for 2 s, calling inject() from 0.3 s on, and prints how the base failed under `key`.
 template <typename Inject>
-void drive_into_fault(Base& base, const char* key, Inject inject) {
+void drive_into_fault(MobileBase& base, const char* key, Inject inject) {
   try {
     run_loop(base, 2.0, [&](double t_s) {
       if (t_s > 0.3) {
@@ -91,7 +92,7 @@ int run() {
   stage.limits.max_accel_mps2 = 5.0;
   stage.limits.max_turn_rate = 1.0;
   stage.watchdog = {0.3, 0.1};
-  Base base(std::make_unique<OdriveCanDrive>(drive_config), stage);
+  MobileBase base(std::make_unique<OdriveCanDrive>(drive_config), stage);
 
   base.configure();
   std::printf("PROBE activate %.6f\n", realtime_s());

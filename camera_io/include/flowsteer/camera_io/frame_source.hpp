@@ -13,6 +13,7 @@ namespace flowsteer::camera_io {
 struct SimChannels {
   cv::Mat depth_m;     // CV_32F, depth along the optical axis; +inf where nothing was hit
   cv::Mat object_ids;  // CV_32S, the renderer's object ids; negative for ground and sky
+                       // (servo/segmentation.hpp)
   cv::Mat flow;        // CV_32FC2, image-plane velocity in normalised units per second (Eq. 1)
 };
 

@@ -109,7 +109,7 @@ class V4l2Camera final : public FrameSource {
   void convert(std::span<const std::uint8_t> data, cv::Mat& bgr);
 
   std::string device_;
-  v4l2::DeviceFd fd_;
+  base::UniqueFd fd_;
   std::string driver_;
   std::string card_;
   std::uint32_t fourcc_ = 0;

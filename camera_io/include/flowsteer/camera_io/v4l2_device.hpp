@@ -5,21 +5,9 @@
 #include <span>
 #include <utility>
 
+#include "flowsteer/base/unique_fd.hpp"
+
 namespace flowsteer::camera_io::v4l2 {
-
-// Owns a V4L2 device's file descriptor.
-class DeviceFd {
- public:
-  DeviceFd() = default;
-  explicit DeviceFd(int fd) : fd_(fd) {}
-  ~DeviceFd();
-  DeviceFd(DeviceFd&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
-  DeviceFd& operator=(DeviceFd&& other) noexcept;
-  int get() const { return fd_; }
-
- private:
-  int fd_ = -1;
-};
 
 // One mmap'ed driver buffer, unmapped when destroyed.
 class Mapping {

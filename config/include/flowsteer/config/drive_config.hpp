@@ -4,8 +4,8 @@
 #include <string>
 #include <variant>
 
-#include "flowsteer/drivers/base.hpp"
 #include "flowsteer/drivers/command_stage.hpp"
+#include "flowsteer/drivers/mobile_base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
 #include "flowsteer/drivers/serial_drives.hpp"
 #include "flowsteer/drivers/sim_base.hpp"
@@ -27,7 +27,7 @@ struct DriveSection {
 // loop period not well below the watchdog timeout).
 DriveSection parse_drive_section(const std::string& yaml_text, const std::string& source_name);
 
-// Builds the base the section describes; nothing is opened until Base::configure().
-std::unique_ptr<drivers::Base> make_base(const DriveSection& section);
+// Builds the base the section describes; nothing is opened until MobileBase::configure().
+std::unique_ptr<drivers::MobileBase> make_base(const DriveSection& section);
 
 }  // namespace flowsteer::config

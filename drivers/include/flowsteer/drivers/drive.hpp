@@ -9,7 +9,7 @@ namespace flowsteer::drivers {
 
 // Thrown by every drive operation that fails: the message names the device and what was wrong
 // (errno text for a failed system call). A drive that throws has already tried to stop its
-// motors; `Base` then deactivates it.
+// motors; `MobileBase` then deactivates it.
 class DriveError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -9,8 +9,8 @@
 #include <string>
 #include <string_view>
 
+#include "flowsteer/base/unique_fd.hpp"
 #include "flowsteer/drivers/drive.hpp"
-#include "flowsteer/drivers/unique_fd.hpp"
 
 namespace flowsteer::drivers {
 
@@ -88,7 +88,7 @@ class CanSocket {
 
  private:
   std::string interface_;
-  UniqueFd fd_;
+  base::UniqueFd fd_;
 };
 
 struct OdriveAxisConfig {

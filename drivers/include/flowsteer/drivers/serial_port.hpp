@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "flowsteer/drivers/unique_fd.hpp"
+#include "flowsteer/base/unique_fd.hpp"
 
 namespace flowsteer::drivers {
 
@@ -41,7 +41,7 @@ class SerialPort {
   bool wait(short events, double deadline_s, const char* operation);
 
   SerialConfig config_;
-  UniqueFd fd_;
+  base::UniqueFd fd_;
 };
 
 // "0x01 0xff ...": bytes for error messages.

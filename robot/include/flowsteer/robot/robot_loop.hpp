@@ -8,7 +8,7 @@
 
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/config/robot_launch.hpp"
-#include "flowsteer/drivers/base.hpp"
+#include "flowsteer/drivers/mobile_base.hpp"
 #include "flowsteer/servo/control.hpp"
 
 namespace flowsteer::robot {
@@ -79,7 +79,7 @@ struct RobotLoopResult {
 // recording, when the camera delivers nothing for camera_timeout_s, when stop_requested
 // becomes true (a signal handler sets it), and when anything throws (the exception then
 // reaches the caller after the stop). Each stop is logged with its reason.
-RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::Base* robot_base,
+RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::MobileBase* robot_base,
                                FrameHandler& brain, const RobotLoopOptions& options,
                                const std::atomic<bool>& stop_requested, std::ostream& log);
 

@@ -7,6 +7,7 @@
 
 #include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/flow_field.hpp"
+#include "flowsteer/servo/segmentation.hpp"
 
 namespace flowsteer::servo {
 
@@ -36,10 +37,6 @@ struct AnalyticScene {
   // Throws std::invalid_argument naming the offending object or field.
   void validate() const;
 };
-
-// Ids written for pixels that hit no object.
-inline constexpr std::int32_t kSkyId = -1;
-inline constexpr std::int32_t kGroundId = -2;
 
 struct SceneRender {
   FlowField flow;  // raw flow (CGF Eq. 1, rotation included) with depth

@@ -6,6 +6,11 @@
 
 namespace flowsteer::servo {
 
+// The object-id channel (a rendered frame's object_ids, an analytic scene's ids): ids >= 0 name
+// objects; a pixel that hits none is the ground or the sky.
+inline constexpr std::int32_t kSkyId = -1;
+inline constexpr std::int32_t kGroundId = -2;
+
 // What a region is to the controller: something seen moving (visible), something too dark to
 // trust (dark, MIG 2019), or the ground.
 enum class RegionKind : std::uint8_t { visible, dark, ground };

@@ -4,11 +4,11 @@
 #include <cstdint>
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "flowsteer/base/command.hpp"
 #include "flowsteer/sim_camera/world_spec.hpp"
 
 namespace flowsteer::sim_camera {
@@ -61,7 +61,7 @@ class World {
   const std::vector<MovingState>& moving() const { return moving_; }
 
   // Advances by one step with one command per agent; agents that reached their last goal stop.
-  void step(const std::vector<std::pair<double, double>>& accel_and_turn);
+  void step(const std::vector<base::Command>& commands);
 
   // Collisions that started during the last step (a contact counts once until it ends).
   const std::vector<Collision>& new_collisions() const { return new_collisions_; }

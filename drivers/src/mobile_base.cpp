@@ -1,4 +1,4 @@
-#include "flowsteer/drivers/base.hpp"
+#include "flowsteer/drivers/mobile_base.hpp"
 
 #include <stdexcept>
 #include <utility>
@@ -23,14 +23,14 @@ const char* lifecycle_name(Lifecycle lifecycle) {
 
 }  // namespace
 
-Base::Base(std::unique_ptr<Drive> drive, const CommandStageConfig& config)
+MobileBase::MobileBase(std::unique_ptr<Drive> drive, const CommandStageConfig& config)
     : drive_(std::move(drive)), stage_(config) {
   if (!drive_) {
     throw std::invalid_argument("base: no drive given");
   }
 }
 
-Base::~Base() {
+MobileBase::~MobileBase() {
   if (lifecycle_ == Lifecycle::active) {
     try {
       drive_->deactivate();
@@ -40,14 +40,14 @@ Base::~Base() {
   }
 }
 
-void Base::require(Lifecycle expected, const char* operation) const {
+void MobileBase::require(Lifecycle expected, const char* operation) const {
   if (lifecycle_ != expected) {
     throw DriveError(std::string(drive_->name()) + ": " + operation + " needs the base " +
                      lifecycle_name(expected) + ", it is " + lifecycle_name(lifecycle_));
   }
 }
 
-void Base::fail(const std::string& during, const std::exception& error) {
+void MobileBase::fail(const std::string& during, const std::exception& error) {
   lifecycle_ = Lifecycle::failed;
   // The link may be what failed: then the zero cannot reach the wheels, and the message must
   // not claim it did (deactivate() below still tries its own way).
@@ -69,7 +69,7 @@ void Base::fail(const std::string& during, const std::exception& error) {
                    error.what());
 }
 
-void Base::configure() {
+void MobileBase::configure() {
   if (lifecycle_ != Lifecycle::unconfigured && lifecycle_ != Lifecycle::failed) {
     require(Lifecycle::unconfigured, "configure");
   }
@@ -82,7 +82,7 @@ void Base::configure() {
   lifecycle_ = Lifecycle::inactive;
 }
 
-void Base::activate(double now_s) {
+void MobileBase::activate(double now_s) {
   require(Lifecycle::inactive, "activate");
   stage_.reset(now_s);
   try {
@@ -93,7 +93,7 @@ void Base::activate(double now_s) {
   lifecycle_ = Lifecycle::active;
 }
 
-void Base::deactivate() {
+void MobileBase::deactivate() {
   require(Lifecycle::active, "deactivate");
   try {
     drive_->deactivate();
@@ -103,11 +103,11 @@ void Base::deactivate() {
   lifecycle_ = Lifecycle::inactive;
 }
 
-std::optional<std::string> Base::command(const base::Command& command, double now_s) {
+std::optional<std::string> MobileBase::command(const base::Command& command, double now_s) {
   return stage_.command(command, now_s);
 }
 
-BaseState Base::update(double now_s) {
+BaseState MobileBase::update(double now_s) {
   require(Lifecycle::active, "update");
   BaseState state;
   state.sent = stage_.update(now_s);
@@ -121,7 +121,7 @@ BaseState Base::update(double now_s) {
   return state;
 }
 
-void Base::emergency_stop() {
+void MobileBase::emergency_stop() {
   stage_.emergency_stop();
   if (lifecycle_ == Lifecycle::active) {
     try {
@@ -132,7 +132,7 @@ void Base::emergency_stop() {
   }
 }
 
-void Base::clear_emergency_stop() {
+void MobileBase::clear_emergency_stop() {
   stage_.clear_emergency_stop();
 }
 

@@ -1,4 +1,4 @@
-#include "flowsteer/drivers/base.hpp"
+#include "flowsteer/drivers/mobile_base.hpp"
 
 #include <cmath>
 #include <memory>
@@ -37,7 +37,7 @@ TEST(SimBase, PositiveTurnRateTurnsTheBaseRightClockwise) {
   SimClock clock;
   auto owned = sim_base(clock);
   SimBase* sim = owned.get();
-  Base base(std::move(owned), stage_config());
+  MobileBase base(std::move(owned), stage_config());
   base.configure();
   base.activate(clock.now_s);
   BaseState state;
@@ -74,7 +74,7 @@ TEST(SimBase, WheelLagAndStopWhenCommandsCease) {
   EXPECT_NEAR(sim.read().measured.left_radps, 10.0 * (1.0 - std::exp(-1.0)), 1e-9);
 
   SimClock clock2;
-  Base base(sim_base(clock2), stage_config());
+  MobileBase base(sim_base(clock2), stage_config());
   base.configure();
   base.activate(0.0);
   base.command({2.0, 0.0}, 0.0);
@@ -123,10 +123,10 @@ class FlakyDrive final : public Drive {
   std::vector<std::string> calls;
 };
 
-TEST(Base, AFailingDriveIsStoppedAndTheErrorNamesIt) {
+TEST(MobileBase, AFailingDriveIsStoppedAndTheErrorNamesIt) {
   auto owned = std::make_unique<FlakyDrive>();
   FlakyDrive* drive = owned.get();
-  Base base(std::move(owned), stage_config());
+  MobileBase base(std::move(owned), stage_config());
   base.configure();
   base.activate(0.0);
   base.command({1.0, 0.0}, 0.0);
@@ -146,10 +146,10 @@ TEST(Base, AFailingDriveIsStoppedAndTheErrorNamesIt) {
   EXPECT_THROW(base.update(0.3), DriveError);  // failed: no more commands reach the drive
 }
 
-TEST(Base, EmergencyStopWritesZeroAtOnce) {
+TEST(MobileBase, EmergencyStopWritesZeroAtOnce) {
   auto owned = std::make_unique<FlakyDrive>();
   FlakyDrive* drive = owned.get();
-  Base base(std::move(owned), stage_config());
+  MobileBase base(std::move(owned), stage_config());
   base.configure();
   base.activate(0.0);
   base.command({1.0, 0.0}, 0.0);
@@ -164,13 +164,13 @@ TEST(Base, EmergencyStopWritesZeroAtOnce) {
   EXPECT_GT(base.update(0.3).sent.body.speed_mps, 0.0);
 }
 
-TEST(Base, LifecycleOrderIsEnforced) {
-  Base base(std::make_unique<FlakyDrive>(), stage_config());
+TEST(MobileBase, LifecycleOrderIsEnforced) {
+  MobileBase base(std::make_unique<FlakyDrive>(), stage_config());
   EXPECT_THROW(base.activate(0.0), DriveError);
   EXPECT_THROW(base.update(0.0), DriveError);
   base.configure();
   EXPECT_THROW(base.update(0.0), DriveError);
-  EXPECT_THROW(Base(nullptr, stage_config()), std::invalid_argument);
+  EXPECT_THROW(MobileBase(nullptr, stage_config()), std::invalid_argument);
 }
 
 }  // namespace

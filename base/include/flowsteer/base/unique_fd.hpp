@@ -4,7 +4,7 @@
 
 #include <utility>
 
-namespace flowsteer::drivers {
+namespace flowsteer::base {
 
 // Owns a file descriptor and closes it once. Move-only.
 class UniqueFd {
@@ -37,4 +37,4 @@ class UniqueFd {
   int fd_ = -1;
 };
 
-}  // namespace flowsteer::drivers
+}  // namespace flowsteer::base

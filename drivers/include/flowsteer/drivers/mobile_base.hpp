@@ -22,14 +22,14 @@ struct BaseState {
 // A command stage in front of a drive: the one thing the control loop talks to. Every failure
 // of the drive leaves the base stopped (zero written, drive deactivated, both best effort) and
 // the base in Lifecycle::failed before the DriveError reaches the caller.
-class Base {
+class MobileBase {
  public:
   // Throws std::invalid_argument on a bad configuration or a null drive.
-  Base(std::unique_ptr<Drive> drive, const CommandStageConfig& config);
+  MobileBase(std::unique_ptr<Drive> drive, const CommandStageConfig& config);
   // Deactivates an active drive; errors are swallowed since a destructor cannot report them.
-  ~Base();
-  Base(const Base&) = delete;
-  Base& operator=(const Base&) = delete;
+  ~MobileBase();
+  MobileBase(const MobileBase&) = delete;
+  MobileBase& operator=(const MobileBase&) = delete;
 
   void configure();
   void activate(double now_s);
