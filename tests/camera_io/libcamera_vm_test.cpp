@@ -16,55 +16,14 @@
 
 #include <gtest/gtest.h>
 
-#include "vm_test_support.hpp"
+#include "camera_vm_run.hpp"
 
 namespace {
 
 constexpr const char* kVimcCamera = "platform/vimc.0 Sensor B";
 
-struct ProbeFrame {
-  unsigned long long sequence = 0;
-  double timestamp_s = 0.0;
-  double read_s = 0.0;  // the probe's monotonic clock just after read() returned
-  unsigned driver_sequence = 0;
-  int width = 0;
-  int height = 0;
-};
-
-struct VmRun {
-  std::string console;
-  std::map<std::string, std::string> probe;               // last line per key
-  std::vector<std::string> cameras;                       // "PROBE camera ID", in order
-  std::map<std::string, std::vector<ProbeFrame>> frames;  // "default" → its frames
-  std::string exit_status;                                // vimc_init.sh's "VM: probe exit status"
-};
-
-VmRun parse(const std::string& console) {
-  VmRun run;
-  run.console = console;
-  flowsteer::vm_test::for_each_line(console, [&](const std::string& line) {
-    const std::string exit_line = "VM: probe exit status ";
-    if (line.starts_with(exit_line)) {
-      run.exit_status = line.substr(exit_line.size());
-    }
-    const auto probe = flowsteer::vm_test::probe_line(line);
-    if (!probe) {
-      return;
-    }
-    const auto& [key, value] = *probe;
-    if (key == "camera") {
-      run.cameras.push_back(value);
-    } else if (key.ends_with("-frame")) {
-      ProbeFrame f;
-      if (std::sscanf(value.c_str(), "%llu %lf %lf %u %dx%d", &f.sequence, &f.timestamp_s,
-                      &f.read_s, &f.driver_sequence, &f.width, &f.height) == 6) {
-        run.frames[key.substr(0, key.size() - 6)].push_back(f);
-      }
-    }
-    run.probe[key] = value;
-  });
-  return run;
-}
+using VmRun = flowsteer::vm_test::CameraVmRun;
+using ProbeFrame = flowsteer::vm_test::CameraFrame;
 
 // "ID|FORMAT|SECONDS" of a "<key>-open" line.
 struct Opened {
@@ -90,7 +49,7 @@ bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
-class VimcVm : public flowsteer::vm_test::VmTest<VmRun, parse> {
+class VimcVm : public flowsteer::vm_test::VmTest<VmRun, flowsteer::vm_test::parse_camera_console> {
  protected:
   void SetUp() override {
     VmTest::SetUp();
@@ -154,7 +113,6 @@ void check_stream(const VmRun& run, const std::string& key, std::size_t count) {
   ASSERT_NE(it, run.frames.end()) << run.console;
   const std::vector<ProbeFrame>& frames = it->second;
   ASSERT_EQ(frames.size(), count) << run.console;
-  unsigned long long gaps = 0;
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const ProbeFrame& f = frames[i];
     EXPECT_EQ(f.sequence, i);
@@ -164,7 +122,6 @@ void check_stream(const VmRun& run, const std::string& key, std::size_t count) {
     if (i > 0) {
       EXPECT_GT(f.timestamp_s, frames[i - 1].timestamp_s);
       EXPECT_GT(f.driver_sequence, frames[i - 1].driver_sequence);
-      gaps += f.driver_sequence - frames[i - 1].driver_sequence - 1;
     }
   }
   const double mean_period_s = (frames.back().timestamp_s - frames.front().timestamp_s) /
@@ -174,7 +131,7 @@ void check_stream(const VmRun& run, const std::string& key, std::size_t count) {
   EXPECT_LT(mean_period_s, 0.5);
   unsigned long long dropped = 0;
   ASSERT_EQ(std::sscanf(run.probe.at(key + "-dropped").c_str(), "%llu", &dropped), 1);
-  EXPECT_EQ(dropped, gaps);
+  EXPECT_EQ(dropped, flowsteer::vm_test::sequence_gaps(frames));
 }
 
 TEST_F(VimcVm, FramesHaveRisingSequenceAndMonotonicTimestamps) {

@@ -13,49 +13,14 @@
 
 #include <gtest/gtest.h>
 
-#include "vm_test_support.hpp"
+#include "camera_vm_run.hpp"
 
 namespace {
 
-struct ProbeFrame {
-  unsigned long long sequence = 0;
-  double timestamp_s = 0.0;
-  double dequeued_s = 0.0;  // the probe's monotonic clock just after read() returned
-  unsigned driver_sequence = 0;
-  int width = 0;
-  int height = 0;
-  int driver_timestamps = 0;
-};
+using VmRun = flowsteer::vm_test::CameraVmRun;
+using ProbeFrame = flowsteer::vm_test::CameraFrame;
 
-struct VmRun {
-  std::string console;
-  std::map<std::string, std::string> probe;               // last line per key
-  std::map<std::string, std::vector<ProbeFrame>> frames;  // "yuyv" → its frames
-};
-
-VmRun parse(const std::string& console) {
-  VmRun run;
-  run.console = console;
-  flowsteer::vm_test::for_each_line(console, [&](const std::string& line) {
-    const auto probe = flowsteer::vm_test::probe_line(line);
-    if (!probe) {
-      return;
-    }
-    const auto& [key, value] = *probe;
-    if (key.ends_with("-frame")) {
-      ProbeFrame f;
-      if (std::sscanf(value.c_str(), "%llu %lf %lf %u %dx%d %d", &f.sequence, &f.timestamp_s,
-                      &f.dequeued_s, &f.driver_sequence, &f.width, &f.height,
-                      &f.driver_timestamps) == 7) {
-        run.frames[key.substr(0, key.size() - 6)].push_back(f);
-      }
-    }
-    run.probe[key] = value;
-  });
-  return run;
-}
-
-class VividVm : public flowsteer::vm_test::VmTest<VmRun, parse> {
+class VividVm : public flowsteer::vm_test::VmTest<VmRun, flowsteer::vm_test::parse_camera_console> {
  protected:
   void SetUp() override {
     VmTest::SetUp();
@@ -89,10 +54,10 @@ void check_stream(const VmRun& run, const std::string& key, std::size_t count, i
     EXPECT_EQ(f.driver_timestamps, 1) << "vivid stamps buffers with the monotonic clock";
     // vivid stamps "end of frame" as the tick's time plus 0.9 of a period, which can be a
     // little after it hands the buffer over; a stamp from another clock would be far off.
-    EXPECT_LE(f.timestamp_s, f.dequeued_s + 1.0 / rate_hz);
+    EXPECT_LE(f.timestamp_s, f.read_s + 1.0 / rate_hz);
     // Stamped at most a few frame periods before the probe saw it (an emulated machine is
     // slow, so not one period).
-    EXPECT_LT(f.dequeued_s - f.timestamp_s, 1.0);
+    EXPECT_LT(f.read_s - f.timestamp_s, 1.0);
     if (i > 0) {
       EXPECT_GT(f.timestamp_s, frames[i - 1].timestamp_s);
       EXPECT_GT(f.driver_sequence, frames[i - 1].driver_sequence);
@@ -105,13 +70,9 @@ void check_stream(const VmRun& run, const std::string& key, std::size_t count, i
   EXPECT_NEAR(span_s / periods, 1.0 / rate_hz, 0.1 / rate_hz);
   // An emulated machine converts slower than vivid fills buffers, so frames are dropped; each
   // gap in the driver's sequence numbers is counted.
-  unsigned long long gaps = 0;
-  for (std::size_t i = 1; i < frames.size(); ++i) {
-    gaps += frames[i].driver_sequence - frames[i - 1].driver_sequence - 1;
-  }
   unsigned long long dropped = 0;
   ASSERT_EQ(std::sscanf(run.probe.at(key + "-dropped").c_str(), "%llu", &dropped), 1);
-  EXPECT_EQ(dropped, gaps);
+  EXPECT_EQ(dropped, flowsteer::vm_test::sequence_gaps(frames));
 }
 
 TEST_F(VividVm, YuyvStreamHasIncreasingSequenceAndMonotonicTimestamps) {
@@ -203,8 +164,8 @@ TEST_F(VividVm, ADriverClockThatCannotBeMonotonicFallsBackToTheDequeueTime) {
   for (std::size_t i = 0; i < frames.size(); ++i) {
     SCOPED_TRACE("frame " + std::to_string(i));
     EXPECT_EQ(frames[i].driver_timestamps, 0);
-    EXPECT_LE(frames[i].timestamp_s, frames[i].dequeued_s);
-    EXPECT_GT(frames[i].timestamp_s, frames[i].dequeued_s - 0.5);
+    EXPECT_LE(frames[i].timestamp_s, frames[i].read_s);
+    EXPECT_GT(frames[i].timestamp_s, frames[i].read_s - 0.5);
     if (i > 0) {
       EXPECT_GT(frames[i].timestamp_s, frames[i - 1].timestamp_s);
     }

@@ -9,4 +9,5 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 kernel_cache=${1:?usage}; work=${2:?usage}; probe=${3:?usage}; flowsteer=${4:?usage}
 exec "$here/run_vm.sh" "$kernel_cache" "$work" "$here/robot_init.sh" 240 --memory-mb 1536 \
-  --modules "vivid vcan can-raw" --binaries "$probe $flowsteer candump"
+  --modules "vivid vcan can-raw" --binaries "$probe $flowsteer candump" \
+  --files "$here/can_session.sh=/lib/can_session.sh"
