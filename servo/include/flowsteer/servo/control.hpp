@@ -158,7 +158,7 @@ struct ClearanceOptions {
   // a car, is passed behind where the agent can still stop short of its path at stop_decel_mps2
   // (infinity: never).
   double yield_speed_ratio = 1.5;
-  double stop_decel_mps2 = 0.5;
+  double stop_decel_mps2 = 0.5;  // the deceleration the agent plans to stop with
 };
 
 // L_b's (braking_term).
@@ -187,9 +187,10 @@ struct FlowsteerOptions {
   DepthGuess align;
   DepthGuess leader_gap;
 };
+
 // The flowsteer law's settings for an agent that keeps kept_width clear and reads depth as
-// `depth` in every term (the dark term adds the bare agent_width_m), each term's own options at
-// their defaults.
+// `depth` in every term, each term's own options at their defaults. The dark term widens a dark
+// region by kept_width.agent_width_m alone.
 FlowsteerOptions flowsteer_options(const KeptWidth& kept_width, const DepthGuess& depth = {});
 
 // L_t = ½ t_x² (CGF Eq. 7). Needs the goal's bearing; zero without one.
