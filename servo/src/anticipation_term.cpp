@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <string>
+#include <string_view>
 
 #include <Eigen/Core>
 
@@ -38,24 +40,24 @@ Energy energy(double tau_s, double tau0_s) {
 
 class AnticipationTerm final : public CostTerm {
  public:
-  explicit AnticipationTerm(const AvoidanceOptions& options) : options_(options) {}
+  explicit AnticipationTerm(const AnticipationOptions& options) : options_(options) {}
   std::string_view name() const override { return "anticipation"; }
 
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     using detail::Contact;
-    const double radius_m = 0.5 * detail::kept_width(agent, options_);
+    const double radius_m = 0.5 * detail::kept_width(agent, options_.kept_width);
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {
       if (object.kind != RegionKind::visible || !object.centre.allFinite()) {
         continue;
       }
       const std::optional<Eigen::Vector2d> velocity =
-          detail::relative_velocity(object, agent, options_);
+          detail::relative_velocity(object, agent, options_.depth, options_.static_closing_ratio);
       if (!velocity) {
         continue;
       }
       detail::Outline outline;
-      detail::outline_of(object, agent, options_, outline);
+      detail::outline_of(object, agent, options_.depth, outline);
       const double now_m = detail::distance_to_outline(outline);
       // Already nearer than R (which holds a margin): the contact is its coming nearer still.
       Contact contact;
@@ -89,17 +91,23 @@ class AnticipationTerm final : public CostTerm {
     const Eigen::Vector2d per_velocity = -tau_s * contact.normal / closing;
     const FeatureRate contact_time_rate{0.0, -per_velocity.y(),
                                         -agent.speed_mps * per_velocity.x()};
-    const Energy e = energy(tau_s, options_.anticipation_s);
+    const Energy e = energy(tau_s, options_.tau0_s);
     return detail::through_rate(e.value, e.slope, e.curvature, contact_time_rate);
   }
 
-  AvoidanceOptions options_;
+  AnticipationOptions options_;
 };
 
 }  // namespace
 
-std::unique_ptr<CostTerm> anticipation_term(const AvoidanceOptions& options) {
-  detail::validate(options);
+std::unique_ptr<CostTerm> anticipation_term(const AnticipationOptions& options) {
+  constexpr std::string_view kTerm = "anticipation";
+  detail::validate(options.kept_width, kTerm);
+  detail::validate(options.depth, kTerm);
+  detail::validate_static_closing(options.static_closing_ratio, kTerm);
+  detail::validate_horizon(options.horizon_s, kTerm);
+  detail::require_option(std::isfinite(options.tau0_s) && options.tau0_s > 0.0, kTerm,
+                         "tau0_s must be positive, got " + std::to_string(options.tau0_s));
   return std::make_unique<AnticipationTerm>(options);
 }
 

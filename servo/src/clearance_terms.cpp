@@ -88,20 +88,20 @@ struct Cone {
 
 // Whether the object's ends have depths (a simulator's): its outline and speed over the ground
 // are then measured, not the depth-free guess from τ (MIG's τ v_c / Z).
-bool ends_measured(const ObjectFeatures& object, const AvoidanceOptions& options) {
-  return options.use_depth && object.min_x_depth_m && object.max_x_depth_m;
+bool ends_measured(const ObjectFeatures& object, const DepthGuess& depth) {
+  return depth.use_depth && object.min_x_depth_m && object.max_x_depth_m;
 }
 
-Cone cone_of(const ObjectFeatures& object, const AgentState& agent, const AvoidanceOptions& options,
+Cone cone_of(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& guess,
              double kept_width_m) {
-  const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, options);
+  const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, guess);
   Cone c;
   c.tau_over_depth = tau_over_depth;
   c.foe = object.foe.x();
   c.end_x[0] = object.min_x;
   c.end_x[1] = object.max_x;
   c.cut = object.cut_left || object.cut_right;
-  const bool depths = ends_measured(object, options);
+  const bool depths = ends_measured(object, guess);
   c.depth[0] = depths ? *object.min_x_depth_m : depth;
   c.depth[1] = depths ? *object.max_x_depth_m : depth;
   // Where the image cuts an end, the object may go on past it: an FOE beyond that end may lie on
@@ -148,27 +148,27 @@ class ThreatCones {
     double best_clearance() const { return std::max(clearance[0], clearance[1]); }
   };
 
-  void build(const Percept& percept, const AgentState& agent, const AvoidanceOptions& options) {
+  void build(const Percept& percept, const AgentState& agent, const ThreatOptions& options) {
     entries_.clear();
     groups_.clear();
-    const double kept_width_m = detail::kept_width(agent, options);
+    const double kept_width_m = detail::kept_width(agent, options.kept_width);
     still_.clear();
     still_.reserve(percept.objects.size());  // no reallocation: entries point into it
     for (const ObjectFeatures& seen : percept.objects) {
       const ObjectFeatures* threat = &seen;
-      if (!detail::is_threat(seen, options)) {
+      if (!detail::is_threat(seen, options.horizon_s)) {
         threat = as_walked_towards(seen, agent, options);
         if (threat == nullptr) {
           continue;
         }
       }
       const ObjectFeatures& object = *threat;
-      const Cone cone = cone_of(object, agent, options, kept_width_m);
+      const Cone cone = cone_of(object, agent, options.depth, kept_width_m);
       if (beyond_goal(cone, percept, kept_width_m)) {
         continue;
       }
       const bool clear = passed_clear(object, agent, options, kept_width_m);
-      if (!clear || ends_measured(object, options)) {
+      if (!clear || ends_measured(object, options.depth)) {
         entries_.push_back({&object, cone, time_to_contact(object, cone, kept_width_m), -1, clear});
       }
     }
@@ -217,20 +217,22 @@ class ThreatCones {
   // τ, nothing to avoid, and it set off into the wall or the neighbour it stood against, or
   // stood facing someone who stood facing it, each waiting for the other. An object that shows
   // no motion of its own, with depth, is then taken as the agent will see it once it walks at
-  // its preferred speed (margin_full_speed_mps): static, its FOE where the agent heads, τ its
-  // nearer end's depth over that speed. Null where the object is not such.
+  // its preferred speed (KeptWidth::margin_full_speed_mps): static, its FOE where the agent heads,
+  // τ its nearer end's depth over that speed. Null where the object is not such.
   const ObjectFeatures* as_walked_towards(const ObjectFeatures& seen, const AgentState& agent,
-                                          const AvoidanceOptions& options) {
-    if (!(std::abs(agent.speed_mps) < options.min_speed_mps) || seen.kind != RegionKind::visible ||
-        !ends_measured(seen, options)) {
+                                          const ThreatOptions& options) {
+    const double rest_mps = options.depth.min_speed_mps;
+    if (!(std::abs(agent.speed_mps) < rest_mps) || seen.kind != RegionKind::visible ||
+        !ends_measured(seen, options.depth)) {
       return nullptr;
     }
-    const std::optional<Eigen::Vector2d> motion = detail::relative_velocity(seen, agent, options);
-    if (motion && motion->norm() > options.min_speed_mps) {
+    const std::optional<Eigen::Vector2d> motion =
+        detail::relative_velocity(seen, agent, options.depth, options.static_closing_ratio);
+    if (motion && motion->norm() > rest_mps) {
       return nullptr;
     }
-    const double ttc_s =
-        std::min(*seen.min_x_depth_m, *seen.max_x_depth_m) / options.margin_full_speed_mps;
+    const double ttc_s = std::min(*seen.min_x_depth_m, *seen.max_x_depth_m) /
+                         options.kept_width.margin_full_speed_mps;
     if (!(ttc_s <= options.horizon_s)) {
       return nullptr;
     }
@@ -255,14 +257,15 @@ class ThreatCones {
   // runs against 38. Without depths its outline is a guess from τ, and numerical flow's static
   // regions kept in the groups took DIS flow at 128² from 15 to 11 clean cases: it is left out.
   static bool passed_clear(const ObjectFeatures& object, const AgentState& agent,
-                           const AvoidanceOptions& options, double kept_width_m) {
+                           const ThreatOptions& options, double kept_width_m) {
     const std::optional<Eigen::Vector2d> velocity =
-        detail::relative_velocity(object, agent, options);
-    if (!detail::stands_still(object, agent, options) || !velocity) {
+        detail::relative_velocity(object, agent, options.depth, options.static_closing_ratio);
+    if (!detail::stands_still(object, agent, options.depth, options.static_closing_ratio) ||
+        !velocity) {
       return false;
     }
     detail::Outline outline;
-    detail::outline_of(object, agent, options, outline);
+    detail::outline_of(object, agent, options.depth, outline);
     const double radius_m = 0.5 * kept_width_m + options.static_clearance_m;
     detail::Contact contact;
     detail::outline_contact(outline, *velocity, radius_m, contact);
@@ -278,11 +281,11 @@ class ThreatCones {
 
 class ClearanceTerm final : public CostTerm {
  public:
-  explicit ClearanceTerm(const AvoidanceOptions& options) : options_(options) {}
+  explicit ClearanceTerm(const ClearanceOptions& options) : options_(options) {}
   std::string_view name() const override { return "clearance"; }
 
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
-    cones_.build(percept, agent, options_);
+    cones_.build(percept, agent, options_.threats);
     group_ends_.clear();
     for (std::size_t g = 0; g < cones_.groups().size(); ++g) {
       const int yielding = yield_end(static_cast<int>(g), agent);
@@ -306,7 +309,7 @@ class ClearanceTerm final : public CostTerm {
           separation_rate(cone.edge[end], cone.foe, tau_end, cone.tau_over_depth, agent.speed_mps);
       const double sign = (end == 0 ? 1.0 : -1.0) / cone.sigma[end];
       const Falloff phi = falloff(cone.clearance[end]);
-      const double importance = detail::importance(entry.contact_s, options_);
+      const double importance = detail::importance(entry.contact_s, options_.importance);
       accumulate(sum, detail::through_rate(importance * phi.value, importance * phi.slope * sign,
                                            importance * phi.curvature * sign * sign, separation));
     }
@@ -358,7 +361,9 @@ class ClearanceTerm final : public CostTerm {
       return 0.0;
     }
     if (taken->side != side) {
-      return std::abs(agent.speed_mps) < options_.min_speed_mps ? options_.rest_commit_s : 0.0;
+      return std::abs(agent.speed_mps) < options_.threats.depth.min_speed_mps
+                 ? options_.rest_commit_s
+                 : 0.0;
     }
     return std::max(0.0, taken->held_s - agent.period_s);
   }
@@ -374,16 +379,19 @@ class ClearanceTerm final : public CostTerm {
   // without it the speed over the ground is the depth-free guess's (MIG's τ v_c / Z), not a
   // measurement.
   int yield_end(int group, const AgentState& agent) const {
-    const double fast_mps = options_.yield_speed_ratio * options_.margin_full_speed_mps;
+    const ThreatOptions& threats = options_.threats;
+    const double fast_mps = options_.yield_speed_ratio * threats.kept_width.margin_full_speed_mps;
     const double stop_m = agent.speed_mps * agent.speed_mps / (2.0 * options_.stop_decel_mps2);
-    const double half_width_m = 0.5 * detail::kept_width(agent, options_);
+    const double half_width_m = 0.5 * detail::kept_width(agent, threats.kept_width);
     double across = 0.0;  // the yielded-to members' velocities across the course
     for (const ThreatCones::Entry& entry : cones_.entries()) {
       const ObjectFeatures& object = *entry.object;
-      const bool measured = ends_measured(object, options_);
+      const bool measured = ends_measured(object, threats.depth);
       const std::optional<Eigen::Vector2d> relative =
-          entry.group == group && measured && !detail::stands_still(object, agent, options_)
-              ? detail::relative_velocity(object, agent, options_)
+          entry.group == group && measured &&
+                  !detail::stands_still(object, agent, threats.depth, threats.static_closing_ratio)
+              ? detail::relative_velocity(object, agent, threats.depth,
+                                          threats.static_closing_ratio)
               : std::nullopt;
       if (!relative) {
         continue;
@@ -393,7 +401,7 @@ class ClearanceTerm final : public CostTerm {
         continue;
       }
       detail::Outline outline;
-      detail::outline_of(object, agent, options_, outline);
+      detail::outline_of(object, agent, threats.depth, outline);
       if (detail::distance_to_path_m(outline, ground, half_width_m) > stop_m) {
         across += ground.x();
       }
@@ -402,7 +410,7 @@ class ClearanceTerm final : public CostTerm {
     return across > 0.0 ? 0 : across < 0.0 ? 1 : -1;
   }
 
-  AvoidanceOptions options_;
+  ClearanceOptions options_;
   ThreatCones cones_;
   std::vector<int> group_ends_;
   detail::SideMemory sides_;
@@ -410,14 +418,14 @@ class ClearanceTerm final : public CostTerm {
 
 class BrakingTerm final : public CostTerm {
  public:
-  explicit BrakingTerm(const AvoidanceOptions& options) : options_(options) {}
+  explicit BrakingTerm(const BrakingOptions& options) : options_(options) {}
   std::string_view name() const override { return "braking"; }
 
   // ψ and the stopping speed are held constant in the gradient, as CGF §6.2 holds σ and I(τ):
   // v̇_c = a_c is all that moves. ψ is the object's group's: the FOE between two objects too
   // close to pass between is on course.
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
-    cones_.build(percept, agent, options_);
+    cones_.build(percept, agent, options_.threats);
     TermGradient sum;
     for (const ThreatCones::Entry& entry : cones_.entries()) {
       if (entry.passed_clear) {
@@ -426,7 +434,8 @@ class BrakingTerm final : public CostTerm {
       const ThreatCones::Group& group = cones_.groups()[static_cast<std::size_t>(entry.group)];
       const double on_course = std::min(1.0, falloff(group.best_clearance()).value);
       const double ahead_m = entry.cone.depth_at(entry.cone.foe);
-      const double room = std::max(0.0, ahead_m - 0.5 * detail::kept_width(agent, options_));
+      const double room =
+          std::max(0.0, ahead_m - 0.5 * detail::kept_width(agent, options_.threats.kept_width));
       const double stopping_speed = std::sqrt(2.0 * options_.stop_decel_mps2 * room);
       const double excess = agent.speed_mps - stopping_speed;
       if (excess > 0.0) {
@@ -437,7 +446,7 @@ class BrakingTerm final : public CostTerm {
   }
 
  private:
-  AvoidanceOptions options_;
+  BrakingOptions options_;
   ThreatCones cones_;
 };
 
@@ -458,7 +467,7 @@ class HeadingTerm final : public CostTerm {
 class ApproachSpeedTerm final : public CostTerm {
  public:
   ApproachSpeedTerm(double preferred_speed_mps, double max_turn_rate, double arrival_decel_mps2,
-                    const AvoidanceOptions& options)
+                    const ApproachSpeedOptions& options)
       : preferred_(preferred_speed_mps),
         turn_rate_(0.5 * max_turn_rate),
         arrival_decel_(arrival_decel_mps2),
@@ -490,14 +499,14 @@ class ApproachSpeedTerm final : public CostTerm {
   // again, a step at a time.
   double course_room_m(const Percept& percept, const AgentState& agent) const {
     double room_m = std::numeric_limits<double>::infinity();
-    if (!options_.use_depth) {
+    if (!options_.depth.use_depth) {
       return room_m;
     }
-    const double radius_m = 0.5 * detail::kept_width(agent, options_);
+    const double radius_m = 0.5 * detail::kept_width(agent, options_.kept_width);
     for (const ObjectFeatures& object : percept.objects) {
       if (object.kind == RegionKind::visible && object.min_x_depth_m && object.max_x_depth_m &&
-          !detail::is_threat(object, options_)) {
-        room_m = std::min(room_m, detail::course_room_m(object, agent, options_, radius_m));
+          !detail::is_threat(object, options_.horizon_s)) {
+        room_m = std::min(room_m, detail::course_room_m(object, agent, options_.depth, radius_m));
       }
     }
     return room_m;
@@ -506,19 +515,19 @@ class ApproachSpeedTerm final : public CostTerm {
   double preferred_;
   double turn_rate_;
   double arrival_decel_;
-  AvoidanceOptions options_;
+  ApproachSpeedOptions options_;
 };
 
 class LeaderGapTerm final : public CostTerm {
  public:
-  LeaderGapTerm(double gap_m, double gap_time_s, const AvoidanceOptions& options)
-      : gap_m_(gap_m), gap_time_s_(gap_time_s), options_(options) {}
+  LeaderGapTerm(double gap_m, double gap_time_s, const DepthGuess& depth)
+      : gap_m_(gap_m), gap_time_s_(gap_time_s), depth_(depth) {}
   std::string_view name() const override { return "leader_gap"; }
 
   // v_z = −Z/τ and v_x = f v_z from the leader's fit; a leader moving only sideways has v_z = 0.
   TermGradient evaluate(const Percept& percept, const AgentState&) override {
     const ObjectFeatures* leader = detail::find_leader(percept);
-    if (leader == nullptr || !options_.use_depth || !leader->depth_m) {
+    if (leader == nullptr || !depth_.use_depth || !leader->depth_m) {
       return {};
     }
     double vz = 0.0;
@@ -537,7 +546,7 @@ class LeaderGapTerm final : public CostTerm {
  private:
   double gap_m_;
   double gap_time_s_;
-  AvoidanceOptions options_;
+  DepthGuess depth_;
 };
 
 void require_positive(double value, const char* what) {
@@ -555,39 +564,70 @@ std::unique_ptr<CostTerm> heading_term() {
 
 std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate,
                                               double arrival_decel_mps2,
-                                              const AvoidanceOptions& options) {
+                                              const ApproachSpeedOptions& options) {
   if (!std::isfinite(preferred_speed_mps)) {
     throw std::invalid_argument("preferred speed must be finite");
   }
   require_positive(max_turn_rate, "approach speed: max_turn_rate");
   require_positive(arrival_decel_mps2, "approach speed: arrival_decel_mps2");
-  detail::validate(options);
+  detail::validate(options.kept_width, "approach_speed");
+  detail::validate(options.depth, "approach_speed");
+  detail::validate_horizon(options.horizon_s, "approach_speed");
+  detail::validate_stop_decel(options.stop_decel_mps2, "approach_speed");
   return std::make_unique<ApproachSpeedTerm>(preferred_speed_mps, max_turn_rate, arrival_decel_mps2,
                                              options);
 }
 
-std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options) {
-  detail::validate(options);
+std::unique_ptr<CostTerm> clearance_term(const ClearanceOptions& options) {
+  constexpr std::string_view kTerm = "clearance";
+  detail::validate(options.threats, kTerm);
+  detail::validate(options.importance, kTerm);
+  detail::validate_commit_band(options.commit_band, kTerm);
+  detail::require_option(
+      std::isfinite(options.rest_commit_s) && options.rest_commit_s >= 0.0, kTerm,
+      "rest_commit_s must be >= 0, got " + std::to_string(options.rest_commit_s));
+  detail::require_option(std::isfinite(options.passing_band) && options.passing_band >= 0.0, kTerm,
+                         "passing_band must be >= 0, got " + std::to_string(options.passing_band));
+  detail::require_option(
+      options.yield_speed_ratio > 0.0, kTerm,
+      "yield_speed_ratio must be positive, got " + std::to_string(options.yield_speed_ratio));
+  detail::validate_stop_decel(options.stop_decel_mps2, kTerm);
   return std::make_unique<ClearanceTerm>(options);
 }
 
-std::unique_ptr<CostTerm> braking_term(const AvoidanceOptions& options) {
-  detail::validate(options);
+std::unique_ptr<CostTerm> braking_term(const BrakingOptions& options) {
+  detail::validate(options.threats, "braking");
+  detail::validate_stop_decel(options.stop_decel_mps2, "braking");
   return std::make_unique<BrakingTerm>(options);
 }
 
 std::unique_ptr<CostTerm> leader_gap_term(double gap_m, double gap_time_s,
-                                          const AvoidanceOptions& options) {
-  detail::validate(options);
+                                          const DepthGuess& depth) {
+  detail::validate(depth, "leader_gap");
   if (!std::isfinite(gap_m) || gap_m < 0.0) {
     throw std::invalid_argument("leader gap must be >= 0, got " + std::to_string(gap_m));
   }
   require_positive(gap_time_s, "leader gap time");
-  return std::make_unique<LeaderGapTerm>(gap_m, gap_time_s, options);
+  return std::make_unique<LeaderGapTerm>(gap_m, gap_time_s, depth);
+}
+
+FlowsteerOptions flowsteer_options(const KeptWidth& kept_width, const DepthGuess& depth) {
+  FlowsteerOptions o;
+  o.approach_speed.kept_width = kept_width;
+  o.approach_speed.depth = depth;
+  o.clearance.threats.kept_width = kept_width;
+  o.clearance.threats.depth = depth;
+  o.braking.threats = o.clearance.threats;
+  o.anticipation.kept_width = kept_width;
+  o.anticipation.depth = depth;
+  o.dark.agent_width_m = kept_width.agent_width_m;
+  o.align = depth;
+  o.leader_gap = depth;
+  return o;
 }
 
 NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& w,
-                                           const AvoidanceOptions& avoidance) {
+                                           const FlowsteerOptions& options) {
   detail::require_weight(w.alpha, "alpha");
   detail::require_weight(w.beta, "beta");
   detail::require_weight(w.gamma, "gamma");
@@ -601,24 +641,23 @@ NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& w,
   NavigationFunction f;
   f.add(w.alpha, heading_term())
       .add(w.beta, approach_speed_term(w.preferred_speed_mps, w.max_turn_rate, w.arrival_decel_mps2,
-                                       avoidance))
-      .add(w.gamma, clearance_term(avoidance))
-      .add(w.braking, braking_term(avoidance))
-      .add(w.anticipation, anticipation_term(avoidance));
+                                       options.approach_speed))
+      .add(w.gamma, clearance_term(options.clearance))
+      .add(w.braking, braking_term(options.braking))
+      .add(w.anticipation, anticipation_term(options.anticipation));
   if (w.delta > 0.0) {
-    f.add(w.delta, dark_term(avoidance));
+    f.add(w.delta, dark_term(options.dark));
   }
   return f;
 }
 
-NavigationFunction flowsteer_following(const FlowsteerWeights& w,
-                                       const AvoidanceOptions& avoidance) {
+NavigationFunction flowsteer_following(const FlowsteerWeights& w, const FlowsteerOptions& options) {
   detail::require_weight(w.braking, "braking");
   NavigationFunction f;
-  f.add(w.alpha, align_term(avoidance))
-      .add(w.beta, leader_gap_term(w.follow_gap_m, w.gap_time_s, avoidance))
-      .add(w.gamma, clearance_term(avoidance))
-      .add(w.braking, braking_term(avoidance));
+  f.add(w.alpha, align_term(options.align))
+      .add(w.beta, leader_gap_term(w.follow_gap_m, w.gap_time_s, options.leader_gap))
+      .add(w.gamma, clearance_term(options.clearance))
+      .add(w.braking, braking_term(options.braking));
   return f;
 }
 

@@ -94,18 +94,19 @@ double distance_to_path_m(const Outline& outline, const Eigen::Vector2d& v, doub
 }
 
 std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
-                                                 const AgentState& agent,
-                                                 const AvoidanceOptions& options) {
+                                                 const AgentState& agent, const DepthGuess& depth,
+                                                 double static_closing_ratio) {
   // A static object moves relative to the agent by the agent's own speed. Z/τ from the region's
   // mean depth and its fitted τ is the speed of no one point of it: for a wall along the path,
   // whose fit leans on its near pixels, it was three times the agent's, and a wall's far end 9 m
   // ahead came within the horizon.
-  if (stands_still(object, agent, options) && object.has_foe() && std::isfinite(object.foe.x())) {
+  if (stands_still(object, agent, depth, static_closing_ratio) && object.has_foe() &&
+      std::isfinite(object.foe.x())) {
     const double vz = -agent.speed_mps;
     return Eigen::Vector2d{object.foe.x() * vz, vz};
   }
   if (object.has_foe() && std::isfinite(object.ttc_s) && std::isfinite(object.foe.x())) {
-    const double vz = -depth_scale(object, agent, options).depth_m / object.ttc_s;
+    const double vz = -depth_scale(object, agent, depth).depth_m / object.ttc_s;
     return Eigen::Vector2d{object.foe.x() * vz, vz};
   }
   if (object.status == MotionStatus::lateral && object.moments.mean_inv_depth &&
@@ -115,12 +116,12 @@ std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
   return std::nullopt;
 }
 
-void outline_of(const ObjectFeatures& object, const AgentState& agent,
-                const AvoidanceOptions& options, Outline& outline) {
-  const double depth = depth_scale(object, agent, options).depth_m;
-  const bool depths = options.use_depth && object.min_x_depth_m && object.max_x_depth_m;
-  const double left_m = depths ? *object.min_x_depth_m : depth;
-  const double right_m = depths ? *object.max_x_depth_m : depth;
+void outline_of(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
+                Outline& outline) {
+  const double depth_m = depth_scale(object, agent, depth).depth_m;
+  const bool depths = depth.use_depth && object.min_x_depth_m && object.max_x_depth_m;
+  const double left_m = depths ? *object.min_x_depth_m : depth_m;
+  const double right_m = depths ? *object.max_x_depth_m : depth_m;
   outline.count = 0;
   outline.points[outline.count++] = {object.min_x * left_m, left_m};
   if (depths && object.nearest_depth_m && object.nearest_x > object.min_x &&
@@ -131,12 +132,12 @@ void outline_of(const ObjectFeatures& object, const AgentState& agent,
   outline.points[outline.count++] = {object.max_x * right_m, right_m};
 }
 
-double course_room_m(const ObjectFeatures& object, const AgentState& agent,
-                     const AvoidanceOptions& options, double radius_m) {
+double course_room_m(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
+                     double radius_m) {
   // Further than the agent stops from at any speed it walks at.
   constexpr double kHiddenLength_m = 10.0;
   Outline outline;
-  outline_of(object, agent, options, outline);
+  outline_of(object, agent, depth, outline);
   // A cut end goes on along its segment's line.
   const auto extend = [&](bool cut, int end, int inner) {
     const Eigen::Vector2d out = outline.points[end] - outline.points[inner];

@@ -56,19 +56,19 @@ double distance_to_path_m(const Outline& outline, const Eigen::Vector2d& v, doub
 // stands still (stands_still); for lateral motion, the derotated flow u = V_x / Z gives V_x =
 // mean(u) / mean(1/Z). Nothing for an object without a usable fit.
 std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
-                                                 const AgentState& agent,
-                                                 const AvoidanceOptions& options);
+                                                 const AgentState& agent, const DepthGuess& depth,
+                                                 double static_closing_ratio);
 
 // The object's outline, (x Z, Z) at each point's depth; without depths, its two ends at the depth
 // its τ gives (depth_scale).
-void outline_of(const ObjectFeatures& object, const AgentState& agent,
-                const AvoidanceOptions& options, Outline& outline);
+void outline_of(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
+                Outline& outline);
 
 // How far the agent can walk straight on before it comes within R of the object, taken as
 // standing still; infinity if it never does. An end the image cuts is taken to go on along its
 // segment's line (a wall beside the agent, of which only the part ahead is in view). Within R
 // already, the distance until it comes nearer still (R taken at 0.99 of the distance now).
-double course_room_m(const ObjectFeatures& object, const AgentState& agent,
-                     const AvoidanceOptions& options, double radius_m);
+double course_room_m(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
+                     double radius_m);
 
 }  // namespace flowsteer::servo::detail

@@ -55,19 +55,20 @@ class SpeedTerm final : public CostTerm {
 
 class AvoidanceTerm final : public CostTerm {
  public:
-  explicit AvoidanceTerm(const AvoidanceOptions& options) : options_(options) {}
+  explicit AvoidanceTerm(const AvoidanceTermOptions& options) : options_(options) {}
   std::string_view name() const override { return "avoidance"; }
 
-  // CGF Eq. 9 and 10; the gradient sign follows docs/CONVENTIONS.md ("Signs"), not the printed Eq. 17.
+  // CGF Eq. 9 and 10; the gradient sign follows docs/CONVENTIONS.md ("Signs"), not the printed
+  // Eq. 17.
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {
-      if (!detail::is_threat(object, options_)) {
+      if (!detail::is_threat(object, options_.horizon_s)) {
         continue;
       }
       const double tau = object.ttc_s;
-      const double importance = detail::importance(tau, options_);
-      const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, options_);
+      const double importance = detail::importance(tau, options_.importance);
+      const auto [tau_over_depth, depth] = detail::depth_scale(object, agent, options_.depth);
       const double sigma = (object.width + options_.agent_width_m / depth) / kLn10;
       const double foe = object.foe.x();
       double centre = object.centre.x();
@@ -94,13 +95,13 @@ class AvoidanceTerm final : public CostTerm {
   }
 
  private:
-  AvoidanceOptions options_;
+  AvoidanceTermOptions options_;
   detail::SideMemory sides_;
 };
 
 class DarkTerm final : public CostTerm {
  public:
-  explicit DarkTerm(const AvoidanceOptions& options) : options_(options) {}
+  explicit DarkTerm(const DarkOptions& options) : options_(options) {}
   std::string_view name() const override { return "dark"; }
 
   // MIG Eq. 3. A dark region has no flow to fit; it is taken as static, so its FOE is straight
@@ -129,13 +130,13 @@ class DarkTerm final : public CostTerm {
   }
 
  private:
-  AvoidanceOptions options_;
+  DarkOptions options_;
   detail::SideMemory sides_;
 };
 
 class AlignTerm final : public CostTerm {
  public:
-  explicit AlignTerm(const AvoidanceOptions& options) : options_(options) {}
+  explicit AlignTerm(const DepthGuess& depth) : depth_(depth) {}
   std::string_view name() const override { return "align"; }
 
   // CGF Eq. 11 with Eq. 6 averaged over the leader's pixels: L = U², U = (Σ u_j)/N.
@@ -147,13 +148,13 @@ class AlignTerm final : public CostTerm {
     const FlowMoments& m = leader->moments;
     double mean_inv_depth = 0.0;
     double mean_x_inv_depth = 0.0;
-    if (options_.use_depth && m.mean_inv_depth && m.mean_x_inv_depth) {
+    if (depth_.use_depth && m.mean_inv_depth && m.mean_x_inv_depth) {
       mean_inv_depth = *m.mean_inv_depth;
       mean_x_inv_depth = *m.mean_x_inv_depth;
     } else if (leader->has_foe() && std::isfinite(leader->ttc_s)) {
       // τ v_c / Z = ratio, as for avoidance.
       mean_inv_depth =
-          options_.depth_free_ratio / (std::abs(leader->ttc_s) * floored_speed(agent, options_));
+          depth_.depth_free_ratio / (std::abs(leader->ttc_s) * floored_speed(agent, depth_));
       mean_x_inv_depth = leader->centre.x() * mean_inv_depth;
     }
     const double u = m.mean_u;
@@ -163,12 +164,12 @@ class AlignTerm final : public CostTerm {
   }
 
  private:
-  AvoidanceOptions options_;
+  DepthGuess depth_;
 };
 
 class LeaderSpeedTerm final : public CostTerm {
  public:
-  explicit LeaderSpeedTerm(const AvoidanceOptions& options) : options_(options) {}
+  explicit LeaderSpeedTerm(const DepthGuess& depth) : depth_(depth) {}
   std::string_view name() const override { return "leader_speed"; }
 
   // CGF Eq. 13 with v_z = −Z/τ. The printed Eq. 19 takes v_z = +Z/τ, which would speed the
@@ -176,7 +177,7 @@ class LeaderSpeedTerm final : public CostTerm {
   // is not observable from flow alone and the term is zero.
   TermGradient evaluate(const Percept& percept, const AgentState&) override {
     const ObjectFeatures* leader = find_leader(percept);
-    if (leader == nullptr || !options_.use_depth || !leader->depth_m) {
+    if (leader == nullptr || !depth_.use_depth || !leader->depth_m) {
       return {};
     }
     double vz = 0.0;
@@ -191,7 +192,7 @@ class LeaderSpeedTerm final : public CostTerm {
   }
 
  private:
-  AvoidanceOptions options_;
+  DepthGuess depth_;
 };
 
 }  // namespace
@@ -211,44 +212,67 @@ const ObjectFeatures* find_leader(const Percept& percept) {
   return nullptr;
 }
 
-void validate(const AvoidanceOptions& o) {
-  auto require = [](bool ok, const std::string& what) {
-    if (!ok) {
-      throw std::invalid_argument("avoidance options: " + what);
-    }
-  };
-  require(std::isfinite(o.agent_width_m) && o.agent_width_m >= 0.0,
-          "agent_width_m must be >= 0, got " + std::to_string(o.agent_width_m));
-  require(std::isfinite(o.horizon_s) && o.horizon_s > 0.0,
-          "horizon_s must be positive, got " + std::to_string(o.horizon_s));
-  require(std::isfinite(o.depth_free_ratio) && o.depth_free_ratio > 0.0,
-          "depth_free_ratio must be positive, got " + std::to_string(o.depth_free_ratio));
-  require(std::isfinite(o.min_speed_mps) && o.min_speed_mps > 0.0,
-          "min_speed_mps must be positive, got " + std::to_string(o.min_speed_mps));
-  require(std::isfinite(o.margin_m) && o.margin_m >= 0.0,
-          "margin_m must be >= 0, got " + std::to_string(o.margin_m));
-  require(std::isfinite(o.standing_margin_m) && o.standing_margin_m >= 0.0,
-          "standing_margin_m must be >= 0, got " + std::to_string(o.standing_margin_m));
-  require(std::isfinite(o.margin_full_speed_mps) && o.margin_full_speed_mps > 0.0,
-          "margin_full_speed_mps must be positive, got " + std::to_string(o.margin_full_speed_mps));
-  require(std::isfinite(o.importance_slope) && std::isfinite(o.importance_intercept),
-          "importance slope and intercept must be finite");
-  require(std::isfinite(o.commit_band) && o.commit_band >= 0.0,
-          "commit_band must be >= 0, got " + std::to_string(o.commit_band));
-  require(std::isfinite(o.rest_commit_s) && o.rest_commit_s >= 0.0,
-          "rest_commit_s must be >= 0, got " + std::to_string(o.rest_commit_s));
-  require(std::isfinite(o.passing_band) && o.passing_band >= 0.0,
-          "passing_band must be >= 0, got " + std::to_string(o.passing_band));
-  require(o.yield_speed_ratio > 0.0,
-          "yield_speed_ratio must be positive, got " + std::to_string(o.yield_speed_ratio));
-  require(std::isfinite(o.stop_decel_mps2) && o.stop_decel_mps2 > 0.0,
-          "stop_decel_mps2 must be positive, got " + std::to_string(o.stop_decel_mps2));
-  require(std::isfinite(o.anticipation_s) && o.anticipation_s > 0.0,
-          "anticipation_s must be positive, got " + std::to_string(o.anticipation_s));
-  require(o.static_clearance_m >= 0.0,
-          "static_clearance_m must be >= 0, got " + std::to_string(o.static_clearance_m));
-  require(o.static_closing_ratio > 0.0,
-          "static_closing_ratio must be > 0, got " + std::to_string(o.static_closing_ratio));
+void require_option(bool ok, std::string_view term, const std::string& what) {
+  if (!ok) {
+    throw std::invalid_argument(std::string(term) + " options: " + what);
+  }
+}
+
+void validate_agent_width(double agent_width_m, std::string_view term) {
+  require_option(std::isfinite(agent_width_m) && agent_width_m >= 0.0, term,
+                 "agent_width_m must be >= 0, got " + std::to_string(agent_width_m));
+}
+
+void validate(const KeptWidth& o, std::string_view term) {
+  validate_agent_width(o.agent_width_m, term);
+  require_option(std::isfinite(o.margin_m) && o.margin_m >= 0.0, term,
+                 "margin_m must be >= 0, got " + std::to_string(o.margin_m));
+  require_option(std::isfinite(o.standing_margin_m) && o.standing_margin_m >= 0.0, term,
+                 "standing_margin_m must be >= 0, got " + std::to_string(o.standing_margin_m));
+  require_option(
+      std::isfinite(o.margin_full_speed_mps) && o.margin_full_speed_mps > 0.0, term,
+      "margin_full_speed_mps must be positive, got " + std::to_string(o.margin_full_speed_mps));
+}
+
+void validate(const Importance& o, std::string_view term) {
+  require_option(std::isfinite(o.slope) && std::isfinite(o.intercept), term,
+                 "importance slope and intercept must be finite");
+}
+
+void validate(const DepthGuess& o, std::string_view term) {
+  require_option(std::isfinite(o.depth_free_ratio) && o.depth_free_ratio > 0.0, term,
+                 "depth_free_ratio must be positive, got " + std::to_string(o.depth_free_ratio));
+  require_option(std::isfinite(o.min_speed_mps) && o.min_speed_mps > 0.0, term,
+                 "min_speed_mps must be positive, got " + std::to_string(o.min_speed_mps));
+}
+
+void validate(const ThreatOptions& o, std::string_view term) {
+  validate(o.kept_width, term);
+  validate(o.depth, term);
+  validate_horizon(o.horizon_s, term);
+  require_option(o.static_clearance_m >= 0.0, term,
+                 "static_clearance_m must be >= 0, got " + std::to_string(o.static_clearance_m));
+  validate_static_closing(o.static_closing_ratio, term);
+}
+
+void validate_horizon(double horizon_s, std::string_view term) {
+  require_option(std::isfinite(horizon_s) && horizon_s > 0.0, term,
+                 "horizon_s must be positive, got " + std::to_string(horizon_s));
+}
+
+void validate_commit_band(double commit_band, std::string_view term) {
+  require_option(std::isfinite(commit_band) && commit_band >= 0.0, term,
+                 "commit_band must be >= 0, got " + std::to_string(commit_band));
+}
+
+void validate_stop_decel(double stop_decel_mps2, std::string_view term) {
+  require_option(std::isfinite(stop_decel_mps2) && stop_decel_mps2 > 0.0, term,
+                 "stop_decel_mps2 must be positive, got " + std::to_string(stop_decel_mps2));
+}
+
+void validate_static_closing(double static_closing_ratio, std::string_view term) {
+  require_option(static_closing_ratio > 0.0, term,
+                 "static_closing_ratio must be > 0, got " + std::to_string(static_closing_ratio));
 }
 
 void require_weight(double value, const char* name) {
@@ -262,6 +286,9 @@ void require_weight(double value, const char* name) {
 
 using detail::require_weight;
 using detail::validate;
+using detail::validate_agent_width;
+using detail::validate_commit_band;
+using detail::validate_horizon;
 
 std::unique_ptr<CostTerm> goal_term() {
   return std::make_unique<GoalTerm>();
@@ -274,24 +301,29 @@ std::unique_ptr<CostTerm> speed_term(double preferred_speed_mps) {
   return std::make_unique<SpeedTerm>(preferred_speed_mps);
 }
 
-std::unique_ptr<CostTerm> avoidance_term(const AvoidanceOptions& options) {
-  validate(options);
+std::unique_ptr<CostTerm> avoidance_term(const AvoidanceTermOptions& options) {
+  validate_agent_width(options.agent_width_m, "avoidance");
+  validate(options.importance, "avoidance");
+  validate_horizon(options.horizon_s, "avoidance");
+  validate(options.depth, "avoidance");
+  validate_commit_band(options.commit_band, "avoidance");
   return std::make_unique<AvoidanceTerm>(options);
 }
 
-std::unique_ptr<CostTerm> dark_term(const AvoidanceOptions& options) {
-  validate(options);
+std::unique_ptr<CostTerm> dark_term(const DarkOptions& options) {
+  validate_agent_width(options.agent_width_m, "dark");
+  validate_commit_band(options.commit_band, "dark");
   return std::make_unique<DarkTerm>(options);
 }
 
-std::unique_ptr<CostTerm> align_term(const AvoidanceOptions& options) {
-  validate(options);
-  return std::make_unique<AlignTerm>(options);
+std::unique_ptr<CostTerm> align_term(const DepthGuess& depth) {
+  validate(depth, "align");
+  return std::make_unique<AlignTerm>(depth);
 }
 
-std::unique_ptr<CostTerm> leader_speed_term(const AvoidanceOptions& options) {
-  validate(options);
-  return std::make_unique<LeaderSpeedTerm>(options);
+std::unique_ptr<CostTerm> leader_speed_term(const DepthGuess& depth) {
+  validate(depth, "leader_speed");
+  return std::make_unique<LeaderSpeedTerm>(depth);
 }
 
 NavigationFunction& NavigationFunction::add(double weight, std::unique_ptr<CostTerm> term) {
@@ -317,7 +349,7 @@ TermGradient NavigationFunction::evaluate(const Percept& percept, const AgentSta
   return total;
 }
 
-NavigationFunction goal_reaching(const GoalReachingWeights& w, const AvoidanceOptions& avoidance) {
+NavigationFunction goal_reaching(const GoalReachingWeights& w, const PapersOptions& options) {
   require_weight(w.alpha, "alpha");
   require_weight(w.beta, "beta");
   require_weight(w.gamma, "gamma");
@@ -330,18 +362,18 @@ NavigationFunction goal_reaching(const GoalReachingWeights& w, const AvoidanceOp
   NavigationFunction f;
   f.add(w.alpha, goal_term())
       .add(w.beta, speed_term(w.preferred_speed_mps))
-      .add(w.gamma, avoidance_term(avoidance));
+      .add(w.gamma, avoidance_term(options.avoidance));
   if (w.delta > 0.0) {
-    f.add(w.delta, dark_term(avoidance));
+    f.add(w.delta, dark_term(options.dark));
   }
   return f;
 }
 
-NavigationFunction following(const FollowingWeights& w, const AvoidanceOptions& avoidance) {
+NavigationFunction following(const FollowingWeights& w, const PapersOptions& options) {
   NavigationFunction f;
-  f.add(w.alpha, align_term(avoidance))
-      .add(w.beta, leader_speed_term(avoidance))
-      .add(w.gamma, avoidance_term(avoidance));
+  f.add(w.alpha, align_term(options.align))
+      .add(w.beta, leader_speed_term(options.leader_speed))
+      .add(w.gamma, avoidance_term(options.avoidance));
   return f;
 }
 

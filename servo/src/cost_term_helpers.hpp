@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -46,30 +48,30 @@ inline void accumulate(TermGradient& sum, const TermGradient& g, double weight =
   sum.curvature_turn += weight * g.curvature_turn;
 }
 
-inline double floored_speed(const AgentState& agent, const AvoidanceOptions& options) {
-  return std::max(std::abs(agent.speed_mps), options.min_speed_mps);
+inline double floored_speed(const AgentState& agent, const DepthGuess& depth) {
+  return std::max(std::abs(agent.speed_mps), depth.min_speed_mps);
 }
 
 // The width the flowsteer law's terms keep clear: the agent's own and its speed's share of the
 // margin, at least its standing part.
-inline double kept_width(const AgentState& agent, const AvoidanceOptions& options) {
+inline double kept_width(const AgentState& agent, const KeptWidth& options) {
   const double share = std::min(1.0, std::abs(agent.speed_mps) / options.margin_full_speed_mps);
   return options.agent_width_m +
          std::max(std::min(options.standing_margin_m, options.margin_m), options.margin_m * share);
 }
 
-// τ/Z of an approaching object and its depth: from the object's depth where the options use it
+// τ/Z of an approaching object and its depth: from the object's depth where the term uses it
 // and it has one, else from the depth-free guess τ v_c / Z = depth_free_ratio (MIG §7.1).
 struct DepthScale {
   double tau_over_depth;
   double depth_m;
 };
 inline DepthScale depth_scale(const ObjectFeatures& object, const AgentState& agent,
-                              const AvoidanceOptions& options) {
-  if (options.use_depth && object.depth_m && *object.depth_m > 0.0) {
+                              const DepthGuess& depth) {
+  if (depth.use_depth && object.depth_m && *object.depth_m > 0.0) {
     return {object.ttc_s / *object.depth_m, *object.depth_m};
   }
-  const double tau_over_depth = options.depth_free_ratio / floored_speed(agent, options);
+  const double tau_over_depth = depth.depth_free_ratio / floored_speed(agent, depth);
   return {tau_over_depth, object.ttc_s / tau_over_depth};
 }
 
@@ -80,35 +82,44 @@ inline DepthScale depth_scale(const ObjectFeatures& object, const AgentState& ag
 // Not with a camera's depth from the ground: numerical flow's τ errs by more than the ratio
 // allows, walls came out moving, and DIS flow lost.
 inline bool stands_still(const ObjectFeatures& object, const AgentState& agent,
-                         const AvoidanceOptions& options) {
+                         const DepthGuess& depth, double static_closing_ratio) {
   if (!object.fit.static_foe) {
     return false;
   }
   const std::optional<double>& nearest_m = object.nearest_depth_m;
   // An agent at rest or nearly sees no expansion from what stands still to measure this by.
-  if (!options.use_depth || !object.depth_m || !nearest_m || !std::isfinite(object.ttc_s) ||
-      std::abs(agent.speed_mps) < options.min_speed_mps) {
+  if (!depth.use_depth || !object.depth_m || !nearest_m || !std::isfinite(object.ttc_s) ||
+      std::abs(agent.speed_mps) < depth.min_speed_mps) {
     return true;
   }
   // Infinity times a τ of 0 is NaN: still standing.
-  return !(options.static_closing_ratio * std::abs(agent.speed_mps) * object.ttc_s < *nearest_m);
+  return !(static_closing_ratio * std::abs(agent.speed_mps) * object.ttc_s < *nearest_m);
 }
 
 // An object the avoidance terms weigh: visible, approaching within the horizon, fitted.
-inline bool is_threat(const ObjectFeatures& object, const AvoidanceOptions& options) {
+inline bool is_threat(const ObjectFeatures& object, double horizon_s) {
   return object.kind == RegionKind::visible && object.status == MotionStatus::approaching &&
-         object.ttc_s <= options.horizon_s && object.foe.allFinite() && object.centre.allFinite();
+         object.ttc_s <= horizon_s && object.foe.allFinite() && object.centre.allFinite();
 }
 
 // I(τ) of CGF Eq. 9.
-inline double importance(double ttc_s, const AvoidanceOptions& options) {
-  return std::max(0.0, options.importance_slope * ttc_s + options.importance_intercept);
+inline double importance(double ttc_s, const Importance& importance) {
+  return std::max(0.0, importance.slope * ttc_s + importance.intercept);
 }
 
 // The leader's features: the visible object of percept.leader_id with valid flow, if seen.
 const ObjectFeatures* find_leader(const Percept& percept);
-// Throws std::invalid_argument naming the option that is out of range.
-void validate(const AvoidanceOptions& options);
+// Each throws std::invalid_argument "<term> options: ..." naming the option that is out of range.
+void require_option(bool ok, std::string_view term, const std::string& what);
+void validate_agent_width(double agent_width_m, std::string_view term);
+void validate(const KeptWidth& options, std::string_view term);
+void validate(const Importance& options, std::string_view term);
+void validate(const DepthGuess& options, std::string_view term);
+void validate(const ThreatOptions& options, std::string_view term);
+void validate_horizon(double horizon_s, std::string_view term);
+void validate_commit_band(double commit_band, std::string_view term);
+void validate_stop_decel(double stop_decel_mps2, std::string_view term);
+void validate_static_closing(double static_closing_ratio, std::string_view term);
 // Throws std::invalid_argument for a negative or non-finite weight.
 void require_weight(double value, const char* name);
 

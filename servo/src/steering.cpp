@@ -75,29 +75,36 @@ std::optional<Enum> value_of(const std::array<std::pair<Enum, std::string_view>,
   return std::nullopt;
 }
 
-// The avoidance options' part of LawMechanism; the weights, the speed limit and the step are
+// The terms' part of LawMechanism; the weights, the speed limit and the step are
 // make_controller's.
-void disable(LawMechanism mechanism, AvoidanceOptions& avoidance) {
+void disable(LawMechanism mechanism, FlowsteerOptions& o) {
   constexpr double kNever = std::numeric_limits<double>::infinity();
   switch (mechanism) {
     case LawMechanism::passing_convention:
-      avoidance.passing_side = PassingSide::none;
+      o.clearance.passing_side = PassingSide::none;
       break;
     case LawMechanism::commitment:
-      avoidance.commit_band = 0.0;
-      avoidance.rest_commit_s = 0.0;
+      o.clearance.commit_band = 0.0;
+      o.clearance.rest_commit_s = 0.0;
+      o.dark.commit_band = 0.0;
       break;
     case LawMechanism::passed_clear:
-      avoidance.static_clearance_m = kNever;
+      o.clearance.threats.static_clearance_m = kNever;
+      o.braking.threats.static_clearance_m = kNever;
       break;
     case LawMechanism::giving_way:
-      avoidance.yield_speed_ratio = kNever;
+      o.clearance.yield_speed_ratio = kNever;
       break;
     case LawMechanism::proportional_margin:
-      avoidance.standing_margin_m = avoidance.margin_m;
+      for (KeptWidth* kept : {&o.approach_speed.kept_width, &o.clearance.threats.kept_width,
+                              &o.braking.threats.kept_width, &o.anticipation.kept_width}) {
+        kept->standing_margin_m = kept->margin_m;
+      }
       break;
     case LawMechanism::static_closing:
-      avoidance.static_closing_ratio = kNever;
+      o.clearance.threats.static_closing_ratio = kNever;
+      o.braking.threats.static_closing_ratio = kNever;
+      o.anticipation.static_closing_ratio = kNever;
       break;
     case LawMechanism::none:
     case LawMechanism::braking:
@@ -106,6 +113,32 @@ void disable(LawMechanism mechanism, AvoidanceOptions& avoidance) {
     case LawMechanism::implicit_step:
       break;
   }
+}
+
+// The flowsteer law's terms for a config: they keep the agent's width and the margin in
+// proportion to its speed, in full from full_speed_mps on; the mechanism switched off is off.
+FlowsteerOptions flowsteer_terms(const ControllerConfig& c, double agent_width_m,
+                                 double full_speed_mps) {
+  KeptWidth kept;
+  kept.agent_width_m = agent_width_m;
+  kept.margin_m = c.clearance_margin_m;
+  kept.margin_full_speed_mps = full_speed_mps;
+  DepthGuess depth;
+  depth.use_depth = c.use_depth;
+  FlowsteerOptions options = flowsteer_options(kept, depth);
+  disable(c.without, options);
+  return options;
+}
+
+// The papers' law's terms for a config: the margin is part of the agent's width (CGF §6.2).
+PapersOptions papers_terms(const ControllerConfig& c, double agent_width_m) {
+  PapersOptions o;
+  o.avoidance.agent_width_m = agent_width_m + c.clearance_margin_m;
+  o.avoidance.depth.use_depth = c.use_depth;
+  o.dark.agent_width_m = o.avoidance.agent_width_m;
+  o.align.use_depth = c.use_depth;
+  o.leader_speed.use_depth = c.use_depth;
+  return o;
 }
 
 }  // namespace
@@ -188,21 +221,17 @@ NavigationWeights navigation_weights(const ControllerConfig& c) {
 
 Controller make_controller(const ControllerConfig& c, double agent_width_m,
                            double preferred_speed_mps) {
-  AvoidanceOptions avoidance;
-  avoidance.agent_width_m = agent_width_m + c.clearance_margin_m;
-  avoidance.use_depth = c.use_depth;
   ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
   const NavigationWeights w = navigation_weights(c);
   if (c.law == NavigationLaw::flowsteer) {
-    // The flowsteer law keeps the margin in proportion to the agent's speed.
-    avoidance.agent_width_m = agent_width_m;
-    avoidance.margin_m = c.clearance_margin_m;
-    avoidance.margin_full_speed_mps = std::max(preferred_speed_mps, avoidance.min_speed_mps);
+    // The margin is in full from the preferred speed on, or from the speed below which the terms
+    // take the agent as at rest.
+    const double full_speed_mps = std::max(preferred_speed_mps, DepthGuess{}.min_speed_mps);
     // A follower keeps its leader's pace.
     if (c.kind == NavigationKind::goal_reaching && c.without != LawMechanism::speed_limit) {
-      limits.max_speed_mps = c.max_speed_ratio * avoidance.margin_full_speed_mps;
+      limits.max_speed_mps = c.max_speed_ratio * full_speed_mps;
     }
-    disable(c.without, avoidance);
+    const FlowsteerOptions options = flowsteer_terms(c, agent_width_m, full_speed_mps);
     FlowsteerWeights weights;
     weights.alpha = w.alpha;
     weights.beta = w.beta;
@@ -214,17 +243,18 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
     weights.max_turn_rate = c.max_turn_rate;
     weights.follow_gap_m = c.follow_gap_m;
     return Controller(c.kind == NavigationKind::following
-                          ? flowsteer_following(weights, avoidance)
-                          : flowsteer_goal_reaching(weights, avoidance),
+                          ? flowsteer_following(weights, options)
+                          : flowsteer_goal_reaching(weights, options),
                       c.lambda, limits,
                       c.without == LawMechanism::implicit_step ? GradientStep::explicit_euler
                                                                : GradientStep::implicit_euler);
   }
+  const PapersOptions options = papers_terms(c, agent_width_m);
   if (c.kind == NavigationKind::following) {
-    return Controller(following({w.alpha, w.beta, w.gamma}, avoidance), c.lambda, limits);
+    return Controller(following({w.alpha, w.beta, w.gamma}, options), c.lambda, limits);
   }
   const GoalReachingWeights weights{w.alpha, w.beta, w.gamma, w.delta, preferred_speed_mps};
-  return Controller(goal_reaching(weights, avoidance), c.lambda, limits);
+  return Controller(goal_reaching(weights, options), c.lambda, limits);
 }
 
 }  // namespace flowsteer::servo

@@ -45,8 +45,8 @@ ObjectFeatures features(const test::TwoBody& s) {
 
 TermGradient evaluate(const ObjectFeatures& object, const test::TwoBody& s,
                       std::optional<double> goal_distance_m = std::nullopt) {
-  AvoidanceOptions options;
-  options.agent_width_m = 0.8;
+  AnticipationOptions options;
+  options.kept_width.agent_width_m = 0.8;
   const std::vector<ObjectFeatures> objects = {object};
   return anticipation_term(options)->evaluate({objects, {}, goal_distance_m, {}}, {s.agent_speed});
 }

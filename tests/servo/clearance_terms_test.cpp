@@ -30,11 +30,14 @@ ObjectFeatures point_object(const test::TwoBody& s, std::int32_t id = 1) {
   return o;
 }
 
-AvoidanceOptions options_without_convention(double agent_width_m) {
-  AvoidanceOptions options;
-  options.agent_width_m = agent_width_m;
-  options.passing_side = PassingSide::none;
+// The law for an agent agent_width_m wide without a margin that prefers no side to pass on.
+FlowsteerOptions law_without_convention(double agent_width_m) {
+  FlowsteerOptions options = flowsteer_options({.agent_width_m = agent_width_m});
+  options.clearance.passing_side = PassingSide::none;
   return options;
+}
+ClearanceOptions options_without_convention(double agent_width_m) {
+  return law_without_convention(agent_width_m).clearance;
 }
 
 // ∂L̇/∂ω and ∂L̇/∂a_c of `cost` along the simulation, by finite differences.
@@ -105,7 +108,7 @@ TEST(ClearanceBehaviour, AStaticObstacleJustRightOfTheHeadingTurnsLeft) {
   test::TwoBody s;
   s.point = {4.0, -0.3};
   const std::vector<ObjectFeatures> objects = {point_object(s)};
-  Controller c(flowsteer_goal_reaching({}, options_without_convention(1.0)), 1.0, {10.0, 10.0});
+  Controller c(flowsteer_goal_reaching({}, law_without_convention(1.0)), 1.0, {10.0, 10.0});
   EXPECT_LT(c.step({objects, 0.0, 10.0, {}}, {1.0}).command.turn_rate, 0.0);
 }
 
@@ -114,12 +117,11 @@ TEST(ClearanceBehaviour, KeepingRightTurnsRightForAPersonMetHeadOn) {
   s.point = {6.0, 0.0};
   s.point_velocity = {-1.0, 0.0};
   const std::vector<ObjectFeatures> objects = {point_object(s)};
-  AvoidanceOptions keep_right;
-  keep_right.agent_width_m = 1.0;
+  const FlowsteerOptions keep_right = flowsteer_options({.agent_width_m = 1.0});
   Controller right(flowsteer_goal_reaching({}, keep_right), 1.0, {10.0, 10.0});
   EXPECT_GT(right.step({objects, 0.0, 20.0, {}}, {1.0}).command.turn_rate, 0.0);
-  AvoidanceOptions keep_left = keep_right;
-  keep_left.passing_side = PassingSide::keep_left;
+  FlowsteerOptions keep_left = keep_right;
+  keep_left.clearance.passing_side = PassingSide::keep_left;
   Controller left(flowsteer_goal_reaching({}, keep_left), 1.0, {10.0, 10.0});
   EXPECT_LT(left.step({objects, 0.0, 20.0, {}}, {1.0}).command.turn_rate, 0.0);
 }
@@ -171,9 +173,9 @@ TEST(ClearanceBehaviour, ASlowAgentKeepsLessRoom) {
   test::TwoBody s;
   s.point = {3.0, -0.7};
   const std::vector<ObjectFeatures> objects = {point_object(s)};
-  AvoidanceOptions options = options_without_convention(0.6);
-  options.margin_m = 0.5;
-  options.margin_full_speed_mps = 1.0;
+  ClearanceOptions options = options_without_convention(0.6);
+  options.threats.kept_width.margin_m = 0.5;
+  options.threats.kept_width.margin_full_speed_mps = 1.0;
   const auto term = clearance_term(options);
   const double walking = term->evaluate({objects, {}, {}, {}}, {1.0}).cost;
   const double stepping = term->evaluate({objects, {}, {}, {}}, {0.2}).cost;
@@ -205,7 +207,7 @@ ObjectFeatures wall_along_the_path(double right_m) {
 // could turn into the path, and its cost's tail would still push.
 TEST(ClearanceBehaviour, AStaticObjectTheCoursePassesClearOfIsLeftOut) {
   ObjectFeatures wall = wall_along_the_path(1.5);
-  const AvoidanceOptions options = options_without_convention(1.0);
+  const ClearanceOptions options = options_without_convention(1.0);
   auto cost = [&](const ObjectFeatures& object) {
     const std::vector<ObjectFeatures> objects = {object};
     return clearance_term(options)->evaluate({objects, {}, {}, {}}, {1.0}).cost;
@@ -257,7 +259,7 @@ ObjectFeatures crossing_car(double near_side_m, double agent_speed_mps) {
 
 TEST(ClearanceBehaviour, ACarCrossingThePathIsPassedBehind) {
   const std::vector<ObjectFeatures> objects = {crossing_car(4.1, 1.0)};
-  AvoidanceOptions options = options_without_convention(0.6);
+  ClearanceOptions options = options_without_convention(0.6);
   const TermGradient yielding = clearance_term(options)->evaluate({objects, {}, {}, {}}, {1.0});
   options.yield_speed_ratio = std::numeric_limits<double>::infinity();
   const TermGradient by_the_gaps = clearance_term(options)->evaluate({objects, {}, {}, {}}, {1.0});
@@ -270,7 +272,7 @@ TEST(ClearanceBehaviour, ACarCrossingThePathIsPassedBehind) {
 // leave it standing in the lane: it passes as it would anything else, here in front. At 0.5 m/s
 // it stops in 0.25 m and gives way.
 TEST(ClearanceBehaviour, ACarIsNotYieldedToWhereTheAgentCannotStopShortOfItsPath) {
-  AvoidanceOptions options = options_without_convention(0.6);
+  ClearanceOptions options = options_without_convention(0.6);
   const auto yielding = clearance_term(options);
   options.yield_speed_ratio = std::numeric_limits<double>::infinity();
   const auto by_the_gaps = clearance_term(options);
@@ -287,7 +289,7 @@ TEST(BrakingGradient, MatchesSimulation) {
   test::TwoBody s;  // a static obstacle 2 m ahead on course, the agent at 1.3 m/s
   s.point = {2.0, 0.0};
   s.agent_speed = 1.3;
-  AvoidanceOptions options = options_without_convention(1.0);
+  const BrakingOptions options = law_without_convention(1.0).braking;
   const double stopping_speed = std::sqrt(2.0 * options.stop_decel_mps2 * (2.0 - 0.5));
   auto cost = [&](const test::TwoBody& b) {
     const double excess = std::max(0.0, b.agent_speed - stopping_speed);
@@ -316,7 +318,7 @@ TEST(BrakingBehaviour, AWallMetHeadOnStopsTheAgentShortOfIt) {
   FlowsteerWeights at_preferred_speed;
   at_preferred_speed.preferred_speed_mps = 1.3;
   at_preferred_speed.anticipation = 0.0;  // which brakes for the wall too, by its own measure
-  Controller c(flowsteer_goal_reaching(at_preferred_speed, options_without_convention(1.0)), 1.0,
+  Controller c(flowsteer_goal_reaching(at_preferred_speed, law_without_convention(1.0)), 1.0,
                {1.0, 1.0});
   // From 1.3 m/s it stops 1 m on at 0.5 m/s² only from 1 m/s: brake by ε (1.3 − 1.0).
   const ControlOutput out = c.step({objects, 0.0, 10.0, {}}, {1.3});
@@ -389,17 +391,17 @@ ObjectFeatures standing_object(Eigen::Vector2d left, Eigen::Vector2d right) {
 
 // The agent 0.6 m wide with a margin of 0.5 m, of which 0.1 m kept at rest: it keeps 0.35 m
 // from its centre while it stands.
-AvoidanceOptions walker_options() {
-  AvoidanceOptions options = options_without_convention(0.6);
-  options.margin_m = 0.5;
-  options.margin_full_speed_mps = 1.3;
+FlowsteerOptions walker_law() {
+  FlowsteerOptions options =
+      flowsteer_options({.agent_width_m = 0.6, .margin_m = 0.5, .margin_full_speed_mps = 1.3});
+  options.clearance.passing_side = PassingSide::none;
   return options;
 }
 
 // At rest and facing a wall 0.5 m ahead, it may only set off at the speed it stops from within
 // the 0.15 m left: a target of 0 against the wall would hold it there.
 TEST(ApproachSpeedBehaviour, SetsOffNoFasterThanItStopsShortOfAStandingWall) {
-  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_options());
+  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_law().approach_speed);
   ObjectFeatures wall = standing_object({-0.5, 0.5}, {0.5, 0.5});
   wall.cut_left = wall.cut_right = true;
   const std::vector<ObjectFeatures> objects = {wall};
@@ -408,7 +410,7 @@ TEST(ApproachSpeedBehaviour, SetsOffNoFasterThanItStopsShortOfAStandingWall) {
 }
 
 TEST(ApproachSpeedBehaviour, AStandingWallAlongTheCourseDoesNotSlowIt) {
-  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_options());
+  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_law().approach_speed);
   const std::vector<ObjectFeatures> objects = {standing_object({1.0, 10.0}, {1.0, 1.0})};
   EXPECT_NEAR(term->evaluate({objects, 0.0, 10.0, {}}, {0.0}).per_accel, -1.3, 1e-12);
 }
@@ -424,7 +426,7 @@ TEST(ApproachSpeedBehaviour, AWallCutByTheImageGoesOnBesideTheAgent) {
     return Eigen::Vector2d{(distance - z * normal.y()) / normal.x(), z};
   };
   ObjectFeatures wall = standing_object(on_wall(5.0), on_wall(1.0));
-  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_options());
+  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_law().approach_speed);
   auto target = [&](const ObjectFeatures& object) {
     const std::vector<ObjectFeatures> objects = {object};
     return -term->evaluate({objects, 0.0, 10.0, {}}, {0.0}).per_accel;
@@ -443,7 +445,7 @@ TEST(ApproachSpeedBehaviour, ABuildingSeenAtItsCornerIsTouchedAtTheCorner) {
   ObjectFeatures building = standing_object({0.2, 8.0}, {3.0, 1.2});
   building.nearest_x = 0.2 / 1.2;
   building.nearest_depth_m = 1.2;
-  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_options());
+  const auto term = approach_speed_term(1.3, 1.0, 0.5, walker_law().approach_speed);
   auto target = [&](const ObjectFeatures& object) {
     const std::vector<ObjectFeatures> objects = {object};
     return -term->evaluate({objects, 0.0, 10.0, {}}, {0.0}).per_accel;
@@ -458,10 +460,10 @@ TEST(ApproachSpeedBehaviour, ABuildingSeenAtItsCornerIsTouchedAtTheCorner) {
 // will see them once it walks, and turns to pass them on their right, the nearer way round.
 TEST(ClearanceBehaviour, AnAgentAtRestTurnsToPassSomeoneStandingInItsWay) {
   const std::vector<ObjectFeatures> objects = {standing_object({-0.35, 0.5}, {0.15, 0.5})};
-  const auto term = clearance_term(walker_options());
+  const auto term = clearance_term(walker_law().clearance);
   const TermGradient at_rest = term->evaluate({objects, 0.0, 10.0, {}}, {0.0});
   EXPECT_GT(at_rest.cost, 0.0);
-  Controller c(flowsteer_goal_reaching({}, walker_options()), 1.0, {1.0, 1.0});
+  Controller c(flowsteer_goal_reaching({}, walker_law()), 1.0, {1.0, 1.0});
   EXPECT_GT(c.step({objects, 0.0, 10.0, {}}, {0.0}).command.turn_rate, 0.0);
   // Walking, an object that shows no flow is not in the way. At rest, one further than half the
   // kept width and static_clearance_m is not either: nothing touches an agent that stands (the
@@ -486,7 +488,7 @@ TEST(ClearanceBehaviour, AnAgentAtRestKeepsTheEndItChoseWhenTurningTakesAWallOut
   auto turns = [&](CostTerm& term, const std::vector<ObjectFeatures>& objects) {
     return -term.evaluate({objects, 0.0, 10.0, {}}, at_rest).per_turn;  // ω's sign
   };
-  AvoidanceOptions options = walker_options();
+  ClearanceOptions options = walker_law().clearance;
   const auto term = clearance_term(options);
   EXPECT_GT(turns(*term, alone), 0.0);
   EXPECT_LT(turns(*term, with_wall), 0.0);
@@ -515,7 +517,7 @@ TEST(ClearanceBehaviour, AnObjectClosingInFasterThanTheAgentWalksIsNotTakenAsSta
   person.status = MotionStatus::approaching;
   person.foe = {0.0, 0.0};
   person.fit.static_foe = true;
-  AvoidanceOptions options = options_without_convention(1.0);
+  ClearanceOptions options = options_without_convention(1.0);
   auto cost = [&](double ttc_s) {
     person.ttc_s = ttc_s;
     const std::vector<ObjectFeatures> objects = {person};
@@ -523,7 +525,7 @@ TEST(ClearanceBehaviour, AnObjectClosingInFasterThanTheAgentWalksIsNotTakenAsSta
   };
   EXPECT_EQ(cost(3.0), 0.0);
   EXPECT_GT(cost(1.5), 0.0);
-  options.static_closing_ratio = std::numeric_limits<double>::infinity();
+  options.threats.static_closing_ratio = std::numeric_limits<double>::infinity();
   EXPECT_EQ(cost(1.5), 0.0);
 }
 
@@ -593,8 +595,8 @@ TEST(FlowsteerLaw, RefusesBadWeights) {
   EXPECT_THROW(leader_gap_term(-1.0, 1.0), std::invalid_argument);
   EXPECT_THROW(approach_speed_term(1.0, 0.0), std::invalid_argument);
   EXPECT_THROW(approach_speed_term(1.0, 1.0, 0.0), std::invalid_argument);
-  AvoidanceOptions no_full_speed;
-  no_full_speed.margin_full_speed_mps = 0.0;
+  ClearanceOptions no_full_speed;
+  no_full_speed.threats.kept_width.margin_full_speed_mps = 0.0;
   EXPECT_THROW(clearance_term(no_full_speed), std::invalid_argument);
 }
 

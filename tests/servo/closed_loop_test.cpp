@@ -36,9 +36,9 @@ double clearance(const SceneObject& o, const Eigen::Vector2d& p, double agent_ra
 constexpr double kAgentRadius = 0.25;
 
 Controller papers_controller() {
-  AvoidanceOptions avoidance;
-  avoidance.agent_width_m = 2.0 * kAgentRadius;
-  return Controller(goal_reaching({}, avoidance), 1.0, {1.0, 1.5});
+  PapersOptions options;
+  options.avoidance.agent_width_m = 2.0 * kAgentRadius;
+  return Controller(goal_reaching({}, options), 1.0, {1.0, 1.5});
 }
 
 RunResult run(std::vector<SceneObject> world, const Eigen::Vector2d& goal,
@@ -143,10 +143,9 @@ TEST(ClosedLoop, ThreadsBetweenTwoPosts) {
 // turns the FOE past the balance and the next one turns it back, at the limits; the implicit
 // step walks the corridor without that chatter.
 Controller flowsteer_controller(GradientStep step) {
-  AvoidanceOptions avoidance;
-  avoidance.agent_width_m = 2.0 * kAgentRadius;
-  avoidance.margin_m = 0.5;
-  return Controller(flowsteer_goal_reaching({}, avoidance), 1.0, {1.0, 1.5}, step);
+  const FlowsteerOptions options =
+      flowsteer_options({.agent_width_m = 2.0 * kAgentRadius, .margin_m = 0.5});
+  return Controller(flowsteer_goal_reaching({}, options), 1.0, {1.0, 1.5}, step);
 }
 
 // Each wall a row of short blocks: the analytic scene's boxes keep their sides along the agent's

@@ -113,7 +113,7 @@ TEST(ControlGradient, AvoidanceGradientMatchesSimulation) {
   s.point_velocity = {-0.3, 0.35};
   s.agent_speed = 1.2;
   const double width = 0.15;
-  AvoidanceOptions options;
+  AvoidanceTermOptions options;
   options.agent_width_m = 0.0;
   const double sigma = width / kLn10;
   const double importance = -2.0 * s.ttc() + 10.0;
@@ -164,7 +164,7 @@ TEST(ControlBorder, FoeBeyondTheCutSideOfAnObjectCountsAsOnIt) {
   // The object's point at the FOE (g = f in Eq. 10): a_c = −λ γ ∂L̇/∂a_c with
   // ∂L̇/∂a_c = −I sign(g − f)/σ · (τ/Z) f; the visible part is right of the FOE.
   // The speed term adds β (v* − v_c).
-  const double sigma = (2.0 + AvoidanceOptions{}.agent_width_m / 0.8) / kLn10;
+  const double sigma = (2.0 + AvoidanceTermOptions{}.agent_width_m / 0.8) / kLn10;
   const double tau_over_depth = 3.0 / 0.8;
   const double speed_term = 0.1 * (1.0 - 0.3);
   EXPECT_NEAR(out.unclamped.accel_mps2, speed_term + importance / sigma * tau_over_depth * -12.0,
@@ -290,7 +290,7 @@ TEST(ControlInput, BadSettingsAreRejected) {
   w.delta = 0.0;
   w.alpha = -1.0;
   EXPECT_THROW(goal_reaching(w), std::invalid_argument);
-  AvoidanceOptions bad;
+  AvoidanceTermOptions bad;
   bad.horizon_s = 0.0;
   EXPECT_THROW(avoidance_term(bad), std::invalid_argument);
   EXPECT_THROW(goal_controller().step({}, {std::nan("")}), std::invalid_argument);

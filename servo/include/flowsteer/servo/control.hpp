@@ -59,73 +59,152 @@ class CostTerm {
 // meeting head-on that would otherwise mirror each other's moves.
 enum class PassingSide { none, keep_right, keep_left };
 
-// How the avoidance terms size objects and guess what depth does not tell them.
-struct AvoidanceOptions {
-  double agent_width_m = 0.5;  // added to each object's image width (CGF §6.2)
-  // The flowsteer law's terms only: personal space added to agent_width_m in proportion to the
-  // agent's speed, in full from margin_full_speed_mps on. A person keeps more room walking than
-  // stepping slowly up to a goal beside someone.
+// The width the flowsteer law's terms keep clear of an object: the agent's own (CGF §6.2's agent
+// width) and personal space in proportion to the agent's speed, margin_m in full from
+// margin_full_speed_mps on. A person keeps more room walking than stepping slowly up to a goal
+// beside someone.
+struct KeptWidth {
+  double agent_width_m = 0.5;
   double margin_m = 0.0;
   double margin_full_speed_mps = 1.0;
   // Of margin_m, what is kept at any speed, even at rest: without it an agent stepping slowly
   // along a wall or up to a neighbour keeps exactly its own width and touches at the first error.
   double standing_margin_m = 0.1;
-  // I(τ) = slope·τ + intercept for 0 ≤ τ ≤ horizon, zero outside (CGF Eq. 9: −2, 10, 5 s).
-  double importance_slope = -2.0;
-  double importance_intercept = 10.0;
-  double horizon_s = 5.0;
-  // When false, or when an object has no depth, τ v_c / Z is taken as depth_free_ratio
-  // (MIG 2019 §7.1: 1/2).
+};
+
+// I(τ) = max(0, slope·τ + intercept), how much an object τ away weighs (CGF Eq. 9: −2, 10; its
+// horizon of 5 s is each term's horizon_s).
+struct Importance {
+  double slope = -2.0;
+  double intercept = 10.0;
+};
+
+// How a term reads an object's depth. When use_depth is false, or when an object has no depth,
+// τ v_c / Z is taken as depth_free_ratio (MIG 2019 §7.1: 1/2).
+struct DepthGuess {
   bool use_depth = true;
   double depth_free_ratio = 0.5;
-  // The depth-free guess Z = τ v_c / ratio needs a speed; below this one it uses this one.
+  // The depth-free guess Z = τ v_c / ratio needs a speed; below this one it uses this one. The
+  // flowsteer law's terms take an agent slower than this as at rest.
   double min_speed_mps = 0.1;
+};
+
+// L_av's (avoidance_term).
+struct AvoidanceTermOptions {
+  double agent_width_m = 0.5;  // added to each object's image width (CGF §6.2)
+  Importance importance;
+  double horizon_s = 5.0;  // objects approaching later than this are left out (CGF Eq. 9)
+  DepthGuess depth;
   // An object within this many σ of the cusp of its cost (|g − f| small) keeps the side the
   // agent chose to pass it on at the previous step, instead of flipping with the sign of g − f
   // (0 turns this off). Needs objects with a source id.
   double commit_band = 1.0;
-  // The clearance term only: an agent at rest (below min_speed_mps) that changes the end it
-  // passes a group of objects by keeps the new end this long, while a member it was taken for
-  // stays in view (0 turns this off). Turning in place takes objects in and out of view while
-  // nothing moves, and a decision made with an object in view is not undone by turning away from
-  // it.
-  double rest_commit_s = 1.0;
-  // The clearance term only: the passing convention, and how strongly it leans (in σ: an object
-  // whose two ways round differ by less than this is passed on the convention's side).
-  PassingSide passing_side = PassingSide::keep_right;
-  double passing_band = 1.0;
-  // The clearance term only: an object crossing the agent's path (its velocity over the ground
-  // more across the agent's course than along it) faster than this many times
-  // margin_full_speed_mps, a car, is passed behind where the agent can still stop short of its
-  // path at stop_decel_mps2 (infinity: never).
-  double yield_speed_ratio = 1.5;
-  // The braking term only: the deceleration it plans to stop with, short of an object ahead.
-  double stop_decel_mps2 = 0.5;
-  // The anticipation term only: τ0 of its energy, how far ahead in time contacts matter.
-  double anticipation_s = 3.0;
-  // The clearance and braking terms of the flowsteer law: a static object the agent's straight
-  // course passes further than half its kept width plus this from, within the horizon, is left
-  // out (infinity: none is).
+};
+
+// L_dark's (dark_term).
+struct DarkOptions {
+  double agent_width_m = 0.5;  // added to the image width of a dark region with a depth
+  double commit_band = 1.0;    // as AvoidanceTermOptions::commit_band
+};
+
+// The papers' law's settings: each of its terms' options (goal_reaching, following).
+struct PapersOptions {
+  AvoidanceTermOptions avoidance;
+  DarkOptions dark;
+  DepthGuess align;
+  DepthGuess leader_speed;
+};
+
+// L_v's of the flowsteer law (approach_speed_term).
+struct ApproachSpeedOptions {
+  KeptWidth kept_width;
+  DepthGuess depth;
+  // Objects approaching within this are the braking term's, not this one's.
+  double horizon_s = 5.0;
+  double stop_decel_mps2 = 0.5;  // a_b, the deceleration it plans to stop with
+};
+
+// What the clearance and braking terms take for an object in their way.
+struct ThreatOptions {
+  KeptWidth kept_width;
+  DepthGuess depth;
+  double horizon_s = 5.0;  // objects approaching later than this are left out
+  // A static object the agent's straight course passes further than half its kept width plus
+  // this from, within the horizon, is left out (infinity: none is).
   double static_clearance_m = 0.25;
-  // The flowsteer law: an object whose FOE the fit could not tell from a static one's moves all
-  // the same when it closes in faster than this many times the agent's own speed (Z / τ at its
-  // nearest point, where the field has a depth per pixel): someone walking straight at the agent
-  // has the FOE of a wall ahead, and half its τ (infinity: the fit's word is taken).
+  // An object whose FOE the fit could not tell from a static one's moves all the same when it
+  // closes in faster than this many times the agent's own speed (Z / τ at its nearest point,
+  // where the field has a depth per pixel): someone walking straight at the agent has the FOE of
+  // a wall ahead, and half its τ (infinity: the fit's word is taken).
   double static_closing_ratio = 1.5;
 };
+
+// L_c's (clearance_term).
+struct ClearanceOptions {
+  ThreatOptions threats;
+  Importance importance;
+  double commit_band = 1.0;  // as AvoidanceTermOptions::commit_band
+  // An agent at rest (below threats.depth.min_speed_mps) that changes the end it passes a group
+  // of objects by keeps the new end this long, while a member it was taken for stays in view (0
+  // turns this off). Turning in place takes objects in and out of view while nothing moves, and
+  // a decision made with an object in view is not undone by turning away from it.
+  double rest_commit_s = 1.0;
+  // The passing convention, and how strongly it leans (in σ: an object whose two ways round
+  // differ by less than this is passed on the convention's side).
+  PassingSide passing_side = PassingSide::keep_right;
+  double passing_band = 1.0;
+  // An object crossing the agent's path (its velocity over the ground more across the agent's
+  // course than along it) faster than this many times threats.kept_width.margin_full_speed_mps,
+  // a car, is passed behind where the agent can still stop short of its path at stop_decel_mps2
+  // (infinity: never).
+  double yield_speed_ratio = 1.5;
+  double stop_decel_mps2 = 0.5;  // the deceleration the agent plans to stop with
+};
+
+// L_b's (braking_term).
+struct BrakingOptions {
+  ThreatOptions threats;
+  double stop_decel_mps2 = 0.5;  // a_b, the deceleration it plans to stop with
+};
+
+// L_a's (anticipation_term).
+struct AnticipationOptions {
+  KeptWidth kept_width;
+  DepthGuess depth;
+  double static_closing_ratio = 1.5;  // as ThreatOptions::static_closing_ratio
+  double horizon_s = 5.0;             // contacts later than this are left out
+  double tau0_s = 3.0;                // τ0 of its energy, how far ahead in time contacts matter
+};
+
+// The flowsteer law's settings: each of its terms' options (flowsteer_goal_reaching,
+// flowsteer_following).
+struct FlowsteerOptions {
+  ApproachSpeedOptions approach_speed;
+  ClearanceOptions clearance;
+  BrakingOptions braking;
+  AnticipationOptions anticipation;
+  DarkOptions dark;
+  DepthGuess align;
+  DepthGuess leader_gap;
+};
+
+// The flowsteer law's settings for an agent that keeps kept_width clear and reads depth as
+// `depth` in every term, each term's own options at their defaults. The dark term widens a dark
+// region by kept_width.agent_width_m alone.
+FlowsteerOptions flowsteer_options(const KeptWidth& kept_width, const DepthGuess& depth = {});
 
 // L_t = ½ t_x² (CGF Eq. 7). Needs the goal's bearing; zero without one.
 std::unique_ptr<CostTerm> goal_term();
 // L_v = ½ (v_c − v*)² (CGF Eq. 12).
 std::unique_ptr<CostTerm> speed_term(double preferred_speed_mps);
 // L_av = Σ_i I(τ_i) exp(−|g_i − f_i| / σ_i) over approaching visible objects (CGF Eq. 9).
-std::unique_ptr<CostTerm> avoidance_term(const AvoidanceOptions& options = {});
+std::unique_ptr<CostTerm> avoidance_term(const AvoidanceTermOptions& options = {});
 // L_dark = Σ_dark exp(−|g_i| / σ_i) (MIG 2019 Eq. 3).
-std::unique_ptr<CostTerm> dark_term(const AvoidanceOptions& options = {});
+std::unique_ptr<CostTerm> dark_term(const DarkOptions& options = {});
 // L_min = (Σ_j u_j)² / N² over the leader (CGF Eq. 11).
-std::unique_ptr<CostTerm> align_term(const AvoidanceOptions& options = {});
+std::unique_ptr<CostTerm> align_term(const DepthGuess& depth = {});
 // L_τ = ½ v_z² of the leader (CGF Eq. 13).
-std::unique_ptr<CostTerm> leader_speed_term(const AvoidanceOptions& options = {});
+std::unique_ptr<CostTerm> leader_speed_term(const DepthGuess& depth = {});
 
 // The flowsteer law's terms (clearance_terms.cpp): the papers' structure, with what their law
 // collides in replaced.
@@ -142,7 +221,7 @@ std::unique_ptr<CostTerm> heading_term();
 // object that is not approaching, taken as standing (objects with depth only).
 std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double max_turn_rate,
                                               double arrival_decel_mps2 = 0.5,
-                                              const AvoidanceOptions& options = {});
+                                              const ApproachSpeedOptions& options = {});
 // L_c = Σ_i I(τ_i) φ(c_i / σ_i) over approaching visible objects: c_i is the FOE's clearance from
 // the object's extent [min_x, max_x] widened at each end by half the kept width (agent_width_m and
 // the speed's share of margin_m) at that end's depth, on the side the agent passes it on; φ(u) =
@@ -151,26 +230,26 @@ std::unique_ptr<CostTerm> approach_speed_term(double preferred_speed_mps, double
 // the kept width is left out: the agent stops at the goal short of it. So is a static object that
 // the agent's straight course passes by more than half the kept width and static_clearance_m.
 // See clearance_terms.cpp.
-std::unique_ptr<CostTerm> clearance_term(const AvoidanceOptions& options = {});
+std::unique_ptr<CostTerm> clearance_term(const ClearanceOptions& options = {});
 // L_b = Σ_i ψ_i ½ max(0, v_c − v_i)², v_i = √(2 a_b (Z_i − w/2)) the speed from which the agent
 // stops at a_b (stop_decel_mps2) half its width w short of object i, Z_i the object's depth where
 // the FOE points (a vertical plane through its ends), ψ_i = min(1, φ(c_i/σ_i)) on
 // the better side: brakes for an object whose widened extent holds the FOE, which no turning
 // term does for a static obstacle met head-on (its FOE is straight ahead, f = 0, and CGF Eq. 10's
 // f a_c term vanishes).
-std::unique_ptr<CostTerm> braking_term(const AvoidanceOptions& options = {});
-// L_a = Σ_i E(τ_i), E(τ) = k e^(−τ/τ0) / τ² (k = 1.5, τ0 = anticipation_s): Karamouzas et al.'s
+std::unique_ptr<CostTerm> braking_term(const BrakingOptions& options = {});
+// L_a = Σ_i E(τ_i), E(τ) = k e^(−τ/τ0) / τ² (k = 1.5, τ0 = tau0_s): Karamouzas et al.'s
 // time-to-collision energy (PRL 2014), τ_i the time until object i, moving at the velocity its
 // flow shows (V_z = −Z/τ, V_x = f V_z), first comes within half the kept width of the agent, the
 // object taken as the segment between its ends on the ground. Its gradient turns or slows the
 // agent for what will touch it, whatever its FOE says (a neighbour closing in sideways has no
 // expansion, its FOE at infinity), and costs nothing for what will not (a wall along the path).
 // Contacts later than the agent takes to reach its goal are left out. See anticipation_term.cpp.
-std::unique_ptr<CostTerm> anticipation_term(const AvoidanceOptions& options = {});
+std::unique_ptr<CostTerm> anticipation_term(const AnticipationOptions& options = {});
 // L_g = ½ (v_z + (Z − G)/T)² of the leader: close the gap to G metres with time constant T,
 // then match its speed (CGF Eq. 13's L_τ is the case G = 0, T → ∞). Needs the leader's depth.
 std::unique_ptr<CostTerm> leader_gap_term(double gap_m, double gap_time_s,
-                                          const AvoidanceOptions& options = {});
+                                          const DepthGuess& depth = {});
 
 struct TermEvaluation {
   std::string name;
@@ -224,17 +303,16 @@ struct FollowingWeights {  // CGF Eq. 18
 
 // Throws std::invalid_argument when a weight is negative or δ > γ.
 NavigationFunction goal_reaching(const GoalReachingWeights& weights,
-                                 const AvoidanceOptions& avoidance = {});
-NavigationFunction following(const FollowingWeights& weights,
-                             const AvoidanceOptions& avoidance = {});
+                                 const PapersOptions& options = {});
+NavigationFunction following(const FollowingWeights& weights, const PapersOptions& options = {});
 
 // The flowsteer law: L = α L_θ + β L_v + γ L_c + ε L_b + ζ L_a (+ δ L_dark), ζ the anticipation
 // weight, and for following L = α L_min + β L_g + γ L_c + ε L_b. Throws std::invalid_argument like
 // goal_reaching.
 NavigationFunction flowsteer_goal_reaching(const FlowsteerWeights& weights,
-                                           const AvoidanceOptions& avoidance = {});
+                                           const FlowsteerOptions& options = {});
 NavigationFunction flowsteer_following(const FlowsteerWeights& weights,
-                                       const AvoidanceOptions& avoidance = {});
+                                       const FlowsteerOptions& options = {});
 
 struct ControlLimits {
   double max_accel_mps2 = 1.0;
