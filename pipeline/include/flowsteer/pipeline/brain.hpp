@@ -12,11 +12,6 @@
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/steering.hpp"
 
-namespace flowsteer::servo {
-class FlowField;
-struct Segmentation;
-}  // namespace flowsteer::servo
-
 namespace flowsteer::pipeline {
 
 class MotionEnergySteering;
