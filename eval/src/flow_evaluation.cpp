@@ -7,8 +7,10 @@
 #include <sstream>
 
 #include "flowsteer/base/output_files.hpp"
-#include "flowsteer/pipeline/perception.hpp"
+#include "flowsteer/pipeline/brain.hpp"
 #include "flowsteer/servo/analytic_scene.hpp"
+#include "flowsteer/servo/features.hpp"
+#include "flowsteer/servo/segmentation.hpp"
 #include "flowsteer/sim/simulated_agent.hpp"
 
 namespace flowsteer::eval {
@@ -61,7 +63,7 @@ void cover_regions(const servo::Segmentation& segmentation, const cv::Mat& objec
 }
 
 struct MethodRun {
-  std::unique_ptr<pipeline::Perception> perception;
+  std::unique_ptr<pipeline::Brain> brain;
   FlowEvalRow row;
   double epe_sum = 0.0;
   double valid_count = 0.0;
@@ -98,6 +100,21 @@ sim_camera::WorldSpec at_resolution(const sim_camera::WorldSpec& world_spec, int
   return spec;
 }
 
+// A brain that sees by `perception`, for what it sees: the vision model, whose perception is all
+// that is measured of it.
+std::unique_ptr<pipeline::Brain> seeing_brain(const base::CameraIntrinsics& intrinsics,
+                                              const pipeline::PerceptionOptions& perception) {
+  pipeline::BrainConfig config;
+  config.perception = perception;
+  return std::make_unique<pipeline::Brain>(intrinsics, config);
+}
+
+// What a brain sees of the frame agent 0 sees, with agent 0's speed and turn rate.
+void see(pipeline::Brain& brain, const camera_io::Frame& view,
+         const sim_camera::AgentState& state) {
+  brain.step({view, state.speed_mps, state.turn_rate, {}, {}, {}});
+}
+
 // One run per method, each perceiving like the truth but with the method's flow, without depth.
 std::vector<MethodRun> start_runs(std::span<const servo::FlowMethod> methods,
                                   const pipeline::PerceptionOptions& truth_options,
@@ -110,7 +127,7 @@ std::vector<MethodRun> start_runs(std::span<const servo::FlowMethod> methods,
     o.use_depth = false;
     o.segmentation = segmentation;
     MethodRun run;
-    run.perception = std::make_unique<pipeline::Perception>(intrinsics, o);
+    run.brain = seeing_brain(intrinsics, o);
     run.row.method = method;
     run.row.segmentation = segmentation;
     run.row.resolution = resolution;
@@ -195,14 +212,13 @@ void score_object(MethodRun& run, const servo::ObjectFeatures& t,
 }
 
 // Scores the run on a frame it has processed, against the truth's flow and objects.
-void score_frame(MethodRun& run, double flow_ms, const pipeline::Perception& truth,
+void score_frame(MethodRun& run, double flow_ms, const pipeline::Brain& truth,
                  const camera_io::Frame& view, double to_px, const FlowEvalOptions& options) {
   ++run.row.frames;
   run.ms_sum += flow_ms;
-  add_endpoint_errors(run, run.perception->flow().flow(), truth.flow().flow(), to_px);
-  cover_regions(run.perception->segmentation(), view.sim->object_ids, run.region_id_pairs,
-                run.covers);
-  const auto estimated_objects = run.perception->objects();
+  add_endpoint_errors(run, run.brain->flow().flow(), truth.flow().flow(), to_px);
+  cover_regions(run.brain->segmentation(), view.sim->object_ids, run.region_id_pairs, run.covers);
+  const auto estimated_objects = run.brain->objects();
   count_phantoms(run, estimated_objects, options.phantom_horizon_s);
   for (const servo::ObjectFeatures& t : truth.objects()) {
     if (t.kind == servo::RegionKind::visible && t.status == servo::MotionStatus::approaching) {
@@ -243,7 +259,7 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
   truth_options.dark_regions = false;
   truth_options.use_depth = true;
   const base::CameraIntrinsics& k = agents[0]->intrinsics();
-  pipeline::Perception truth(k, truth_options);
+  const std::unique_ptr<pipeline::Brain> truth = seeing_brain(k, truth_options);
   std::vector<MethodRun> runs =
       start_runs(methods, truth_options, options.segmentation, k, resolution);
   const double to_px = k.fx_px * spec.step_s;
@@ -258,14 +274,11 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
     step_agents(agents, renderer, commands);
     const camera_io::Frame& view = agents[0]->frame();
     const sim_camera::AgentState& state = world.agents()[0];
-    pipeline::StageTimes times;
-    truth.process(view, state.speed_mps, state.turn_rate, times);
+    see(*truth, view, state);
     for (MethodRun& run : runs) {
-      pipeline::StageTimes method_times;
-      if (run.perception->process(view, state.speed_mps, state.turn_rate, method_times) ==
-              servo::FlowStatus::ok &&
-          frame >= warmup_frames) {
-        score_frame(run, method_times.flow, truth, view, to_px, options);
+      see(*run.brain, view, state);
+      if (run.brain->flow_status() == servo::FlowStatus::ok && frame >= warmup_frames) {
+        score_frame(run, run.brain->times().flow, *truth, view, to_px, options);
       }
     }
     world.step(commands);

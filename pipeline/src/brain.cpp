@@ -7,6 +7,7 @@
 
 #include "flowsteer/base/clock.hpp"
 #include "motion_energy_steering.hpp"
+#include "perception.hpp"
 
 namespace flowsteer::pipeline {
 
@@ -30,7 +31,7 @@ double goal_bearing_rad(double dx_m, double dy_m, double yaw_rad) {
 Brain::Brain(const base::CameraIntrinsics& intrinsics, const BrainConfig& config,
              std::unique_ptr<FeatureOracle> oracle)
     : config_(config),
-      perception_(intrinsics, config.perception),
+      perception_(std::make_unique<Perception>(intrinsics, config.perception)),
       controller_(servo::make_controller(config.controller, config.agent_width_m,
                                          config.preferred_speed_mps)),
       oracle_(std::move(oracle)) {
@@ -51,7 +52,23 @@ Brain::Brain(Brain&&) noexcept = default;
 Brain& Brain::operator=(Brain&&) noexcept = default;
 
 bool Brain::reads_image() const {
-  return motion_energy_ != nullptr || (!oracle_ && perception_.reads_image());
+  return motion_energy_ != nullptr || (!oracle_ && perception_->reads_image());
+}
+
+servo::FlowStatus Brain::flow_status() const {
+  return perception_->status();
+}
+
+const servo::FlowField& Brain::flow() const {
+  return perception_->flow();
+}
+
+const servo::Segmentation& Brain::segmentation() const {
+  return perception_->segmentation();
+}
+
+const base::CameraIntrinsics& Brain::intrinsics() const {
+  return perception_->intrinsics();
 }
 
 bool Brain::uses_flow() const {
@@ -73,16 +90,16 @@ const servo::ControlOutput& Brain::step(const BrainInput& input) {
   // The geometric reference perceives by exact geometry: flow would only cost it time.
   if (!oracle_) {
     const servo::FlowStatus status =
-        perception_.process(input.frame, input.speed_mps, input.turn_rate, times_);
+        perception_->process(input.frame, input.speed_mps, input.turn_rate, times_);
     if (uses_flow()) {
       status_ = status;
     }
   }
   const base::Stopwatch control;
-  percept_ = servo::Percept{oracle_ ? oracle_->perceive(input.speed_mps) : perception_.objects(),
+  percept_ = servo::Percept{oracle_ ? oracle_->perceive(input.speed_mps) : perception_->objects(),
                             input.goal_bearing_rad, input.goal_distance_m, input.leader_id};
   if (motion_energy_) {
-    motion_energy_->step(input.frame, perception_.flow(), percept_, {input.speed_mps}, output_);
+    motion_energy_->step(input.frame, perception_->flow(), percept_, {input.speed_mps}, output_);
   } else {
     // The command is held until the next frame; the last interval between frames is the best
     // guess of how long that is.

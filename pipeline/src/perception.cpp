@@ -1,8 +1,6 @@
-#include "flowsteer/pipeline/perception.hpp"
+#include "perception.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -24,7 +22,8 @@ bool per_pixel_depth(const PerceptionOptions& options) {
   return synthetic(options) && options.use_depth && options.depth == servo::DepthSource::renderer;
 }
 
-servo::FeatureOptions feature_options(const PerceptionOptions& options) {
+servo::FeatureOptions feature_options(const PerceptionOptions& options,
+                                      const servo::FlowSource& flow) {
   servo::FeatureOptions features;
   features.use_depth = per_pixel_depth(options);
   // A camera has no depth; where objects stand on the ground, the ground gives it.
@@ -32,31 +31,8 @@ servo::FeatureOptions feature_options(const PerceptionOptions& options) {
     features.ground_mount = options.mount;
   }
   features.static_foe = options.mount.forward_foe();
-  features.flow_noise_correlation_px = servo::noise_correlation_px(options.flow);
+  features.flow_noise_correlation_px = flow.noise_correlation_px();
   return features;
-}
-
-// Copies the simulator's flow and depth into the servo core's field. With the ground's depth
-// only, a pixel that sees nothing (the sky, without depth) gets no flow either: a camera's sky has
-// no texture to show motion by.
-void copy_sim_channels(const camera_io::SimChannels& sim, servo::DepthSource depth_source,
-                       servo::FlowField& field) {
-  auto flow = field.flow();
-  auto depth = field.depth();
-  const bool sky_without_flow = depth_source == servo::DepthSource::ground;
-  const Eigen::Vector2f no_flow =
-      Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
-  for (int row = 0; row < field.height(); ++row) {
-    const auto* f = sim.flow.ptr<cv::Vec2f>(row);
-    const auto* d = sim.depth_m.ptr<float>(row);
-    for (int col = 0; col < field.width(); ++col) {
-      const std::size_t i = field.index(col, row);
-      flow[i] = sky_without_flow && !std::isfinite(d[col]) ? no_flow
-                                                           : Eigen::Vector2f(f[col][0], f[col][1]);
-      if (!depth.empty())
-        depth[i] = d[col];
-    }
-  }
 }
 
 }  // namespace
@@ -74,19 +50,21 @@ StageTimes& StageTimes::operator+=(const StageTimes& other) {
 Perception::Perception(const base::CameraIntrinsics& intrinsics, const PerceptionOptions& options)
     : options_(options),
       field_(intrinsics, per_pixel_depth(options)),
+      // With the ground's depth only, the sky has no flow either, as a camera's has none.
+      flow_source_(servo::make_flow_source(
+          options.flow, options.optical_flow,
+          {.no_flow_without_depth = options.depth == servo::DepthSource::ground})),
       dark_finder_(options.dark),
-      extractor_(feature_options(options)),
+      extractor_(feature_options(options, *flow_source_)),
       motions_(std::make_unique<MotionHistory>(
           static_cast<std::size_t>(options.optical_flow.max_kept_images) + 2)) {
-  if (!synthetic(options))
-    optical_flow_.emplace(options.flow, options.optical_flow);
   if (options.segmentation != servo::SegmentationMethod::semantic) {
     segmenter_.emplace(options.segmentation, options.flow_segmentation);
   }
 }
 
 bool Perception::reads_image() const {
-  return optical_flow_.has_value() || options_.dark_regions;
+  return flow_source_->estimated() || options_.dark_regions;
 }
 
 servo::FlowStatus Perception::process(const camera_io::Frame& frame, double speed_mps,
@@ -106,8 +84,8 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   const MotionHistory::Motion measured{speed_mps, turn_rate_cy};
   motions_->remember(frame.timestamp_s, measured);
   const cv::Mat& image = frame.image;
-  // Grey for the dark regions only: OpticalFlow converts the frame into the grey image it keeps,
-  // and a grey image handed to it is copied (which costs less than converting twice).
+  // Grey for the dark regions only: an estimator converts the frame into the grey image it
+  // keeps, and a grey image handed to it is copied (which costs less than converting twice).
   if (!image.empty() && options_.dark_regions) {
     if (image.channels() == 3) {
       cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);
@@ -115,32 +93,24 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
       image.copyTo(grey_);
     }
   }
-  if (optical_flow_) {
-    const auto rotation = [&](double from_s, double to_s) {
-      return servo::rotation_over(
-          servo::camera_angular_velocity(motions_->mean(from_s, to_s, measured).turn_rate_cy,
-                                         options_.mount.pitch_rad),
-          to_s - from_s);
-    };
-    status_ = image.empty() ? servo::FlowStatus::empty_frame
-                            : optical_flow_->update(options_.dark_regions ? grey_ : image,
-                                                    frame.timestamp_s, field_, rotation);
-  } else if (const cv::Mat& flow = frame.sim->flow;
-             flow.empty() || flow.cols != field_.width() || flow.rows != field_.height()) {
-    status_ = flow.empty() ? servo::FlowStatus::empty_frame : servo::FlowStatus::size_changed;
-  } else {
-    copy_sim_channels(*frame.sim, options_.depth, field_);
-    status_ = servo::FlowStatus::ok;
-  }
-  if (status_ != servo::FlowStatus::ok) {
-    times.flow = stage.elapsed_ms();
-    return status_;
-  }
-  // Numerical flow comes out derotated: the estimator compared images of one orientation.
-  if (!optical_flow_) {
-    servo::derotate(field_, servo::camera_angular_velocity(turn_rate_cy, options_.mount.pitch_rad));
-  }
+  const cv::Mat& flow_image = options_.dark_regions && !image.empty() ? grey_ : image;
+  const servo::FlowFrame flow_frame{flow_image, frame.timestamp_s,
+                                    frame.sim ? &frame.sim->flow : nullptr,
+                                    frame.sim ? &frame.sim->depth_m : nullptr};
+  // The estimators turn the older image by the mean turn rate over their baseline; the
+  // renderer's flow is derotated by this frame's.
+  const servo::CameraRotation rotation{
+      servo::camera_angular_velocity(turn_rate_cy, options_.mount.pitch_rad),
+      [&](double from_s, double to_s) {
+        return servo::rotation_over(
+            servo::camera_angular_velocity(motions_->mean(from_s, to_s, measured).turn_rate_cy,
+                                           options_.mount.pitch_rad),
+            to_s - from_s);
+      }};
+  status_ = flow_source_->update(flow_frame, rotation, field_);
   times.flow = stage.elapsed_ms();
+  if (status_ != servo::FlowStatus::ok)
+    return status_;
 
   stage.restart();
   if (segmenter_) {
@@ -151,14 +121,14 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     const double speed_mps =
         motions_->mean(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, measured)
             .speed_mps;
-    if (optical_flow_) {
+    if (flow_source_->estimated()) {
       ground.flow_floor =
           std::max(ground.flow_floor, options_.numerical_flow_noise_px /
                                           (field_.intrinsics().fx_px * field_.interval_s()));
     }
     servo::mark_ground(field_, options_.mount, speed_mps, ground, ground_mask_);
     segmenter_->segment(field_, ground_mask_, segmentation_);
-    if (optical_flow_) {
+    if (flow_source_->estimated()) {
       ground_regions_.mark(field_, options_.mount, speed_mps, ground, segmentation_);
     }
   } else {
@@ -206,7 +176,5 @@ MotionHistory::Motion MotionHistory::mean(double from_s, double to_s,
 }
 
 Perception::~Perception() = default;
-Perception::Perception(Perception&&) noexcept = default;
-Perception& Perception::operator=(Perception&&) noexcept = default;
 
 }  // namespace flowsteer::pipeline

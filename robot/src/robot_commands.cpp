@@ -200,10 +200,10 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
            o.width, o.foe.x(), o.foe.y(), o.ttc_s, static_cast<double>(o.pixel_count)});
       ++summary.object_rows;
     }
-    commands.add({servo::to_string(brain.perception().status())},
+    commands.add({servo::to_string(brain.flow_status())},
                  {seq, frame.timestamp_s, static_cast<double>(brain.objects().size()),
                   bearing.value_or(nan), c.accel_mps2, c.turn_rate, brain.output().cost});
-    video->write(pipeline::draw_overlay(frame.image, brain.perception().flow(), brain.objects(),
+    video->write(pipeline::draw_overlay(frame.image, brain.flow(), brain.objects(),
                                         source.intrinsics(), bearing));
   }
   video->release();

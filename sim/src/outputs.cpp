@@ -47,36 +47,39 @@ void write_image(const std::filesystem::path& path, const cv::Mat& image) {
 
 void write_summary_json(const std::filesystem::path& path, const SimResult& result) {
   std::ostringstream out;
-  out << "{\n  \"scenario\": " << base::json_string(result.scenario) << ",\n  \"steps\": " << result.steps
+  out << "{\n  \"scenario\": " << base::json_string(result.scenario)
+      << ",\n  \"steps\": " << result.steps
       << ",\n  \"duration_s\": " << base::json_number(result.duration_s) << ",\n  \"agents\": [\n";
   for (std::size_t i = 0; i < result.agents.size(); ++i) {
     const AgentResult& a = result.agents[i];
     out << "    {\"name\": " << base::json_string(a.name)
-        << ", \"reached_goal\": " << (a.reached_goal ? "true" : "false")
-        << ", \"time_to_goal_s\": " << (a.reached_goal ? base::json_number(a.time_to_goal_s) : "null")
+        << ", \"reached_goal\": " << (a.reached_goal ? "true" : "false") << ", \"time_to_goal_s\": "
+        << (a.reached_goal ? base::json_number(a.time_to_goal_s) : "null")
         << ", \"path_length_m\": " << base::json_number(a.path_length_m)
         << ", \"min_clearance_m\": " << base::json_number(a.min_clearance_m)
         << ", \"collisions\": " << a.collisions;
     if (a.final_distance_to_leader_m >= 0.0) {
-      out << ", \"final_distance_to_leader_m\": " << base::json_number(a.final_distance_to_leader_m);
+      out << ", \"final_distance_to_leader_m\": "
+          << base::json_number(a.final_distance_to_leader_m);
     }
     out << "}" << (i + 1 < result.agents.size() ? "," : "") << "\n";
   }
   const pipeline::StageTimes& t = result.per_agent_step_ms;
   out << "  ],\n  \"collisions_total\": " << result.collisions.size()
       << ",\n  \"per_agent_step_ms\": {\"render\": " << base::json_number(t.render)
-      << ", \"flow\": " << base::json_number(t.flow) << ", \"segment\": " << base::json_number(t.segment)
+      << ", \"flow\": " << base::json_number(t.flow)
+      << ", \"segment\": " << base::json_number(t.segment)
       << ", \"features\": " << base::json_number(t.features)
-      << ", \"control\": " << base::json_number(t.control) << ", \"total\": " << base::json_number(t.total)
-      << "},\n  \"threads\": " << result.threads
+      << ", \"control\": " << base::json_number(t.control)
+      << ", \"total\": " << base::json_number(t.total) << "},\n  \"threads\": " << result.threads
       << ",\n  \"world_steps_per_s\": " << base::json_number(result.world_steps_per_s) << "\n}\n";
   base::write_text(path, out.str());
 }
 
 cv::Mat draw_overlay(const SimulatedAgent& agent) {
   const pipeline::Brain& brain = agent.brain();
-  return pipeline::draw_overlay(agent.frame().image, brain.perception().flow(), brain.objects(),
-                      agent.intrinsics(), brain.percept().goal_bearing_rad);
+  return pipeline::draw_overlay(agent.frame().image, brain.flow(), brain.objects(),
+                                agent.intrinsics(), brain.goal_bearing_rad());
 }
 
 cv::Mat draw_topview(const sim_camera::World& world,

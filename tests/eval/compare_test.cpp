@@ -87,8 +87,8 @@ TEST(GeometricReference, ComputesNoFlow) {
     EXPECT_GT(vision_times.flow, 0.0);
     world.step(std::vector<base::Command>(spec.agents.size()));
   }
-  EXPECT_EQ(geometric.brain().perception().status(), servo::FlowStatus::no_previous_frame);
-  EXPECT_EQ(vision.brain().perception().status(), servo::FlowStatus::ok);
+  EXPECT_EQ(geometric.brain().flow_status(), servo::FlowStatus::no_previous_frame);
+  EXPECT_EQ(vision.brain().flow_status(), servo::FlowStatus::ok);
   EXPECT_FALSE(
       geometric.brain().objects().empty());  // the walls and the other agents, from geometry
 }

@@ -17,7 +17,6 @@
 #include "flowsteer/camera_io/replay_source.hpp"
 #include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/config/scenario_file.hpp"
-#include "flowsteer/pipeline/perception.hpp"
 #include "flowsteer/robot/robot_brain.hpp"
 #include "flowsteer/sim/simulated_agent.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
@@ -176,7 +175,7 @@ struct Seen {
 
 // The check: frames rendered by sim_camera, encoded by OpenCV and replayed through
 // ReplaySource give the same features as the rendered frames themselves, through the same
-// Perception (DIS medium flow, flow-graph segmentation: a recording has no object ids). The
+// perception (DIS medium flow, flow-graph segmentation: a recording has no object ids). The
 // recording is FFV1 (lossless): with it the container round trip (timestamps from the rate,
 // intrinsics from the field of view, BGR frames) is checked exactly, so each frame gives the
 // same segmentation and the same objects; a lossy codec would add its own error to the flow.
@@ -189,12 +188,12 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
   // The recorded frames are replayed: the lit image is what a camera would give.
   sim::SimulatedAgent agent(world, 0, sim_camera::RenderChannels::all);
 
-  pipeline::PerceptionOptions options;
-  options.flow = servo::FlowMethod::dis_medium;
-  options.segmentation = servo::SegmentationMethod::flow_graph;
-  options.use_depth = false;
-  options.mount = {spec.agents[0].camera.height_m, spec.agents[0].camera.pitch_rad};
-  pipeline::Perception direct(agent.intrinsics(), options);
+  pipeline::BrainConfig config;
+  config.perception.flow = servo::FlowMethod::dis_medium;
+  config.perception.segmentation = servo::SegmentationMethod::flow_graph;
+  config.perception.use_depth = false;
+  config.perception.mount = {spec.agents[0].camera.height_m, spec.agents[0].camera.pitch_rad};
+  pipeline::Brain direct(agent.intrinsics(), config);
 
   const fs::path video = fs::temp_directory_path() /
                          ("flowsteer_replay_of_render_" + std::to_string(::getpid()) + ".avi");
@@ -219,7 +218,8 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
       rendered.push_back(frame.image.clone());
       speeds.push_back(state.speed_mps);
       direct_seen[f].timestamp_s = frame.timestamp_s;
-      direct_seen[f].status = direct.process(frame, state.speed_mps, 0.0, times);
+      direct.step({frame, state.speed_mps, 0.0, {}, {}, {}});
+      direct_seen[f].status = direct.flow_status();
       if (direct_seen[f].status == servo::FlowStatus::ok) {
         direct_seen[f].labels = direct.segmentation().labels;
         direct_seen[f].objects.assign(direct.objects().begin(), direct.objects().end());
@@ -234,7 +234,7 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
   replay_options.lens.horizontal_fov_rad = spec.agents[0].camera.hfov_rad;
   camera_io::ReplaySource source(replay_options);
   EXPECT_NEAR(source.intrinsics().fx_px, agent.intrinsics().fx_px, 1e-9);
-  pipeline::Perception replayed(source.intrinsics(), options);
+  pipeline::Brain replayed(source.intrinsics(), config);
   camera_io::Frame frame;
   int f = 0;
   int compared = 0;
@@ -242,13 +242,13 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
     ASSERT_LT(f, kFrames);
     ASSERT_EQ(cv::norm(frame.image, rendered[f], cv::NORM_INF), 0.0) << "frame " << f;
     // The decoded frame is the rendered one bit for bit (checked above), at the same time up to
-    // rounding (frame / rate against the world's summed steps): the same Perception gives the
+    // rounding (frame / rate against the world's summed steps): the same perception gives the
     // same segmentation and the same features, time to contact up to that rounding.
     SCOPED_TRACE("frame " + std::to_string(f));
     const Seen& seen = direct_seen[f];
     EXPECT_DOUBLE_EQ(frame.timestamp_s, seen.timestamp_s);
-    pipeline::StageTimes times;
-    ASSERT_EQ(replayed.process(frame, speeds[f], 0.0, times), seen.status);
+    replayed.step({frame, speeds[f], 0.0, {}, {}, {}});
+    ASSERT_EQ(replayed.flow_status(), seen.status);
     if (seen.status == servo::FlowStatus::ok) {
       EXPECT_EQ(replayed.segmentation().labels, seen.labels);
       ASSERT_EQ(replayed.objects().size(), seen.objects.size());
@@ -300,8 +300,8 @@ std::vector<Recorded> record_simulated_agent(sim_camera::WorldSpec spec, int fra
     Recorded r{agent.frame(),
                state.speed_mps,
                state.turn_rate,
-               agent.brain().percept().goal_bearing_rad,
-               agent.brain().percept().goal_distance_m,
+               agent.brain().goal_bearing_rad(),
+               agent.brain().goal_distance_m(),
                out.command};
     r.frame.image = r.frame.image.clone();
     r.frame.sim.reset();  // as a camera gives it

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -30,6 +31,11 @@ cv::Mat shifted(const cv::Mat& texture, int width, int height, int dx, int dy) {
   return texture(cv::Rect(20 - dx, 20 - dy, width, height)).clone();
 }
 
+// The next image of a camera that does not turn.
+FlowStatus update(FlowSource& flow, const cv::Mat& image, double timestamp_s, FlowField& field) {
+  return flow.update({image, timestamp_s}, {}, field);
+}
+
 class EveryEstimator : public ::testing::TestWithParam<FlowMethod> {};
 
 TEST_P(EveryEstimator, ATranslatedTextureGivesItsShiftInNormalisedUnitsPerSecond) {
@@ -39,11 +45,12 @@ TEST_P(EveryEstimator, ATranslatedTextureGivesItsShiftInNormalisedUnitsPerSecond
   const cv::Mat texture = textured_image(width, height, 7);
   OpticalFlowOptions options;
   options.baseline_s = 0.1;
-  OpticalFlow flow(GetParam(), options);
+  const std::unique_ptr<FlowSource> flow = make_flow_source(GetParam(), options);
+  EXPECT_TRUE(flow->estimated());
   FlowField field(intrinsics);
-  EXPECT_EQ(flow.update(shifted(texture, width, height, 0, 0), 1.0, field),
+  EXPECT_EQ(update(*flow, shifted(texture, width, height, 0, 0), 1.0, field),
             FlowStatus::no_previous_frame);
-  ASSERT_EQ(flow.update(shifted(texture, width, height, 2, -1), 1.1, field), FlowStatus::ok);
+  ASSERT_EQ(update(*flow, shifted(texture, width, height, 2, -1), 1.1, field), FlowStatus::ok);
   EXPECT_NEAR(field.interval_s(), 0.1, 1e-12);
   // 2 px right and 1 px up in 0.1 s.
   const double expected_u = 2.0 / intrinsics.fx_px / 0.1;
@@ -69,36 +76,73 @@ INSTANTIATE_TEST_SUITE_P(Methods, EveryEstimator,
                                              numerical_flow_methods().end()),
                          [](const auto& info) { return std::string(to_string(info.param)); });
 
-TEST(OpticalFlow, BadFramesGiveAStatusNotACrash) {
+TEST(FlowSource, BadFramesGiveAStatusNotACrash) {
   const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg);
   FlowField field(intrinsics);
-  OpticalFlow flow(FlowMethod::dis_fast);
+  const std::unique_ptr<FlowSource> source = make_flow_source(FlowMethod::dis_fast);
+  FlowSource& flow = *source;
   const cv::Mat texture = textured_image(64, 48, 3);
-  EXPECT_EQ(flow.update(cv::Mat(), 0.0, field), FlowStatus::empty_frame);
-  EXPECT_EQ(flow.update(cv::Mat(48, 64, CV_8UC1, cv::Scalar(128)), 0.0, field),
+  EXPECT_EQ(update(flow, cv::Mat(), 0.0, field), FlowStatus::empty_frame);
+  EXPECT_EQ(update(flow, cv::Mat(48, 64, CV_8UC1, cv::Scalar(128)), 0.0, field),
             FlowStatus::untextured);
-  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 0, 0), 0.0, field), FlowStatus::no_previous_frame);
-  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 1, 0), 0.0, field), FlowStatus::no_time_elapsed);
+  EXPECT_EQ(update(flow, shifted(texture, 64, 48, 0, 0), 0.0, field),
+            FlowStatus::no_previous_frame);
+  EXPECT_EQ(update(flow, shifted(texture, 64, 48, 1, 0), 0.0, field), FlowStatus::no_time_elapsed);
   // Another size: kept as the start of the next pair, nothing computed.
-  EXPECT_EQ(flow.update(textured_image(80, 60, 4), 0.1, field), FlowStatus::size_changed);
-  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 1, 0), 0.2, field), FlowStatus::size_changed);
-  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 2, 0), 0.3, field), FlowStatus::ok);
+  EXPECT_EQ(update(flow, textured_image(80, 60, 4), 0.1, field), FlowStatus::size_changed);
+  EXPECT_EQ(update(flow, shifted(texture, 64, 48, 1, 0), 0.2, field), FlowStatus::size_changed);
+  EXPECT_EQ(update(flow, shifted(texture, 64, 48, 2, 0), 0.3, field), FlowStatus::ok);
   // A single-colour frame breaks the chain: the next textured one starts it again.
-  EXPECT_EQ(flow.update(cv::Mat(48, 64, CV_8UC3, cv::Scalar(9, 9, 9)), 0.4, field),
+  EXPECT_EQ(update(flow, cv::Mat(48, 64, CV_8UC3, cv::Scalar(9, 9, 9)), 0.4, field),
             FlowStatus::untextured);
-  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 3, 0), 0.5, field), FlowStatus::no_previous_frame);
+  EXPECT_EQ(update(flow, shifted(texture, 64, 48, 3, 0), 0.5, field),
+            FlowStatus::no_previous_frame);
   // A clock that jumps back: that image starts the history again, the next one has flow.
-  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 4, 0), 0.55, field), FlowStatus::ok);
-  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 5, 0), 0.05, field), FlowStatus::time_went_back);
-  EXPECT_EQ(flow.update(shifted(texture, 64, 48, 6, 0), 0.1, field), FlowStatus::ok);
-  EXPECT_THROW(flow.update(cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0F)), 0.6, field),
+  EXPECT_EQ(update(flow, shifted(texture, 64, 48, 4, 0), 0.55, field), FlowStatus::ok);
+  EXPECT_EQ(update(flow, shifted(texture, 64, 48, 5, 0), 0.05, field), FlowStatus::time_went_back);
+  EXPECT_EQ(update(flow, shifted(texture, 64, 48, 6, 0), 0.1, field), FlowStatus::ok);
+  EXPECT_THROW(update(flow, cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0F)), 0.6, field),
                std::invalid_argument);
-  EXPECT_THROW(OpticalFlow{FlowMethod::synthetic}, std::invalid_argument);
+  OpticalFlowOptions no_baseline;
+  no_baseline.max_kept_images = 0;
+  EXPECT_THROW(make_flow_source(FlowMethod::dis_fast, no_baseline), std::invalid_argument);
+}
+
+// The renderer's flow is copied as it comes (the sky's too, unless a camera is imitated), with
+// its depth where the field carries depth, and derotated by the angular velocity at the frame.
+TEST(FlowSource, TheRenderersFlowIsCopiedAndDerotated) {
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(4, 3, 90.0 * kDeg);
+  const cv::Mat flow(3, 4, CV_32FC2, cv::Scalar(0.25F, -0.5F));
+  cv::Mat depth(3, 4, CV_32FC1, cv::Scalar(2.0F));
+  depth.at<float>(0, 1) = std::numeric_limits<float>::infinity();
+  const cv::Mat no_image;
+  const FlowFrame frame{no_image, 1.0, &flow, &depth};
+  const Eigen::Vector3d omega = camera_angular_velocity(0.5, 0.1);
+  for (const bool camera_sky : {false, true}) {
+    const std::unique_ptr<FlowSource> renderer =
+        make_flow_source(FlowMethod::synthetic, {}, {.no_flow_without_depth = camera_sky});
+    EXPECT_FALSE(renderer->estimated());
+    EXPECT_EQ(renderer->noise_correlation_px(), 1.0);
+    FlowField field(intrinsics, true);
+    ASSERT_EQ(renderer->update(frame, {omega, {}}, field), FlowStatus::ok);
+    EXPECT_EQ(field.removed_rotation(), omega);
+    const Eigen::Vector2d derotated =
+        Eigen::Vector2d(0.25, -0.5) - rotational_flow(field.x(2), field.y(2), omega);
+    EXPECT_NEAR(field.at(2, 2).x(), derotated.x(), 1e-6);
+    EXPECT_NEAR(field.at(2, 2).y(), derotated.y(), 1e-6);
+    EXPECT_EQ(field.depth()[field.index(2, 2)], 2.0F);
+    EXPECT_EQ(field.at(1, 0).allFinite(), !camera_sky);
+  }
+  FlowField field(intrinsics);
+  const std::unique_ptr<FlowSource> renderer = make_flow_source(FlowMethod::synthetic);
+  EXPECT_EQ(renderer->update({no_image, 1.0, &no_image, &depth}, {}, field),
+            FlowStatus::empty_frame);
+  EXPECT_THROW(renderer->update({no_image, 1.0}, {}, field), std::invalid_argument);
 }
 
 // Along a straight edge only the motion across it can be seen (the aperture problem): such pixels
 // get no flow, though their gradient is strong, while textured pixels beside them keep theirs.
-TEST(OpticalFlow, AStraightEdgeGivesNoFlowWhereTextureDoes) {
+TEST(FlowSource, AStraightEdgeGivesNoFlowWhereTextureDoes) {
   const int width = 96;
   const int height = 64;
   const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
@@ -110,10 +154,10 @@ TEST(OpticalFlow, AStraightEdgeGivesNoFlowWhereTextureDoes) {
     image(cv::Rect(width / 2, height / 2, width / 2, height / 2)).setTo(180);
     return image;
   };
-  OpticalFlow flow(FlowMethod::dis_medium);
+  const std::unique_ptr<FlowSource> flow = make_flow_source(FlowMethod::dis_medium);
   FlowField field(intrinsics);
-  ASSERT_EQ(flow.update(scene(0), 0.0, field), FlowStatus::no_previous_frame);
-  ASSERT_EQ(flow.update(scene(2), 0.2, field), FlowStatus::ok);
+  ASSERT_EQ(update(*flow, scene(0), 0.0, field), FlowStatus::no_previous_frame);
+  ASSERT_EQ(update(*flow, scene(2), 0.2, field), FlowStatus::ok);
   int edge_valid = 0;
   for (int row = height / 2 - 2; row <= height / 2 + 1; ++row) {
     for (int col = width / 2 + 8; col < width - 8; ++col) {
@@ -132,16 +176,19 @@ TEST(OpticalFlow, AStraightEdgeGivesNoFlowWhereTextureDoes) {
 
 // OpenCV's presets and defaults: DIS matches 8 px patches, at half resolution (medium) or a
 // quarter (fast, ultrafast); Farneback averages over 13 px, TV-L1's median filter is 5 px wide.
-TEST(OpticalFlow, NoiseCorrelationIsTheEstimatorsWindow) {
-  EXPECT_EQ(noise_correlation_px(FlowMethod::synthetic), 1.0);
-  EXPECT_EQ(noise_correlation_px(FlowMethod::dis_medium), 16.0);
-  EXPECT_EQ(noise_correlation_px(FlowMethod::dis_fast), 32.0);
-  EXPECT_EQ(noise_correlation_px(FlowMethod::dis_ultrafast), 32.0);
-  EXPECT_EQ(noise_correlation_px(FlowMethod::farneback), 13.0);
-  EXPECT_EQ(noise_correlation_px(FlowMethod::tvl1), 5.0);
+TEST(FlowSource, NoiseCorrelationIsTheEstimatorsWindow) {
+  const auto window_px = [](FlowMethod method) {
+    return make_flow_source(method)->noise_correlation_px();
+  };
+  EXPECT_EQ(window_px(FlowMethod::synthetic), 1.0);
+  EXPECT_EQ(window_px(FlowMethod::dis_medium), 16.0);
+  EXPECT_EQ(window_px(FlowMethod::dis_fast), 32.0);
+  EXPECT_EQ(window_px(FlowMethod::dis_ultrafast), 32.0);
+  EXPECT_EQ(window_px(FlowMethod::farneback), 13.0);
+  EXPECT_EQ(window_px(FlowMethod::tvl1), 5.0);
 }
 
-TEST(OpticalFlow, MethodNamesRoundTrip) {
+TEST(FlowSource, MethodNamesRoundTrip) {
   for (FlowMethod method : numerical_flow_methods()) {
     EXPECT_EQ(parse_flow_method(to_string(method)), method);
   }

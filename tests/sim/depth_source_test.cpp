@@ -49,7 +49,7 @@ Seen look(servo::DepthSource depth, servo::SegmentationMethod segmentation) {
     agent.step(*renderer, times);
   }
   Seen seen;
-  seen.segmentation = agent.brain().perception().segmentation();
+  seen.segmentation = agent.brain().segmentation();
   for (const servo::ObjectFeatures& object : agent.brain().objects()) {
     if (object.pixel_count > seen.wall.pixel_count) {
       seen.wall = object;

@@ -7,13 +7,15 @@
 
 #include "flowsteer/base/camera.hpp"
 #include "flowsteer/camera_io/frame_source.hpp"
-#include "flowsteer/pipeline/perception.hpp"
+#include "flowsteer/pipeline/perception_options.hpp"
 #include "flowsteer/servo/control.hpp"
+#include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/steering.hpp"
 
 namespace flowsteer::pipeline {
 
 class MotionEnergySteering;
+class Perception;
 
 // Features that come from elsewhere than the flow: the simulator's exact geometry, for the
 // geometric model (perfect perception, the reference the vision model is compared with).
@@ -83,23 +85,30 @@ class Brain {
   // synthetic flow and no image term it reads only the simulator's channels, and a simulator
   // can leave the image out.
   bool reads_image() const;
-  const Perception& perception() const { return perception_; }
   // The last step's perception status: FlowStatus::ok when the model had features to steer by.
   servo::FlowStatus status() const { return status_; }
   bool blind() const { return status_ != servo::FlowStatus::ok; }
+  // What became of the last frame's flow, whether or not the model steers by it:
+  // no_previous_frame before the first step and with the geometric model, which computes none.
+  servo::FlowStatus flow_status() const;
+  // The last frame's flow, derotated (valid when flow_status() is ok), and its segmentation.
+  const servo::FlowField& flow() const;
+  const servo::Segmentation& segmentation() const;
   // The features the controller saw: from the flow, or from the oracle (model geometric).
   std::span<const servo::ObjectFeatures> objects() const { return percept_.objects; }
-  const servo::Percept& percept() const { return percept_; }
+  // The goal the last step steered for, as BrainInput gave it.
+  std::optional<double> goal_bearing_rad() const { return percept_.goal_bearing_rad; }
+  std::optional<double> goal_distance_m() const { return percept_.goal_distance_m; }
   const servo::ControlOutput& output() const { return output_; }
   // What each stage of the last step took (render stays 0: the caller times its camera).
   const StageTimes& times() const { return times_; }
-  const base::CameraIntrinsics& intrinsics() const { return perception_.intrinsics(); }
+  const base::CameraIntrinsics& intrinsics() const;
 
  private:
   bool uses_flow() const;
 
   BrainConfig config_;
-  Perception perception_;
+  std::unique_ptr<Perception> perception_;
   servo::Controller controller_;
   std::unique_ptr<FeatureOracle> oracle_;
   std::unique_ptr<MotionEnergySteering> motion_energy_;

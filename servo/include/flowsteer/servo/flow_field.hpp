@@ -43,7 +43,7 @@ class FlowField {
 
   // The camera rotation the last derotate() took out of this flow, zero until one has. The
   // vectors are float, exact only to their magnitude before it came off
-  // (FlowSample::delivered_norm). Perception derotates each frame of the renderer's flow.
+  // (FlowSample::delivered_norm). The renderer's flow source derotates each of its frames.
   const Eigen::Vector3d& removed_rotation() const { return removed_rotation_; }
 
   std::size_t index(int col, int row) const {
@@ -76,7 +76,7 @@ Eigen::Matrix3d rotation_over(const Eigen::Vector3d& camera_omega, double interv
 
 // Removes the rotational part of every vector (CGF Eq. 1 -> Eq. 2) of instantaneous flow.
 // Non-finite vectors stay non-finite so that later stages can count them. Displacement flow has
-// its rotation compensated before it is estimated (OpticalFlow::update with a rotation).
+// its rotation compensated before it is estimated (CameraRotation::between).
 void derotate(FlowField& field, const Eigen::Vector3d& camera_omega);
 
 }  // namespace flowsteer::servo

@@ -6,8 +6,8 @@
 #include <span>
 #include <string>
 #include <string_view>
-#include <vector>
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "flowsteer/servo/flow_field.hpp"
@@ -26,12 +26,7 @@ std::string flow_method_names();
 // Every method that computes flow from images, in the order tables list them.
 std::span<const FlowMethod> numerical_flow_methods();
 
-// Side in pixels of the window over which a method's errors are correlated: the patch (DIS, at
-// its finest scale), the averaging window (Farneback) or the median filter (TV-L1); 1 for the
-// synthetic flow. Flow vectors closer than this are not independent measurements.
-double noise_correlation_px(FlowMethod method);
-
-// What became of one image given to OpticalFlow::update.
+// What became of one frame given to FlowSource::update.
 enum class FlowStatus {
   ok,
   no_previous_frame,  // the first image, or the first after reset(): nothing to compare with
@@ -45,6 +40,7 @@ enum class FlowStatus {
 
 const char* to_string(FlowStatus status);
 
+// The estimators' options (every method but synthetic).
 struct OpticalFlowOptions {
   // Pixels whose neighbourhood has less image gradient than this in its least textured
   // direction (RMS over a 5×5 window, grey levels per pixel) get no flow: estimators fill such
@@ -62,66 +58,67 @@ struct OpticalFlowOptions {
   int max_kept_images = 8;
 };
 
-// Dense optical flow between consecutive images, in the servo core's units: normalised image
-// coordinates per second at the pixels of the newer image (the convention of CGF Eq. 1), so the
-// rest of the pipeline cannot tell it from the renderer's flow. The flow is not derotated.
-class OpticalFlow {
- public:
-  // Throws std::invalid_argument for FlowMethod::synthetic, which has no images to compute from.
-  explicit OpticalFlow(FlowMethod method, const OpticalFlowOptions& options = {});
-  ~OpticalFlow();
-  OpticalFlow(OpticalFlow&&) noexcept;
-  OpticalFlow& operator=(OpticalFlow&&) noexcept;
-
-  FlowMethod method() const { return method_; }
-
-  // Takes the next image (8-bit grey or BGR) taken at timestamp_s (monotonic). On ok, every
-  // vector of `field` is set: flow, or NaN where the image has too little texture to show it.
-  // On any other status `field` is left untouched and the image (when it has texture) is kept as
-  // the start of the next pair. Throws std::invalid_argument when the image is not 8-bit with 1
-  // or 3 channels.
-  FlowStatus update(const cv::Mat& image, double timestamp_s, FlowField& field);
-
-  // The camera's rotation between two times (from_s older): R with a static point's direction p
-  // in the newer image at R p in the older one (rotation_over in flow_field.hpp).
-  using RotationBetween = std::function<Eigen::Matrix3d(double from_s, double to_s)>;
-
-  // As above, with the rotation the base measured compensated before the estimator runs (MIG's
-  // rotation compensation): the older image is warped to the newer image's orientation, so the
-  // estimator sees only the translational flow and the field comes out derotated. A turning
-  // agent otherwise hands the estimator displacements of 20 px and more at the edge of a wide
-  // view, which DIS falls short of by a quarter; the derotation then leaves that shortfall in
-  // every vector as spurious motion. Pixels whose ray the older image did not see get NaN.
-  FlowStatus update(const cv::Mat& image, double timestamp_s, FlowField& field,
-                    const RotationBetween& rotation);
-
-  // Forgets the previous images: the next update returns no_previous_frame.
-  void reset();
-
- private:
-  struct Estimator;
-  void keep(double timestamp_s);
-
-  FlowMethod method_;
-  OpticalFlowOptions options_;
-  std::unique_ptr<Estimator> estimator_;
-  struct KeptImage {
-    cv::Mat grey;
-    double timestamp_s = 0.0;
-  };
-  // A ring of the newest images, oldest first from kept_begin_.
-  std::vector<KeptImage> kept_;
-  std::size_t kept_begin_ = 0;
-  std::size_t kept_count_ = 0;
-  cv::Mat grey_;
-  cv::Mat flow_px_;
-  cv::Mat gradient_x_;
-  cv::Mat gradient_y_;
-  cv::Mat gradient_product_;
-  cv::Mat tensor_xx_;
-  cv::Mat tensor_xy_;
-  cv::Mat tensor_yy_;
-  cv::Mat warped_;
+// The renderer's flow as it comes, or as a camera would see it.
+struct RendererFlowOptions {
+  // No flow where the renderer's depth is not finite (the sky): a camera's sky has no texture to
+  // show motion by.
+  bool no_flow_without_depth = false;
 };
+
+// One frame as a flow source reads it.
+struct FlowFrame {
+  const cv::Mat& image;  // 8-bit grey or BGR; the renderer's flow does not read it
+  double timestamp_s = 0.0;
+  // The renderer's flow (CV_32FC2, in the field's units) and depth (CV_32FC1, metres): null
+  // unless a simulator rendered the frame.
+  const cv::Mat* renderer_flow = nullptr;
+  const cv::Mat* renderer_depth_m = nullptr;
+};
+
+// The camera's rotation as the base measured it, which every source takes out of its flow.
+struct CameraRotation {
+  // At the frame's time, in the camera frame (camera_angular_velocity): instantaneous flow is
+  // derotated by it.
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
+  // Between two times (from_s older): R with a static point's direction p in the newer image at
+  // R p in the older one (rotation_over). Empty: the camera did not turn.
+  std::function<Eigen::Matrix3d(double from_s, double to_s)> between;
+};
+
+// Dense optical flow, one class per algorithm behind one interface, as OpenCV's
+// cv::DenseOpticalFlow: the renderer's exact flow and each of OpenCV's estimators. Every source
+// gives flow in the servo core's units, normalised image coordinates per second at the pixels of
+// the newer image (the convention of CGF Eq. 1), derotated, so that the rest of the pipeline
+// cannot tell them apart but by their errors.
+class FlowSource {
+ public:
+  virtual ~FlowSource() = default;
+
+  // Takes the next frame, taken at frame.timestamp_s (monotonic). On ok, every vector of `field`
+  // is set: flow with `rotation` taken out, or NaN where the flow is not known. On any other
+  // status `field` is left untouched. Throws std::invalid_argument when the frame lacks what the
+  // source reads, or an estimator's image is not 8-bit with 1 or 3 channels.
+  virtual FlowStatus update(const FlowFrame& frame, const CameraRotation& rotation,
+                            FlowField& field) = 0;
+
+  // Forgets the previous frames: an estimator's next update returns no_previous_frame.
+  virtual void reset() = 0;
+
+  // Whether the flow is estimated from the frame's image, with an estimator's error, rather than
+  // read from the renderer.
+  virtual bool estimated() const = 0;
+
+  // Side in pixels of the window over which the flow's errors are correlated: the patch (DIS, at
+  // its finest scale), the averaging window (Farneback) or the median filter (TV-L1); 1 for the
+  // renderer's flow. Flow vectors closer than this are not independent measurements.
+  virtual double noise_correlation_px() const = 0;
+};
+
+// The source of `method`: the renderer's flow (synthetic) with `renderer`, else OpenCV's
+// estimator with `estimator`. Throws std::invalid_argument when an estimator's baseline_s is
+// negative or max_kept_images below 1.
+std::unique_ptr<FlowSource> make_flow_source(FlowMethod method,
+                                             const OpticalFlowOptions& estimator = {},
+                                             const RendererFlowOptions& renderer = {});
 
 }  // namespace flowsteer::servo
