@@ -8,8 +8,8 @@ namespace flowsteer::drivers {
 
 namespace {
 
-// ω_z = −ω_cy: the camera's y axis points down, the body's z axis up (docs/CONVENTIONS.md). This pair is
-// the project's one conversion point; everything else speaks ω_cy or wheel speeds.
+// ω_z = −ω_cy: the camera's y axis points down, the body's z axis up (docs/CONVENTIONS.md). This
+// pair is the project's one conversion point; everything else speaks ω_cy or wheel speeds.
 double yaw_rate_from_turn_rate(double turn_rate) {
   return -turn_rate;
 }

@@ -152,9 +152,9 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
 
   if (out) {
     const std::vector<CompareRow> rows = compare_table(result);
-    base::CsvTable table({"controller", "collisions", "goals_reached", "agents", "mean_time_to_goal_s",
-                    "mean_path_length_m", "min_clearance_m", "path_length_vs_geometric",
-                    "min_clearance_vs_geometric_m"});
+    base::CsvTable table({"controller", "collisions", "goals_reached", "agents",
+                          "mean_time_to_goal_s", "mean_path_length_m", "min_clearance_m",
+                          "path_length_vs_geometric", "min_clearance_vs_geometric_m"});
     for (const CompareRow& r : rows) {
       const sim::RunSummary& s = r.summary;
       table.add({std::string(servo::to_string(r.controller))},
@@ -165,7 +165,7 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
     table.write(out->staging_path("compare.csv"));
 
     base::CsvTable agents({"controller", "agent", "reached_goal", "time_to_goal_s", "path_length_m",
-                     "min_clearance_m", "collisions"});
+                           "min_clearance_m", "collisions"});
     std::vector<std::string> histogram_header = {"omega_low", "omega_high"};
     std::vector<cv::Mat> topviews;
     std::vector<cv::Mat> histograms;

@@ -26,8 +26,8 @@ std::string method_name(const std::optional<Method>& method) {
 
 void write_tables(const std::vector<RobustnessRun>& runs, base::OutputDir& out) {
   base::CsvTable csv({"flow", "segmentation", "resolution", "collisions", "goals_reached",
-                "agents_with_goal", "mean_time_to_goal_s", "mean_path_length_m", "min_clearance_m",
-                "clean"});
+                      "agents_with_goal", "mean_time_to_goal_s", "mean_path_length_m",
+                      "min_clearance_m", "clean"});
   for (const RobustnessRun& r : runs) {
     const sim::RunSummary& s = r.summary;
     csv.add(
@@ -60,7 +60,7 @@ std::vector<RobustnessRun> planned_runs(const sim_camera::WorldSpec& world,
 
 // The run as `flowsteer sim` with its overrides, without files or progress lines.
 sim::RunSummary run_once(const sim_camera::WorldSpec& world, const RobustnessRun& run,
-                    std::optional<int> steps) {
+                         std::optional<int> steps) {
   sim::SimOptions sim;
   sim.resolution = run.resolution;
   sim.steps = steps;

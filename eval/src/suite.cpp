@@ -83,7 +83,7 @@ void check_switched_off(const SuiteOptions& options) {
 
 // The case under the configuration, run as `flowsteer sim` runs it, its files into `folder`.
 sim::RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& configuration,
-                    const SuiteOptions& options, const std::filesystem::path& folder) {
+                         const SuiteOptions& options, const std::filesystem::path& folder) {
   sim_camera::WorldSpec world = suite_case.world;
   for (sim_camera::AgentSpec& agent : world.agents) {
     agent.controller.model = configuration.controller.value_or(agent.controller.model);

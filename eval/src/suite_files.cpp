@@ -248,7 +248,7 @@ void write_suite_files(const SuiteResult& result, base::OutputDir& out) {
   base::write_text(out.staging_path("suite.txt"), table.str());
   base::write_text(out.staging_path("suite.json"), suite_json(result));
   sim::write_image(out.staging_path("contact_sheet.png"),
-              contact_sheet(result.runs, out.staging_path("topviews")));
+                   contact_sheet(result.runs, out.staging_path("topviews")));
 }
 
 SuiteResult read_suite_files(const std::filesystem::path& dir) {

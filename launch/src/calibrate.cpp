@@ -8,11 +8,11 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "flowsteer/base/output_files.hpp"
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/calibration/camera_mount.hpp"
 #include "flowsteer/calibration/intrinsics.hpp"
 #include "flowsteer/calibration/mount.hpp"
-#include "flowsteer/base/output_files.hpp"
 
 namespace flowsteer::launch {
 

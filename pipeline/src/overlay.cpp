@@ -43,7 +43,6 @@ cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude) {
   return bgr;
 }
 
-
 cv::Mat draw_overlay(const cv::Mat& image, const servo::FlowField& flow,
                      std::span<const servo::ObjectFeatures> objects,
                      const base::CameraIntrinsics& k, std::optional<double> goal_bearing_rad) {
@@ -90,6 +89,5 @@ std::unique_ptr<cv::VideoWriter> open_video(const std::filesystem::path& path, c
   }
   return writer;
 }
-
 
 }  // namespace flowsteer::pipeline

@@ -10,8 +10,8 @@
 #include <thread>
 
 #include "flowsteer/base/clock.hpp"
-#include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "flowsteer/base/output_files.hpp"
+#include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "vivid_loop.hpp"
 

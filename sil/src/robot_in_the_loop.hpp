@@ -12,8 +12,8 @@
 #include "flowsteer/drivers/command_stage.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
 #include "flowsteer/drivers/simulated_odrive.hpp"
-#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sil/sil.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "robot_process.hpp"
 
 namespace flowsteer::sil {
@@ -32,9 +32,9 @@ struct RobotLink {
   double startup_timeout_s = 30.0;
 };
 
-// The sim::AgentDriver of `flowsteer sil`: shows the agent's view on the output device at each step's
-// time, and moves the agent by the simulated ODrive's wheel velocities. The robot process starts
-// at the first step, and the world waits until it has activated its drive.
+// The sim::AgentDriver of `flowsteer sil`: shows the agent's view on the output device at each
+// step's time, and moves the agent by the simulated ODrive's wheel velocities. The robot process
+// starts at the first step, and the world waits until it has activated its drive.
 class RobotInTheLoop final : public sim::AgentDriver {
  public:
   // Connects vivid's loop and opens the output device and the CAN interface (the robot starts at

@@ -47,8 +47,8 @@ TEST(SuiteScore, EffortIsTheActiveTimeAndTheSumOfHalfTheSquaredSpeeds) {
   EXPECT_DOUBLE_EQ(effort.kinetic_energy_sum, 0.5 + 0.5 + 2.0 + 0.0);
   // SteerSuite's weights: 50 per collision, 1 per second, 1 per unit of effort.
   EXPECT_DOUBLE_EQ(composite01(3, effort), 150.0 + 2.0 + 3.0);
-  EXPECT_DOUBLE_EQ(composite01(0, sim::steersuite_effort(std::vector<Eigen::Vector2d>{{1, 1}}, 0.05)),
-                   0.0);
+  EXPECT_DOUBLE_EQ(
+      composite01(0, sim::steersuite_effort(std::vector<Eigen::Vector2d>{{1, 1}}, 0.05)), 0.0);
 }
 
 TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
@@ -63,7 +63,7 @@ TEST(SuiteScore, ARunsScoresAreMeansOverItsAgents) {
   straight.kinetic_energy_sum = 20.0;
   straight.min_clearance_m = 0.4;
   straight.turn_rates = {0.0, 0.2, 1.5, 0.4};  // two changes of 1 rad/s or more out of three
-  sim::AgentResult bumped;                          // two collisions, did not arrive
+  sim::AgentResult bumped;                     // two collisions, did not arrive
   bumped.path_length_m = 5.0;
   bumped.straight_line_m = 8.0;
   bumped.active_time_s = 30.0;

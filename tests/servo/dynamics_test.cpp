@@ -130,13 +130,12 @@ TEST(FeatureDynamics, InverseTtcRateMatchesSimulation) {
 TEST(FeatureDynamics, GapErrorRateMatchesSimulation) {
   constexpr double kGap = 2.0;
   constexpr double kGapTime = 1.5;
-  auto gap_error = [](const TwoBody& b) {
-    return b.relative_vz() + (b.depth() - kGap) / kGapTime;
-  };
+  auto gap_error = [](const TwoBody& b) { return b.relative_vz() + (b.depth() - kGap) / kGapTime; };
   for (const TwoBody& s : random_configurations()) {
     for (const Controls& c : kControls) {
-      expect_rate(gap_error_rate(s.relative_vx(), s.relative_vz(), s.image_x(), s.depth(), kGapTime),
-                  rate_of(s, c.accel, c.turn, gap_error), c, "gap error");
+      expect_rate(
+          gap_error_rate(s.relative_vx(), s.relative_vz(), s.image_x(), s.depth(), kGapTime),
+          rate_of(s, c.accel, c.turn, gap_error), c, "gap error");
     }
   }
 }

@@ -4,8 +4,8 @@
 
 namespace flowsteer::base {
 
-// The project's one clock (docs/CONVENTIONS.md: time in seconds, monotonic clock): CLOCK_MONOTONIC in
-// seconds. V4L2 and libcamera stamp frames with this clock, and std::chrono::steady_clock reads
+// The project's one clock (docs/CONVENTIONS.md: time in seconds, monotonic clock): CLOCK_MONOTONIC
+// in seconds. V4L2 and libcamera stamp frames with this clock, and std::chrono::steady_clock reads
 // it on Linux, so every time in the stack is comparable with every other.
 inline double monotonic_now_s() {
   timespec now{};

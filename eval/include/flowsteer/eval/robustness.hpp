@@ -5,9 +5,9 @@
 #include <ostream>
 #include <vector>
 
-#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/world.hpp"
 
 namespace flowsteer::eval {

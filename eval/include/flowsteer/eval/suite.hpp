@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/servo/steering.hpp"
+#include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/world_spec.hpp"
 
 namespace flowsteer::eval {
@@ -75,7 +75,7 @@ struct SuiteRun {
   std::string case_name;
   SuiteConfiguration configuration;
   sim::RunSummary summary;  // empty when the run failed
-  std::string error;   // why the run failed (its exception, or how its process ended)
+  std::string error;        // why the run failed (its exception, or how its process ended)
   bool failed() const { return !error.empty(); }
   bool clean() const { return !failed() && summary.clean(); }
   // The run's folder and top view are named this:

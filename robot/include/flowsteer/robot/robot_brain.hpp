@@ -4,8 +4,8 @@
 #include <ostream>
 
 #include "flowsteer/config/robot_launch.hpp"
-#include "flowsteer/robot/robot_loop.hpp"
 #include "flowsteer/pipeline/brain.hpp"
+#include "flowsteer/robot/robot_loop.hpp"
 
 namespace flowsteer::robot {
 

@@ -5,8 +5,8 @@ namespace flowsteer::servo {
 // How a visual feature s moves when the agent moves: ṡ = drift + per_accel·a_c + per_turn·ω,
 // with a_c the forward acceleration and ω the turn rate about the camera's y axis (positive
 // turns right). These are the interactions the control terms differentiate; the signs are the
-// ones docs/CONVENTIONS.md checked numerically, and tests/servo/dynamics_test.cpp pins them against a
-// two-body simulation.
+// ones docs/CONVENTIONS.md checked numerically, and tests/servo/dynamics_test.cpp pins them against
+// a two-body simulation.
 struct FeatureRate {
   double drift = 0.0;
   double per_accel = 0.0;

@@ -18,8 +18,8 @@ enum class SteeringModel { vision, geometric, motion_energy };
 // The navigation function of CGF §6.3: towards goals, or after a leader.
 enum class NavigationKind { goal_reaching, following };
 // The navigation function that models vision and geometric descend: the papers' as published
-// (with docs/CONVENTIONS.md's sign corrections), kept exactly so that comparisons with the papers stay
-// honest, or the project's own law (docs/NAVIGATION.md), the default; mig2019 is cgf2019 with
+// (with docs/CONVENTIONS.md's sign corrections), kept exactly so that comparisons with the papers
+// stay honest, or the project's own law (docs/NAVIGATION.md), the default; mig2019 is cgf2019 with
 // MIG 2019's weights, dark regions included.
 enum class NavigationLaw { flowsteer, cgf2019, mig2019 };
 // One mechanism of the flowsteer law, switched off for an ablation (docs/NAVIGATION.md,
