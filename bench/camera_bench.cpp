@@ -1,7 +1,7 @@
 // Capture-side latency on replay at 640x480: decoding a recorded frame (MJPG in AVI, as a robot
 // records), undistorting it with a calibration, and the DIS optical flow the numerical-flow
 // pipeline runs on consecutive frames; then the whole capture-to-command step of `flowsteer
-// run`: decode, undistort, Perception (DIS flow, derotation, ground test, flow_graph_fast
+// run`: decode, undistort, the brain's perception (DIS flow, derotation, ground test, flow_graph_fast
 // segmentation, features) and the controller's command. The recording is written at start-up:
 // a textured scene sliding sideways, so that the flow has something to find.
 

@@ -246,7 +246,7 @@ void RobotInTheLoop::finish(base::OutputDir* out) {
 }
 
 // The robot's frame log has a line per frame with "latency_ms X", the delay from the frame's
-// capture to its command (launch/src/robot_brain.cpp). Returns the log's text; none when the
+// capture to its command (robot/src/robot_brain.cpp). Returns the log's text; none when the
 // robot never started.
 std::string RobotInTheLoop::read_robot_log() {
   std::ostringstream text;

@@ -11,6 +11,8 @@
 #include <optional>
 #include <stdexcept>
 
+#include "flowsteer/base/unique_fd.hpp"
+
 namespace flowsteer::sil {
 
 namespace {
@@ -19,12 +21,12 @@ namespace {
 class Node {
  public:
   Node(const std::string& path, std::uint32_t needed_cap, const char* role) : path_(path) {
-    fd_ = ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-    if (fd_ < 0) {
+    fd_ = base::UniqueFd(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC));
+    if (!fd_) {
       fail(std::string("cannot open the ") + role + " node: " + std::strerror(errno));
     }
     v4l2_capability cap{};
-    if (::ioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) {
+    if (::ioctl(fd_.get(), VIDIOC_QUERYCAP, &cap) != 0) {
       fail(std::string("VIDIOC_QUERYCAP failed: ") + std::strerror(errno));
     }
     const auto* driver = reinterpret_cast<const char*>(cap.driver);
@@ -35,22 +37,19 @@ class Node {
       fail(std::string("not vivid's ") + role + " node");
     }
   }
-  ~Node() { ::close(fd_); }
-  Node(const Node&) = delete;
-  Node& operator=(const Node&) = delete;
 
   // ioctl that throws naming the node and the request.
   void control(unsigned long request, void* arg, const char* name) const {
-    if (::ioctl(fd_, request, arg) != 0) {
+    if (::ioctl(fd_.get(), request, arg) != 0) {
       fail(std::string(name) + " failed: " + std::strerror(errno));
     }
   }
   bool try_control(unsigned long request, void* arg) const {
-    return ::ioctl(fd_, request, arg) == 0;
+    return ::ioctl(fd_.get(), request, arg) == 0;
   }
   [[noreturn]] void fail(const std::string& what) const {
     throw std::runtime_error("vivid loop: " + path_ + ": " + what + " (the loop needs `" +
-                             kVividModprobe + "`; see the README, \"Simulation in the loop\")");
+                             kVividModprobe + "`; see docs/COMMANDS.md, \"flowsteer sil\")");
   }
 
   // Sets vivid's control `name` (vivid's own controls have ids in no header).
@@ -70,7 +69,7 @@ class Node {
 
  private:
   std::string path_;
-  int fd_ = -1;
+  base::UniqueFd fd_;
 };
 
 void select_hdmi_input(const Node& capture) {

@@ -1,5 +1,5 @@
 // Capture against a SimCamera: views are kept for new coverage or a new pose, duplicates are
-// not; `flowsteer calibrate capture`'s work (launch::run_calibrate_capture) writes its folder
+// not; `flowsteer calibrate capture`'s work (calibration::run_calibrate_capture) writes its folder
 // only when the calibration succeeds. And the boards: specs, the ChArUco path, its warning.
 #include <cmath>
 #include <filesystem>
@@ -14,7 +14,7 @@
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/calibration/capture.hpp"
 #include "flowsteer/calibration/intrinsics.hpp"
-#include "flowsteer/launch/calibrate.hpp"
+#include "flowsteer/calibration/calibrate_commands.hpp"
 #include "flowsteer/sim_camera/sim_camera.hpp"
 #include "target_scene.hpp"
 
@@ -107,14 +107,14 @@ TEST(Capture, AStillCameraGivesOneViewAndNoCalibration) {
   EXPECT_EQ(capture_views(source, detector, options, log).views.size(), 1U);
 
   MovingCamera again(test::shared_renderer(), false);
-  flowsteer::launch::CaptureCommand command;
+  flowsteer::calibration::CaptureCommand command;
   command.board = "chessboard:9x6:0.05";
   command.out_dir =
       fs::temp_directory_path() / ("flowsteer_capture_still_" + std::to_string(::getpid()));
   command.capture.max_frames = 6;
   std::ostringstream out;
   try {
-    flowsteer::launch::run_calibrate_capture(command, again, out, log);
+    flowsteer::calibration::run_calibrate_capture(command, again, out, log);
     ADD_FAILURE() << "calibrated from one view";
   } catch (const CalibrationError& e) {
     EXPECT_NE(std::string(e.what()).find("too few views to calibrate: 1 usable"), std::string::npos)
@@ -126,13 +126,13 @@ TEST(Capture, AStillCameraGivesOneViewAndNoCalibration) {
 
 TEST(Capture, CalibratesAndWritesItsFolder) {
   MovingCamera source(test::shared_renderer(), true);
-  flowsteer::launch::CaptureCommand command;
+  flowsteer::calibration::CaptureCommand command;
   command.board = "chessboard:9x6:0.05";
   command.out_dir = fs::temp_directory_path() / ("flowsteer_capture_" + std::to_string(::getpid()));
   command.capture.views = 12;
   std::ostringstream out;
   std::ostringstream log;
-  flowsteer::launch::run_calibrate_capture(command, source, out, log);
+  flowsteer::calibration::run_calibrate_capture(command, source, out, log);
   std::cout << out.str();
   EXPECT_TRUE(fs::exists(command.out_dir / "view_00.png"));
   EXPECT_TRUE(fs::exists(command.out_dir / "report.txt"));

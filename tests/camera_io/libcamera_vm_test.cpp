@@ -49,16 +49,7 @@ bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
-class VimcVm : public flowsteer::vm_test::VmTest<VmRun, flowsteer::vm_test::parse_camera_console> {
- protected:
-  void SetUp() override {
-    VmTest::SetUp();
-    if (IsSkipped() || HasFatalFailure()) {
-      return;
-    }
-    ASSERT_EQ(run_.probe["done"], "") << run_.console;
-  }
-};
+class VimcVm : public flowsteer::vm_test::CameraVmTest {};
 
 TEST_F(VimcVm, ListsTheVimcCameraAndOpensItById) {
   ASSERT_EQ(run_.cameras.size(), 1u) << run_.console;
@@ -129,9 +120,7 @@ void check_stream(const VmRun& run, const std::string& key, std::size_t count) {
   // 1/60 s in jiffies of 4 ms (HZ=250): 16 ms.
   EXPECT_GE(mean_period_s, 0.016);
   EXPECT_LT(mean_period_s, 0.5);
-  unsigned long long dropped = 0;
-  ASSERT_EQ(std::sscanf(run.probe.at(key + "-dropped").c_str(), "%llu", &dropped), 1);
-  EXPECT_EQ(dropped, flowsteer::vm_test::sequence_gaps(frames));
+  flowsteer::vm_test::expect_drops_counted(run, key);
 }
 
 TEST_F(VimcVm, FramesHaveRisingSequenceAndMonotonicTimestamps) {

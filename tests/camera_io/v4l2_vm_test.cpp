@@ -20,16 +20,7 @@ namespace {
 using VmRun = flowsteer::vm_test::CameraVmRun;
 using ProbeFrame = flowsteer::vm_test::CameraFrame;
 
-class VividVm : public flowsteer::vm_test::VmTest<VmRun, flowsteer::vm_test::parse_camera_console> {
- protected:
-  void SetUp() override {
-    VmTest::SetUp();
-    if (IsSkipped() || HasFatalFailure()) {
-      return;
-    }
-    ASSERT_EQ(run_.probe["done"], "") << run_.console;
-  }
-};
+class VividVm : public flowsteer::vm_test::CameraVmTest {};
 
 TEST_F(VividVm, OffersYuyvAndGrey) {
   const std::string formats = " " + run_.probe["formats"] + " ";
@@ -70,9 +61,7 @@ void check_stream(const VmRun& run, const std::string& key, std::size_t count, i
   EXPECT_NEAR(span_s / periods, 1.0 / rate_hz, 0.1 / rate_hz);
   // An emulated machine converts slower than vivid fills buffers, so frames are dropped; each
   // gap in the driver's sequence numbers is counted.
-  unsigned long long dropped = 0;
-  ASSERT_EQ(std::sscanf(run.probe.at(key + "-dropped").c_str(), "%llu", &dropped), 1);
-  EXPECT_EQ(dropped, flowsteer::vm_test::sequence_gaps(frames));
+  flowsteer::vm_test::expect_drops_counted(run, key);
 }
 
 TEST_F(VividVm, YuyvStreamHasIncreasingSequenceAndMonotonicTimestamps) {

@@ -60,13 +60,29 @@ inline CameraVmRun parse_camera_console(const std::string& console) {
   return run;
 }
 
-// The frames the driver's sequence numbers skip between the first frame and the last.
-inline unsigned long long sequence_gaps(const std::vector<CameraFrame>& frames) {
+// The probe's "<stream>-dropped" count is the frames the driver's sequence numbers skip between
+// the stream's first frame and its last.
+inline void expect_drops_counted(const CameraVmRun& run, const std::string& stream) {
+  const std::vector<CameraFrame>& frames = run.frames.at(stream);
   unsigned long long gaps = 0;
   for (std::size_t i = 1; i < frames.size(); ++i) {
     gaps += frames[i].driver_sequence - frames[i - 1].driver_sequence - 1;
   }
-  return gaps;
+  unsigned long long dropped = 0;
+  ASSERT_EQ(std::sscanf(run.probe.at(stream + "-dropped").c_str(), "%llu", &dropped), 1);
+  EXPECT_EQ(dropped, gaps);
 }
+
+// A camera VM test suite: every test needs the probe to have finished ("PROBE done").
+class CameraVmTest : public VmTest<CameraVmRun, parse_camera_console> {
+ protected:
+  void SetUp() override {
+    VmTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) {
+      return;
+    }
+    ASSERT_EQ(run_.probe["done"], "") << run_.console;
+  }
+};
 
 }  // namespace flowsteer::vm_test

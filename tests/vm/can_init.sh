@@ -1,7 +1,7 @@
 #!/bin/sh
 # /init of the CAN test VM: vcan0 up, candump recording the bus, the ODrive probe against it,
 # then the capture on the console between markers.
-. /lib/can_session.sh
+. /lib/vm_session.sh
 vm_mount
 echo "VM: kernel $(uname -r)"
 vcan_up

@@ -9,4 +9,4 @@ here=$(cd "$(dirname "$0")" && pwd)
 kernel_cache=${1:?usage}; work=${2:?usage}; probe=${3:?usage}
 exec "$here/run_vm.sh" "$kernel_cache" "$work" "$here/can_init.sh" 90 \
   --modules "vcan can-raw" --binaries "$probe candump" \
-  --files "$here/can_session.sh=/lib/can_session.sh"
+  --files "$here/vm_session.sh=/lib/vm_session.sh"

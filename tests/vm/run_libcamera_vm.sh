@@ -14,4 +14,5 @@ kernel_cache=${1:?usage}; work=${2:?usage}; probe=${3:?usage}
 ipa=/usr/lib/x86_64-linux-gnu/libcamera
 exec "$here/run_vm.sh" "$kernel_cache" "$work" "$here/vimc_init.sh" 150 \
   --modules "vimc" --binaries "$probe" \
-  --files "$ipa/ipa_vimc.so $ipa/ipa_vimc.so.sign /usr/share/libcamera/ipa/vimc/vimc.conf"
+  --files "$ipa/ipa_vimc.so $ipa/ipa_vimc.so.sign /usr/share/libcamera/ipa/vimc/vimc.conf \
+$here/vm_session.sh=/lib/vm_session.sh"

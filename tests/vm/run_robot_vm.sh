@@ -10,4 +10,4 @@ here=$(cd "$(dirname "$0")" && pwd)
 kernel_cache=${1:?usage}; work=${2:?usage}; probe=${3:?usage}; flowsteer=${4:?usage}
 exec "$here/run_vm.sh" "$kernel_cache" "$work" "$here/robot_init.sh" 240 --memory-mb 1536 \
   --modules "vivid vcan can-raw" --binaries "$probe $flowsteer candump" \
-  --files "$here/can_session.sh=/lib/can_session.sh"
+  --files "$here/vm_session.sh=/lib/vm_session.sh"

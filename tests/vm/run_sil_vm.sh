@@ -14,4 +14,4 @@ exec "$here/run_vm.sh" "$kernel_cache" "$work" "$here/sil_init.sh" 300 --memory-
   --modules "vivid vcan can-raw" --binaries "$probe $flowsteer candump" \
   --files "/usr/share/glvnd/egl_vendor.d/50_mesa.json $lib/libEGL_mesa.so.0 \
 $lib/dri/swrast_dri.so $here/sil/scenario.yaml=/sil/scenario.yaml \
-$here/sil/launch.yaml=/sil/launch.yaml $here/can_session.sh=/lib/can_session.sh"
+$here/sil/launch.yaml=/sil/launch.yaml $here/vm_session.sh=/lib/vm_session.sh"

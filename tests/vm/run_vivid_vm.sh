@@ -7,4 +7,4 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 kernel_cache=${1:?usage}; work=${2:?usage}; probe=${3:?usage}
 exec "$here/run_vm.sh" "$kernel_cache" "$work" "$here/vivid_init.sh" 120 \
-  --modules "vivid" --binaries "$probe"
+  --modules "vivid" --binaries "$probe" --files "$here/vm_session.sh=/lib/vm_session.sh"

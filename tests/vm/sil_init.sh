@@ -3,7 +3,7 @@
 # (what flowsteer sil loops), vcan0 with candump recording it, then the probe
 # (tests/vm/sil_vm_probe.cpp), which runs /bin/flowsteer sil; the capture goes to the console
 # between markers.
-. /lib/can_session.sh
+. /lib/vm_session.sh
 vm_mount
 echo "VM: kernel $(uname -r), $(grep -c ^processor /proc/cpuinfo) CPUs"
 modprobe vivid n_devs=1 node_types=0x101 num_inputs=1 input_types=0x3 num_outputs=1 \

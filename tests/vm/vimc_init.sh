@@ -2,9 +2,8 @@
 # /init of the libcamera test VM: the vimc driver loaded (built by build_vimc.sh), its media
 # and video nodes listed, then the libcamera probe (tests/vm/libcamera_vm_probe.cpp); its
 # "PROBE" lines go to the console.
-mount -t proc proc /proc
-mount -t sysfs sys /sys
-mount -t devtmpfs dev /dev
+. /lib/vm_session.sh
+vm_mount
 
 echo "VM: kernel $(uname -r)"
 modprobe vimc || echo "VM: modprobe vimc failed"
@@ -17,6 +16,4 @@ for node in /sys/bus/media/devices/* /sys/class/video4linux/*; do
   : > "/run/udev/data/c$(cat "$node/dev")"
 done
 
-/bin/libcamera_vm_probe
-echo "VM: probe exit status $?"
-poweroff -f
+run_probe /bin/libcamera_vm_probe

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "flowsteer/launch/calibrate.hpp"
+#include "flowsteer/calibration/calibrate_commands.hpp"
 #include "flowsteer/robot/camera_source.hpp"
 
 namespace flowsteer::cli {
@@ -17,7 +17,7 @@ const char* const kBoardHelp =
 const char* const kModelHelp = "lens model: pinhole (plumb_bob), rational or fisheye";
 
 Subcommand add_intrinsics(CLI::App& calibrate) {
-  auto command = std::make_shared<launch::IntrinsicsCommand>();
+  auto command = std::make_shared<calibration::IntrinsicsCommand>();
   CLI::App* intrinsics = calibrate.add_subcommand(
       "intrinsics", "Calibrate from images of a board; write a ROS camera_info YAML");
   intrinsics->add_option("--images", command->images, "images, a quoted glob")->required();
@@ -30,19 +30,19 @@ Subcommand add_intrinsics(CLI::App& calibrate) {
       ->check(CLI::Range(3, 1000))
       ->capture_default_str();
   return {intrinsics, [command] {
-            launch::run_calibrate_intrinsics(*command, std::cout, std::cerr);
+            calibration::run_calibrate_intrinsics(*command, std::cout, std::cerr);
             return 0;
           }};
 }
 
 struct CaptureCommand {
-  launch::CaptureCommand capture;
+  calibration::CaptureCommand capture;
   std::string device;
 };
 
 Subcommand add_capture(CLI::App& calibrate) {
   auto command = std::make_shared<CaptureCommand>();
-  launch::CaptureCommand& c = command->capture;
+  calibration::CaptureCommand& c = command->capture;
   CLI::App* capture = calibrate.add_subcommand(
       "capture",
       "Grab views of a board from a camera, keep the ones that add coverage or a new pose, "
@@ -59,16 +59,16 @@ Subcommand add_capture(CLI::App& calibrate) {
       ->capture_default_str();
   capture->add_option("--camera-name", c.camera_name, "camera_name field")->capture_default_str();
   return {capture, [command] {
-            launch::CaptureCommand c = command->capture;
+            calibration::CaptureCommand c = command->capture;
             c.min_views = std::min(c.min_views, c.capture.views);
             const auto source = robot::open_camera(command->device);
-            launch::run_calibrate_capture(c, *source, std::cout, std::cerr);
+            calibration::run_calibrate_capture(c, *source, std::cout, std::cerr);
             return 0;
           }};
 }
 
 Subcommand add_mount(CLI::App& calibrate) {
-  auto command = std::make_shared<launch::MountCommand>();
+  auto command = std::make_shared<calibration::MountCommand>();
   CLI::App* mount = calibrate.add_subcommand(
       "mount",
       "Camera height, pitch and roll from one image of a board lying flat on the floor; write "
@@ -84,7 +84,7 @@ Subcommand add_mount(CLI::App& calibrate) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   return {mount, [command] {
-            launch::run_calibrate_mount(*command, std::cout, std::cerr);
+            calibration::run_calibrate_mount(*command, std::cout, std::cerr);
             return 0;
           }};
 }

@@ -96,7 +96,7 @@ struct ControllerConfig {
   double max_turn_rate = 1.0;
   // Law flowsteer, goal reaching: the fastest it lets the agent go, as a multiple of its
   // preferred speed (>= 1). Without a limit, the clearance term's way to widen a gap by speeding
-  // up took agents in circle_20 to 2.5 m/s for 1.3 (docs/NAVIGATION.md, "Approach speed").
+  // up took agents in circle_20 to 2.5 m/s for 1.3 (docs/NAVIGATION.md, "Control update").
   double max_speed_ratio = 1.1;
   // Use the depths the features carry: the renderer's per pixel with its flow; a camera's, those
   // of the ground where objects stand on it (FeatureOptions::ground_mount). False: MIG's

@@ -8,7 +8,7 @@
 #include "flowsteer/camera_io/camera_model.hpp"
 #include "flowsteer/camera_io/frame_source.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::calibration {
 
 // The lens model a user names: pinhole (plumb_bob), rational (rational_polynomial) or fisheye
 // (equidistant). Throws std::invalid_argument otherwise.
@@ -17,14 +17,14 @@ camera_io::DistortionModel lens_model(const std::string& name);
 // flowsteer calibrate intrinsics: the images of a glob, the board, a camera_info file.
 struct IntrinsicsCommand {
   std::string images;  // a shell pattern, e.g. "shots/*.png"
-  std::string board;   // see calibration::BoardSpec
+  std::string board;   // see BoardSpec
   std::string model = "pinhole";
   std::filesystem::path out = "camera_info.yaml";
   std::string camera_name = "camera";
   int min_views = 8;
 };
 // Prints the report on `out`, warnings on `log`; writes the file only when the calibration
-// succeeds. Throws calibration::CalibrationError, std::invalid_argument or std::runtime_error
+// succeeds. Throws CalibrationError, std::invalid_argument or std::runtime_error
 // with the reason.
 void run_calibrate_intrinsics(const IntrinsicsCommand& command, std::ostream& out,
                               std::ostream& log);
@@ -36,7 +36,7 @@ struct CaptureCommand {
   std::filesystem::path out_dir = "calibration";
   std::string camera_name = "camera";
   int min_views = 8;
-  calibration::CaptureOptions capture;
+  CaptureOptions capture;
 };
 // Writes view_NN.png, camera_info.yaml and report.txt into out_dir all at once, after the
 // calibration succeeded; nothing when it fails.
@@ -54,4 +54,4 @@ struct MountCommand {
 };
 void run_calibrate_mount(const MountCommand& command, std::ostream& out, std::ostream& log);
 
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::calibration

@@ -1,4 +1,4 @@
-#include "flowsteer/launch/calibrate.hpp"
+#include "flowsteer/calibration/calibrate_commands.hpp"
 
 #include <cmath>
 #include <iomanip>
@@ -14,15 +14,12 @@
 #include "flowsteer/calibration/intrinsics.hpp"
 #include "flowsteer/calibration/mount.hpp"
 
-namespace flowsteer::launch {
+namespace flowsteer::calibration {
 
 namespace {
 
-using calibration::BoardDetector;
-using calibration::BoardSpec;
-
-calibration::IntrinsicsOptions intrinsics_options(const std::string& model, int min_views) {
-  calibration::IntrinsicsOptions options;
+IntrinsicsOptions intrinsics_options(const std::string& model, int min_views) {
+  IntrinsicsOptions options;
   options.model = lens_model(model);
   options.min_views = min_views;
   return options;
@@ -60,42 +57,37 @@ camera_io::DistortionModel lens_model(const std::string& name) {
 
 void run_calibrate_intrinsics(const IntrinsicsCommand& command, std::ostream& out,
                               std::ostream& log) {
-  const calibration::IntrinsicsOptions options =
-      intrinsics_options(command.model, command.min_views);
+  const IntrinsicsOptions options = intrinsics_options(command.model, command.min_views);
   const BoardDetector detector(BoardSpec::parse(command.board));
   warn_all(detector.spec().warnings(), log);
-  const auto images = calibration::expand_glob(command.images);
+  const auto images = expand_glob(command.images);
   log << "flowsteer calibrate intrinsics: " << images.size() << " images, board "
       << detector.spec().text() << "\n";
-  const calibration::IntrinsicsResult result =
-      calibration::calibrate_from_images(images, detector, options);
+  const IntrinsicsResult result = calibrate_from_images(images, detector, options);
   out << result.report.text();
   print_model(result.model, out);
-  calibration::write_camera_info(
-      command.out, calibration::CameraInfo::monocular(command.camera_name, result.model));
+  write_camera_info(command.out, CameraInfo::monocular(command.camera_name, result.model));
   out << "wrote " << command.out.string() << "\n";
 }
 
 void run_calibrate_capture(const CaptureCommand& command, camera_io::FrameSource& source,
                            std::ostream& out, std::ostream& log) {
-  const calibration::IntrinsicsOptions options =
-      intrinsics_options(command.model, command.min_views);
+  const IntrinsicsOptions options = intrinsics_options(command.model, command.min_views);
   const BoardDetector detector(BoardSpec::parse(command.board));
   warn_all(detector.spec().warnings(), log);
-  const calibration::CaptureResult capture =
-      calibration::capture_views(source, detector, command.capture, log);
+  const CaptureResult capture = capture_views(source, detector, command.capture, log);
   log << "read " << capture.frames << " frames, the board in " << capture.frames_with_board
       << ", kept " << capture.views.size() << " views"
       << (capture.source_ended ? " (the source ended)" : "") << "\n";
-  std::vector<calibration::CalibrationView> views;
+  std::vector<CalibrationView> views;
   for (std::size_t i = 0; i < capture.views.size(); ++i) {
     std::ostringstream name;
     name << "view_" << std::setw(2) << std::setfill('0') << i << ".png";
     views.push_back({name.str(), capture.views[i].board});
   }
-  const calibration::IntrinsicsResult result =
-      calibration::calibrate_board_views(views, {}, capture.image_size, detector.spec(),
-                                         std::to_string(capture.frames) + " frames read", options);
+  const IntrinsicsResult result =
+      calibrate_board_views(views, {}, capture.image_size, detector.spec(),
+                            std::to_string(capture.frames) + " frames read", options);
   const std::string report = result.report.text();
   out << report;
   print_model(result.model, out);
@@ -107,9 +99,8 @@ void run_calibrate_capture(const CaptureCommand& command, camera_io::FrameSource
       throw std::runtime_error("cannot write " + path.string());
     }
   }
-  calibration::write_camera_info(
-      dir.staging_path("camera_info.yaml"),
-      calibration::CameraInfo::monocular(command.camera_name, result.model));
+  write_camera_info(dir.staging_path("camera_info.yaml"),
+                    CameraInfo::monocular(command.camera_name, result.model));
   base::write_text(dir.staging_path("report.txt"), report);
   dir.commit();
   out << "wrote " << capture.views.size() << " views, camera_info.yaml and report.txt into "
@@ -123,7 +114,7 @@ void run_calibrate_mount(const MountCommand& command, std::ostream& out, std::os
   const BoardDetector detector(BoardSpec::parse(command.board));
   warn_all(detector.spec().warnings(), log);
   std::vector<std::string> warnings;
-  const calibration::CameraInfo info = calibration::read_camera_info(command.intrinsics, warnings);
+  const CameraInfo info = read_camera_info(command.intrinsics, warnings);
   warn_all(warnings, log);
   const cv::Mat image = cv::imread(command.image.string(), cv::IMREAD_GRAYSCALE);
   if (image.empty()) {
@@ -140,15 +131,15 @@ void run_calibrate_mount(const MountCommand& command, std::ostream& out, std::os
   if (!board) {
     throw std::runtime_error(command.image.string() + ": " + why);
   }
-  calibration::MountMeasurement m = calibration::measure_mount(info.model, *board);
+  MountMeasurement m = measure_mount(info.model, *board);
   m.mount.mount.height_m += command.board_thickness_m;
   const double deg = 180.0 / std::numbers::pi;
   out << std::fixed << std::setprecision(3) << "camera height " << m.mount.mount.height_m
       << " m, pitch " << std::setprecision(2) << m.mount.mount.pitch_rad * deg
       << " deg (down), roll " << m.mount.roll_rad * deg << " deg; board pose error "
       << std::setprecision(3) << m.rms_px << " px over " << m.corners << " corners\n";
-  calibration::write_camera_mount(command.out, m.mount);
+  write_camera_mount(command.out, m.mount);
   out << "wrote " << command.out.string() << "\n";
 }
 
-}  // namespace flowsteer::launch
+}  // namespace flowsteer::calibration
