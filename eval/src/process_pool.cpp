@@ -12,8 +12,11 @@
 #include <map>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
 
 #include <opencv2/core/utility.hpp>
+
+#include "flowsteer/base/unique_fd.hpp"
 
 namespace flowsteer::eval {
 
@@ -163,12 +166,12 @@ class Workers {
  public:
   struct Running {
     std::size_t index;
-    int fd;
+    base::UniqueFd pipe;  // the read end of the worker's pipe
   };
   ~Workers() {
-    for (const auto& [pid, running] : running_) {
+    for (auto& [pid, running] : running_) {
       ::kill(pid, SIGTERM);
-      ::close(running.fd);
+      running.pipe.reset();
     }
     for (const auto& entry : running_) {
       int status = 0;
@@ -182,22 +185,21 @@ class Workers {
     if (::pipe2(fds, O_CLOEXEC) != 0) {
       throw std::system_error(errno, std::generic_category(), "cannot create a worker's pipe");
     }
+    base::UniqueFd read_end(fds[0]);
+    base::UniqueFd write_end(fds[1]);
     std::cout.flush();
     std::cerr.flush();
     const InterruptsHeld held;
     const pid_t pid = ::fork();
     if (pid < 0) {
-      const int error = errno;
-      ::close(fds[0]);
-      ::close(fds[1]);
-      throw std::system_error(error, std::generic_category(), "cannot start a worker process");
+      throw std::system_error(errno, std::generic_category(), "cannot start a worker process");
     }
     if (pid == 0) {
-      ::close(fds[0]);
-      run_worker(fds[1], index, jobs, task, held.previous());
+      read_end.reset();
+      run_worker(write_end.get(), index, jobs, task, held.previous());
     }
-    ::close(fds[1]);
-    running_[pid] = {index, fds[0]};
+    write_end.reset();
+    running_.emplace(pid, Running{index, std::move(read_end)});
   }
 
   // Waits for a worker to end; its index and outcome.
@@ -216,10 +218,9 @@ class Workers {
       if (found == running_.end()) {
         continue;  // not one of ours
       }
-      const Running running = found->second;
+      const Running running = std::move(found->second);
       running_.erase(found);
-      const std::string record = read_all(running.fd);
-      ::close(running.fd);
+      const std::string record = read_all(running.pipe.get());
       return {running.index, outcome_of(record, status)};
     }
   }
