@@ -5,18 +5,21 @@
 //     synthetic flow and semantic segmentation, beside the per-agent update times of CGF
 //     Fig. 14 (UE4, Quadro M2000M); targets on a CPU-only machine (Mesa llvmpipe): ≤ 5 ms at
 //     256², ≤ 60 ms at 1024².
-//   AgentStepNumerical/<flow>/<resolution>: the full step with flow computed from the images and
+//   AgentStepNumerical/<flow>/<width>/<height>: the full step with flow computed from the images and
 //     objects found in it (flow_graph_fast). MIG 2019's FlowNet2 step took 100 ms at 256² and
 //     200 ms at 512² on a GPU; targets here ≤ 10 ms and ≤ 25 ms.
-//   RobotStepNumerical/<flow>/<resolution>: the same step without the renderer, on the same
+//   RobotStepNumerical/<flow>/<width>/<height>: the same step without the renderer, on the same
 //     views rendered beforehand: what a robot runs per frame (RobotBrain: flow,
-//     segmentation, features, control).
+//     segmentation, features, control). Perception's budget on one core (perception_ms: flow,
+//     with its texture test and noise measure; segment, with the ground test and the untextured
+//     fill; features): 4 ms at 128², 10 ms at 320×240.
 // Counters: each stage's mean milliseconds.
 //   build/bench/sim_bench --benchmark_filter=Numerical
 #include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -38,10 +41,11 @@ const std::map<int, double> kPaperSeconds = {
 constexpr std::size_t kAgent = 1;
 constexpr int kSteps = 120;
 
-sim_camera::WorldSpec room(int resolution, const servo::PerceptionConfig& perception) {
+sim_camera::WorldSpec room(int width_px, int height_px, const servo::PerceptionConfig& perception) {
   sim_camera::WorldSpec spec = config::builtin_scenario("room");
   for (auto& a : spec.agents) {
-    a.camera.width_px = a.camera.height_px = resolution;
+    a.camera.width_px = width_px;
+    a.camera.height_px = height_px;
     a.perception = perception;
   }
   return spec;
@@ -59,10 +63,12 @@ void report(benchmark::State& state, const pipeline::StageTimes& sum) {
   state.counters["segment_ms"] = sum.segment / n;
   state.counters["features_ms"] = sum.features / n;
   state.counters["control_ms"] = sum.control / n;
+  state.counters["perception_ms"] = (sum.flow + sum.segment + sum.features) / n;
 }
 
-void run_steps(benchmark::State& state, int resolution, const servo::PerceptionConfig& perception) {
-  const sim_camera::WorldSpec spec = room(resolution, perception);
+void run_steps(benchmark::State& state, int width_px, int height_px,
+               const servo::PerceptionConfig& perception) {
+  const sim_camera::WorldSpec spec = room(width_px, height_px, perception);
   const auto renderer = sim_camera::Renderer::create();
   std::optional<sim_camera::World> world;
   std::optional<sim::SimulatedAgent> pipeline;
@@ -91,7 +97,7 @@ void run_steps(benchmark::State& state, int resolution, const servo::PerceptionC
 
 void AgentStep(benchmark::State& state) {
   const int resolution = static_cast<int>(state.range(0));
-  run_steps(state, resolution, {});
+  run_steps(state, resolution, resolution, {});
   state.counters["paper_ms"] = 1000.0 * kPaperSeconds.at(resolution);
 }
 BENCHMARK(AgentStep)
@@ -110,7 +116,7 @@ servo::PerceptionConfig numerical(const benchmark::State& state) {
 
 void AgentStepNumerical(benchmark::State& state) {
   const servo::PerceptionConfig perception = numerical(state);
-  run_steps(state, static_cast<int>(state.range(1)), perception);
+  run_steps(state, static_cast<int>(state.range(1)), static_cast<int>(state.range(2)), perception);
   state.SetLabel(std::string(servo::to_string(perception.flow)));
 }
 
@@ -151,7 +157,8 @@ Recording record_steps(const sim_camera::WorldSpec& spec) {
 
 void RobotStepNumerical(benchmark::State& state) {
   const servo::PerceptionConfig perception = numerical(state);
-  const sim_camera::WorldSpec spec = room(static_cast<int>(state.range(1)), perception);
+  const sim_camera::WorldSpec spec =
+      room(static_cast<int>(state.range(1)), static_cast<int>(state.range(2)), perception);
   const Recording recording = record_steps(spec);
   const std::vector<RecordedStep>& steps = recording.steps;
   const sim_camera::AgentSpec& agent = spec.agents[kAgent];
@@ -188,12 +195,15 @@ void RobotStepNumerical(benchmark::State& state) {
 }
 
 void numerical_args(benchmark::internal::Benchmark* b) {
-  b->ArgsProduct({{static_cast<int>(servo::FlowMethod::dis_ultrafast),
-                   static_cast<int>(servo::FlowMethod::dis_fast),
-                   static_cast<int>(servo::FlowMethod::dis_medium)},
-                  {256, 512}})
-      ->Unit(benchmark::kMillisecond)
-      ->MinTime(2.0);
+  b->ArgNames({"flow", "width", "height"});
+  for (const servo::FlowMethod flow : {servo::FlowMethod::dis_ultrafast,
+                                       servo::FlowMethod::dis_fast, servo::FlowMethod::dis_medium}) {
+    for (const auto& [width_px, height_px] :
+         {std::pair{128, 128}, std::pair{320, 240}, std::pair{256, 256}, std::pair{512, 512}}) {
+      b->Args({static_cast<int>(flow), width_px, height_px});
+    }
+  }
+  b->Unit(benchmark::kMillisecond)->MinTime(2.0);
 }
 BENCHMARK(AgentStepNumerical)->Apply(numerical_args);
 BENCHMARK(RobotStepNumerical)->Apply(numerical_args);

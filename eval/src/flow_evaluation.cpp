@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -75,6 +76,13 @@ struct MethodRun {
   std::vector<double> ttc_errors;
   std::vector<std::pair<std::int32_t, std::int32_t>> region_id_pairs;
   std::vector<RegionCover> covers;
+  double object_px = 0.0;
+  double untextured_px = 0.0;
+  double untextured_correct_px = 0.0;
+  // Renderer id → the track id of the region the object was the most of when last seen.
+  std::map<std::int32_t, std::int32_t> track_of_object;
+  int track_changes = 0;
+  int tracked_object_frames = 0;
 };
 
 // The synthetic method first: it fits the exact flow without depth, the error the fit itself
@@ -158,6 +166,37 @@ void add_endpoint_errors(MethodRun& run, std::span<const Eigen::Vector2f> estima
   }
 }
 
+// Object pixels without measured flow, and how many of them the fill gave flow within 0.5 px +
+// 20% of the truth's displacement over the flow's interval (a static point's, Z / (Z + v_z Δ)
+// times the instantaneous flow).
+void add_untextured(MethodRun& run, const servo::FlowField& truth, const cv::Mat& object_ids,
+                    double approach_mps) {
+  const servo::FlowField& estimated = run.brain->flow();
+  const std::span<const std::uint8_t> filled = run.brain->filled_pixels();
+  const double interval_s = estimated.interval_s();
+  const double to_px = estimated.intrinsics().fx_px * interval_s;
+  const auto* ids = object_ids.ptr<std::int32_t>();
+  for (std::size_t p = 0; p < estimated.size(); ++p) {
+    const bool was_filled = p < filled.size() && filled[p] != 0;
+    if (ids[p] < 0) {
+      continue;
+    }
+    run.object_px += 1.0;
+    if (!was_filled && estimated.flow()[p].allFinite()) {
+      continue;
+    }
+    run.untextured_px += 1.0;
+    const double depth_m = truth.depth()[p];
+    if (!was_filled || !std::isfinite(depth_m) || !truth.flow()[p].allFinite()) {
+      continue;
+    }
+    const Eigen::Vector2d exact =
+        truth.flow()[p].cast<double>() * (depth_m / (depth_m + approach_mps * interval_s));
+    const double error_px = (estimated.flow()[p].cast<double>() - exact).norm() * to_px;
+    run.untextured_correct_px += error_px <= 0.5 + 0.2 * exact.norm() * to_px ? 1.0 : 0.0;
+  }
+}
+
 // Regions approaching within the horizon that are mostly ground or sky.
 void count_phantoms(MethodRun& run, std::span<const servo::ObjectFeatures> estimated_objects,
                     double horizon_s) {
@@ -183,6 +222,28 @@ int region_of_object(std::span<const RegionCover> covers, std::int32_t source_id
     }
   }
   return region;
+}
+
+// Counts the objects whose region changed its track id since the object was last seen.
+void add_track_changes(MethodRun& run, std::span<const servo::ObjectFeatures> truth_objects,
+                       int min_object_px) {
+  const servo::Segmentation& segmentation = run.brain->segmentation();
+  for (const servo::ObjectFeatures& t : truth_objects) {
+    if (t.kind != servo::RegionKind::visible || t.pixel_count < min_object_px) {
+      continue;
+    }
+    const int region = region_of_object(run.covers, t.source_id);
+    if (region == servo::Segmentation::kNoRegion) {
+      continue;
+    }
+    const std::int32_t track = segmentation.source_ids[static_cast<std::size_t>(region)];
+    const auto [last, first_seen] = run.track_of_object.try_emplace(t.source_id, track);
+    if (!first_seen && last->second != track) {
+      ++run.track_changes;
+      last->second = track;
+    }
+    ++run.tracked_object_frames;
+  }
 }
 
 // Scores the run on one object approaching in truth (`t`): small, missed, or found with the errors
@@ -213,11 +274,14 @@ void score_object(MethodRun& run, const servo::ObjectFeatures& t,
 
 // Scores the run on a frame it has processed, against the truth's flow and objects.
 void score_frame(MethodRun& run, double flow_ms, const pipeline::Brain& truth,
-                 const camera_io::Frame& view, double to_px, const FlowEvalOptions& options) {
+                 const camera_io::Frame& view, double to_px, double approach_mps,
+                 const FlowEvalOptions& options) {
   ++run.row.frames;
   run.ms_sum += flow_ms;
   add_endpoint_errors(run, run.brain->flow().flow(), truth.flow().flow(), to_px);
+  add_untextured(run, truth.flow(), view.sim->object_ids, approach_mps);
   cover_regions(run.brain->segmentation(), view.sim->object_ids, run.region_id_pairs, run.covers);
+  add_track_changes(run, truth.objects(), options.min_object_px);
   const auto estimated_objects = run.brain->objects();
   count_phantoms(run, estimated_objects, options.phantom_horizon_s);
   for (const servo::ObjectFeatures& t : truth.objects()) {
@@ -227,8 +291,17 @@ void score_frame(MethodRun& run, double flow_ms, const pipeline::Brain& truth,
   }
 }
 
-FlowEvalRow summarise(const MethodRun& run) {
+FlowEvalRow summarise(const MethodRun& run, double step_s) {
   FlowEvalRow row = run.row;
+  if (run.object_px > 0.0) {
+    row.untextured_fraction = run.untextured_px / run.object_px;
+  }
+  if (run.untextured_px > 0.0) {
+    row.untextured_correct_fraction = run.untextured_correct_px / run.untextured_px;
+  }
+  if (run.tracked_object_frames > 0) {
+    row.flicker_per_s = run.track_changes / (run.tracked_object_frames * step_s);
+  }
   row.endpoint_error_px = run.valid_count > 0 ? run.epe_sum / run.valid_count : 0.0;
   row.valid_fraction = run.total_count > 0 ? run.valid_count / run.total_count : 0.0;
   if (row.approaching_objects > 0) {
@@ -278,13 +351,14 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
     for (MethodRun& run : runs) {
       see(*run.brain, view, state);
       if (run.brain->flow_status() == servo::FlowStatus::ok && frame >= warmup_frames) {
-        score_frame(run, run.brain->times().flow, *truth, view, to_px, options);
+        score_frame(run, run.brain->times().flow, *truth, view, to_px,
+                    state.speed_mps * std::cos(truth_options.mount.pitch_rad), options);
       }
     }
     world.step(commands);
   }
   for (const MethodRun& run : runs) {
-    rows.push_back(summarise(run));
+    rows.push_back(summarise(run, spec.step_s));
   }
 }
 
@@ -310,6 +384,7 @@ void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
       << std::setw(8) << "valid" << std::setw(9) << "objects" << std::setw(8) << "missed"
       << std::setw(7) << "small" << std::setw(8) << "recall" << std::setw(8) << "purity"
       << std::setw(9) << "phantoms" << std::setw(10) << "FOE err" << std::setw(10) << "TTC err"
+      << std::setw(11) << "untextured" << std::setw(9) << "filled" << std::setw(9) << "flicker"
       << std::setw(12) << "ms/frame"
       << "\n";
   for (const FlowEvalRow& r : rows) {
@@ -321,8 +396,10 @@ void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
         << r.small_objects << std::setw(8) << r.object_recall_mean << std::setw(8)
         << r.region_purity_mean << std::setw(9) << r.phantom_objects << std::setw(10)
         << std::setprecision(4) << r.foe_error_median << std::setw(9) << std::setprecision(1)
-        << 100.0 * r.ttc_relative_error_median << "%" << std::setw(12) << std::setprecision(2)
-        << r.ms_per_frame << "\n";
+        << 100.0 * r.ttc_relative_error_median << "%" << std::setw(10) << std::setprecision(1)
+        << 100.0 * r.untextured_fraction << "%" << std::setw(8)
+        << 100.0 * r.untextured_correct_fraction << "%" << std::setw(9) << std::setprecision(2)
+        << r.flicker_per_s << std::setw(12) << r.ms_per_frame << "\n";
   }
 }
 
@@ -332,7 +409,8 @@ void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
   base::CsvTable csv({"method", "segmentation", "resolution", "frames", "endpoint_error_px",
                       "valid_fraction", "approaching_objects", "missed_objects", "small_objects",
                       "object_recall_mean", "region_purity_mean", "phantom_objects",
-                      "foe_error_median", "ttc_relative_error_median", "ms_per_frame"});
+                      "foe_error_median", "ttc_relative_error_median", "untextured_fraction",
+                      "untextured_correct_fraction", "flicker_per_s", "ms_per_frame"});
   for (const FlowEvalRow& r : rows) {
     csv.add(
         {std::string(servo::to_string(r.method)), std::string(servo::to_string(r.segmentation))},
@@ -340,7 +418,8 @@ void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
          r.valid_fraction, static_cast<double>(r.approaching_objects),
          static_cast<double>(r.missed_objects), static_cast<double>(r.small_objects),
          r.object_recall_mean, r.region_purity_mean, static_cast<double>(r.phantom_objects),
-         r.foe_error_median, r.ttc_relative_error_median, r.ms_per_frame});
+         r.foe_error_median, r.ttc_relative_error_median, r.untextured_fraction,
+         r.untextured_correct_fraction, r.flicker_per_s, r.ms_per_frame});
   }
   csv.write(out.staging_path("flow_eval.csv"));
   std::ostringstream table;

@@ -63,6 +63,10 @@ const servo::FlowField& Brain::flow() const {
   return perception_->flow();
 }
 
+std::span<const std::uint8_t> Brain::filled_pixels() const {
+  return perception_->filled_pixels();
+}
+
 const servo::Segmentation& Brain::segmentation() const {
   return perception_->segmentation();
 }

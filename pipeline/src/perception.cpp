@@ -54,6 +54,7 @@ Perception::Perception(const base::CameraIntrinsics& intrinsics, const Perceptio
       flow_source_(servo::make_flow_source(
           options.flow, options.optical_flow,
           {.no_flow_without_depth = options.depth == servo::DepthSource::ground})),
+      untextured_fill_(options.untextured_fill),
       dark_finder_(options.dark),
       extractor_(feature_options(options, *flow_source_)),
       motions_(std::make_unique<MotionHistory>(
@@ -84,16 +85,18 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   const MotionHistory::Motion measured{speed_mps, turn_rate_cy};
   motions_->remember(frame.timestamp_s, measured);
   const cv::Mat& image = frame.image;
-  // Grey for the dark regions only: an estimator converts the frame into the grey image it
+  // Grey for the fill and the dark regions: an estimator converts the frame into the grey image it
   // keeps, and a grey image handed to it is copied (which costs less than converting twice).
-  if (!image.empty() && options_.dark_regions) {
+  const bool needs_grey =
+      !image.empty() && (flow_source_->estimated() || options_.dark_regions);
+  if (needs_grey) {
     if (image.channels() == 3) {
       cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);
     } else {
       image.copyTo(grey_);
     }
   }
-  const cv::Mat& flow_image = options_.dark_regions && !image.empty() ? grey_ : image;
+  const cv::Mat& flow_image = needs_grey ? grey_ : image;
   const servo::FlowFrame flow_frame{flow_image, frame.timestamp_s,
                                     frame.sim ? &frame.sim->flow : nullptr,
                                     frame.sim ? &frame.sim->depth_m : nullptr};
@@ -127,6 +130,10 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
                                           (field_.intrinsics().fx_px * field_.interval_s()));
     }
     servo::mark_ground(field_, options_.mount, speed_mps, ground, ground_mask_);
+    if (flow_source_->estimated()) {
+      untextured_fill_.fill(field_, grey_, flow_source_->image_noise_grey(), options_.mount,
+                            speed_mps, ground_mask_);
+    }
     segmenter_->segment(field_, ground_mask_, segmentation_);
     if (flow_source_->estimated()) {
       ground_regions_.mark(field_, options_.mount, speed_mps, ground, segmentation_);

@@ -17,6 +17,7 @@
 #include "flowsteer/servo/ground.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/segmentation.hpp"
+#include "flowsteer/servo/untextured_fill.hpp"
 
 namespace flowsteer::pipeline {
 
@@ -48,6 +49,9 @@ class Perception {
   const servo::FlowField& flow() const { return field_; }
   const servo::Segmentation& segmentation() const { return segmentation_; }
   std::span<const servo::ObjectFeatures> objects() const { return objects_; }
+  // One entry per pixel: 1 where the flow was not measured but filled (UntexturedFill); empty
+  // before the first numerical flow.
+  std::span<const std::uint8_t> filled_pixels() const { return untextured_fill_.filled(); }
 
  private:
   PerceptionOptions options_;
@@ -55,6 +59,7 @@ class Perception {
   std::unique_ptr<servo::FlowSource> flow_source_;
   std::optional<servo::FlowSegmenter> segmenter_;
   servo::GroundRegionMarker ground_regions_;
+  servo::UntexturedFill untextured_fill_;
   servo::DarkRegionFinder dark_finder_;
   servo::FeatureExtractor extractor_;
   servo::Segmentation segmentation_;

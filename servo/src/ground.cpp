@@ -27,26 +27,45 @@ std::optional<Eigen::Vector2d> FlatGround::flow_at(double x, double y, double sp
   if (!depth) {
     return std::nullopt;
   }
+  return static_flow_at(x, y, *depth, speed_mps, 0.0);
+}
+
+Eigen::Vector2d FlatGround::static_flow_at(double x, double y, double depth_m, double speed_mps,
+                                           double interval_s) const {
   // A static point moves relative to the camera at v = −v_c (0, −sin θ, cos θ); CGF Eq. 2.
   const double vy = speed_mps * sin_pitch_;
   const double vz = -speed_mps * cos_pitch_;
-  return Eigen::Vector2d((-x * vz) / *depth, (vy - y * vz) / *depth);
+  Eigen::Vector2d flow((-x * vz) / depth_m, (vy - y * vz) / depth_m);
+  if (interval_s > 0.0) {
+    flow *= depth_m / (depth_m + speed_mps * cos_pitch_ * interval_s);
+  }
+  return flow;
+}
+
+double FlatGround::distance_ahead_m(double y, double depth_m) const {
+  // The horizontal forward axis in the camera frame is (0, −sin θ, cos θ).
+  return depth_m * (cos_pitch_ - y * sin_pitch_);
+}
+
+std::optional<double> FlatGround::depth_at_distance_ahead(double y, double distance_ahead_m) const {
+  const double ahead = cos_pitch_ - y * sin_pitch_;
+  if (ahead <= 1e-9) {
+    return std::nullopt;
+  }
+  return distance_ahead_m / ahead;
 }
 
 namespace {
 
-// The ground's flow at (x, y) as the field holds it: instantaneous, or the displacement over
-// the field's interval, which is the instantaneous flow scaled by τ / (τ + Δ), τ = Z / v_z
-// (flow_field.hpp): on near ground, far below the instantaneous flow.
+// The ground's flow at (x, y) as the field holds it: instantaneous, or the displacement over the
+// field's interval, which on near ground is far below the instantaneous flow.
 std::optional<Eigen::Vector2d> expected_ground_flow(const FlatGround& ground, double x, double y,
-                                                    double speed_mps, double approach_mps,
-                                                    double interval_s) {
-  auto expected = ground.flow_at(x, y, speed_mps);
-  if (expected && interval_s > 0.0) {
-    const double depth_m = *ground.depth_at(x, y);
-    *expected *= depth_m / (depth_m + approach_mps * interval_s);
+                                                    double speed_mps, double interval_s) {
+  const auto depth_m = ground.depth_at(x, y);
+  if (!depth_m) {
+    return std::nullopt;
   }
-  return expected;
+  return ground.static_flow_at(x, y, *depth_m, speed_mps, interval_s);
 }
 
 // expected_ground_flow along one image row, at_zero + x per_x: the ground's depth, and with it
@@ -57,12 +76,12 @@ struct GroundRowFlow {
 };
 
 std::optional<GroundRowFlow> ground_row_flow(const FlatGround& ground, double y, double speed_mps,
-                                             double approach_mps, double interval_s) {
-  const auto at_zero = expected_ground_flow(ground, 0.0, y, speed_mps, approach_mps, interval_s);
+                                             double interval_s) {
+  const auto at_zero = expected_ground_flow(ground, 0.0, y, speed_mps, interval_s);
   if (!at_zero) {
     return std::nullopt;
   }
-  const auto at_one = expected_ground_flow(ground, 1.0, y, speed_mps, approach_mps, interval_s);
+  const auto at_one = expected_ground_flow(ground, 1.0, y, speed_mps, interval_s);
   return GroundRowFlow{*at_zero, *at_one - *at_zero};
 }
 
@@ -86,7 +105,6 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const base::CameraMo
   const auto flow = derotated.flow();
   const auto depth = derotated.depth();
   const double interval_s = derotated.interval_s();
-  const double approach_mps = speed_mps * std::cos(mount.pitch_rad);
   const auto mark = [&](std::size_t i, bool is_ground) {
     if (is_ground) {
       ground_mask[i] = 1;
@@ -109,7 +127,7 @@ GroundRemovalResult mark_ground(const FlowField& derotated, const base::CameraMo
       }
       continue;
     }
-    const auto expected_row = ground_row_flow(ground, y, speed_mps, approach_mps, interval_s);
+    const auto expected_row = ground_row_flow(ground, y, speed_mps, interval_s);
     if (!expected_row) {
       continue;
     }
@@ -143,10 +161,9 @@ int GroundRegionMarker::mark(const FlowField& derotated, const base::CameraMount
   tallies_.assign(static_cast<std::size_t>(segmentation.region_count()), Tally{});
   const auto flow = derotated.flow();
   const double interval_s = derotated.interval_s();
-  const double approach_mps = speed_mps * std::cos(mount.pitch_rad);
   for (int row = 0; row < derotated.height(); ++row) {
     const auto expected_row =
-        ground_row_flow(ground, derotated.y(row), speed_mps, approach_mps, interval_s);
+        ground_row_flow(ground, derotated.y(row), speed_mps, interval_s);
     std::int32_t label = Segmentation::kNoRegion;
     Tally run;
     const auto flush = [&] {

@@ -27,12 +27,15 @@ class ImageFlowEstimator : public FlowSource {
   FlowStatus update(const FlowFrame& frame, const CameraRotation& rotation, FlowField& field) final;
   void reset() final;
   bool estimated() const final { return true; }
+  double image_noise_grey() const final { return noise_grey_; }
 
  protected:
   // Throws std::invalid_argument when baseline_s is negative or max_kept_images below 1.
   explicit ImageFlowEstimator(const OpticalFlowOptions& options);
 
-  // Pixel displacements (CV_32FC2) from `from` to `to`, at the pixels of `from`.
+  // Pixel displacements (CV_32FC2) from `from` to `to`, at the pixels of `from`. displacement_px
+  // holds the previous pair's, or nothing after reset(): DIS starts from it (a warm start, which
+  // its coarsest scales then correct), the others ignore it.
   virtual void calc(const cv::Mat& from, const cv::Mat& to, cv::Mat& displacement_px) = 0;
 
  private:
@@ -56,6 +59,8 @@ class ImageFlowEstimator : public FlowSource {
   cv::Mat tensor_xy_;
   cv::Mat tensor_yy_;
   cv::Mat warped_;
+  cv::Mat noise_response_;
+  double noise_grey_ = 0.0;
 };
 
 // Dense inverse search (Kroeger et al. 2016) at one of OpenCV's presets

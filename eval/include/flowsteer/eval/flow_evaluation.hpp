@@ -47,6 +47,16 @@ struct FlowEvalRow {
   int phantom_objects = 0;
   double foe_error_median = 0.0;           // |f − f_true|, normalised
   double ttc_relative_error_median = 0.0;  // |τ − τ_true| / τ_true
+  // Untextured surfaces: object pixels (not ground, not sky) whose flow was not measured. Their
+  // share of the object pixels, and the share of them given flow (servo::UntexturedFill) within
+  // 0.5 px + 20% of the truth, both over the flow's interval; the truth is the renderer's flow as
+  // a displacement over that interval, taken for a static point.
+  double untextured_fraction = 0.0;
+  double untextured_correct_fraction = 0.0;
+  // How often the region an object is the most of changes its track id, per object and second of
+  // frames measured (objects of at least min_object_px): what the controller remembers about an
+  // object is lost with each change.
+  double flicker_per_s = 0.0;
   double ms_per_frame = 0.0;               // flow computation alone
 };
 

@@ -94,6 +94,9 @@ class Brain {
   // The last frame's flow, derotated (valid when flow_status() is ok), and its segmentation.
   const servo::FlowField& flow() const;
   const servo::Segmentation& segmentation() const;
+  // One entry per pixel of the last numerical flow: 1 where the flow was filled in on an
+  // untextured surface rather than measured (servo::UntexturedFill).
+  std::span<const std::uint8_t> filled_pixels() const;
   // The features the controller saw: from the flow, or from the oracle (model geometric).
   std::span<const servo::ObjectFeatures> objects() const { return percept_.objects; }
   // The goal the last step steered for, as BrainInput gave it.

@@ -6,6 +6,7 @@
 #include "flowsteer/servo/ground.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/steering.hpp"
+#include "flowsteer/servo/untextured_fill.hpp"
 
 namespace flowsteer::pipeline {
 
@@ -38,6 +39,8 @@ struct PerceptionOptions {
   servo::FlowSegmentationOptions flow_segmentation;
   servo::DarkRegionOptions dark;
   servo::GroundRemovalOptions ground;
+  // Numerical flow only: plain surfaces standing on the ground get the flow of their foot.
+  servo::UntexturedFillOptions untextured_fill;
   // Numerical flow's error in pixels over its interval: the ground test allows it on top of its
   // relative tolerance, since the ground left over joins every object standing on it.
   double numerical_flow_noise_px = 0.3;

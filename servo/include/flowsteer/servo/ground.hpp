@@ -24,6 +24,16 @@ class FlatGround {
   // Derotated flow of the ground at (x, y) for an agent moving forward at speed_mps;
   // empty at or above the horizon.
   std::optional<Eigen::Vector2d> flow_at(double x, double y, double speed_mps) const;
+  // Derotated flow of a static point at depth_m along the ray through (x, y), for an agent moving
+  // forward at speed_mps: instantaneous for interval_s 0, else its displacement over interval_s
+  // per second, which is the instantaneous flow scaled by Z / (Z + v_z Δ) (flow_field.hpp).
+  Eigen::Vector2d static_flow_at(double x, double y, double depth_m, double speed_mps,
+                                 double interval_s) const;
+  // Horizontal distance ahead of the camera of the point at depth_m on the ray through row y, and
+  // back: a vertical surface keeps it from its foot to its top.
+  double distance_ahead_m(double y, double depth_m) const;
+  // Empty where the ray through row y does not reach forward (pointing straight up or back).
+  std::optional<double> depth_at_distance_ahead(double y, double distance_ahead_m) const;
 
  private:
   base::CameraMount mount_;

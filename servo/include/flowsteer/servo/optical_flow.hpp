@@ -46,6 +46,9 @@ struct OpticalFlowOptions {
   // direction (RMS over a 5×5 window, grey levels per pixel) get no flow: estimators fill such
   // areas by smoothing, which invents motion there (sky, blank walls, along straight edges).
   double min_gradient = 0.5;
+  // ...or than this many times the image's noise (grey levels, measured on each image): noise
+  // alone has an RMS gradient of 0.43 σ along any direction, which this keeps out.
+  double min_gradient_per_noise = 1.0;
   // An image whose grey levels span less than this is single-coloured.
   double min_contrast = 2.0;
   // The flow compares each image with the newest kept image at least this much older (or the
@@ -112,6 +115,10 @@ class FlowSource {
   // its finest scale), the averaging window (Farneback) or the median filter (TV-L1); 1 for the
   // renderer's flow. Flow vectors closer than this are not independent measurements.
   virtual double noise_correlation_px() const = 0;
+
+  // The standard deviation of the last image's noise in grey levels, as measured on it; 0 for the
+  // renderer's flow, which reads no image.
+  virtual double image_noise_grey() const { return 0.0; }
 };
 
 // The source of `method`: the renderer's flow (synthetic) with `renderer`, else OpenCV's
