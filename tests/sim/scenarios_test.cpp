@@ -311,6 +311,24 @@ TEST(ScenarioFile, CameraNoiseIsZeroUnlessGivenAndWithinItsBounds) {
             std::string::npos);
 }
 
+// Every scene of the robot scene set loads, with the robot as its first agent.
+TEST(RobotScenes, EveryFileLoads) {
+  int scenes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(FLOWSTEER_ROBOT_SCENES_DIR)) {
+    if (entry.path().extension() != ".yaml") {
+      continue;
+    }
+    SCOPED_TRACE(entry.path().string());
+    const sim_camera::WorldSpec w = load_scenario(entry.path().string());
+    ASSERT_FALSE(w.agents.empty());
+    EXPECT_EQ(w.agents[0].name, "robot");
+    EXPECT_EQ(w.agents[0].camera.width_px, 320);
+    EXPECT_EQ(w.agents[0].camera.height_px, 240);
+    ++scenes;
+  }
+  EXPECT_GE(scenes, 8);
+}
+
 TEST(SteerSuite, TestCaseBecomesAWorld) {
   const sim_camera::WorldSpec w = load_steersuite(FLOWSTEER_CORRIDOR_CASE).world;
   EXPECT_EQ(w.name, "corridor");
