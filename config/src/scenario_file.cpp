@@ -7,6 +7,7 @@
 #include "builtin_scenarios.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
 #include "flowsteer/config/controller_reader.hpp"
+#include "flowsteer/sim_camera/camera_noise.hpp"
 
 namespace flowsteer::config {
 
@@ -103,7 +104,7 @@ sim_camera::CameraSpec read_camera(const base::YamlReader& r, const YAML::Node& 
   if (!node) {
     return camera;
   }
-  r.only_keys(node, field, {"resolution", "hfov_deg", "height_m", "pitch_deg"});
+  r.only_keys(node, field, {"resolution", "hfov_deg", "height_m", "pitch_deg", "noise_sigma"});
   if (const YAML::Node res = node["resolution"]) {
     if (res.IsSequence() && res.size() == 2) {
       camera.width_px = r.integer(res[0], field + ".resolution[0]", 8);
@@ -123,6 +124,9 @@ sim_camera::CameraSpec read_camera(const base::YamlReader& r, const YAML::Node& 
     r.fail(node["pitch_deg"], field + ".pitch_deg", "must be within (-89, 89)");
   }
   camera.pitch_rad = pitch * kDeg;
+  camera.noise_sigma_levels =
+      r.in_range(node, field, "noise_sigma", 0.0, sim_camera::kMaxCameraNoiseLevels,
+                 camera.noise_sigma_levels);
   return camera;
 }
 

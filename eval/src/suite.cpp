@@ -9,6 +9,7 @@
 
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/base/config_error.hpp"
+#include "flowsteer/base/output_files.hpp"
 #include "process_pool.hpp"
 #include "run_choices.hpp"
 #include "suite_files.hpp"
@@ -95,6 +96,7 @@ sim::RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& 
   sim::SimOptions sim;
   sim.out_dir = folder;
   sim.resolution = configuration.resolution;
+  sim.camera_noise_levels = configuration.camera_noise_levels;
   sim.steps = options.steps;
   sim.flow = configuration.flow;
   sim.segmentation = configuration.segmentation;
@@ -263,9 +265,14 @@ SuiteResult join_shards(const std::vector<std::filesystem::path>& shard_dirs) {
 }  // namespace
 
 std::string to_string(const SuiteConfiguration& c) {
-  return name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" + name_or_own(c.depth) +
-         "/" + name_or_own(c.controller) + "/" + name_or_own(c.law) + "/" + name_or_own(c.without) +
-         "/" + (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
+  std::string text = name_or_own(c.flow) + "/" + name_or_own(c.segmentation) + "/" +
+                     name_or_own(c.depth) + "/" + name_or_own(c.controller) + "/" +
+                     name_or_own(c.law) + "/" + name_or_own(c.without) + "/" +
+                     (c.resolution ? std::to_string(*c.resolution) : std::string("own"));
+  if (c.camera_noise_levels) {
+    text += "/" + base::format_csv_number(*c.camera_noise_levels);
+  }
+  return text;
 }
 
 std::string SuiteRun::folder_name() const {
@@ -310,6 +317,7 @@ std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options
   refuse_repeats(options.switched_off, "--without");
   check_switched_off(options);
   check_resolutions(options.resolutions);
+  refuse_repeats(options.camera_noise_levels, "--camera-noise");
   std::vector<SuiteConfiguration> configurations;
   for (const auto& flow : each_or_own(options.flows)) {
     for (const auto& segmentation : each_or_own(options.segmentations)) {
@@ -318,8 +326,10 @@ std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options
           for (const auto& law : each_or_own(options.laws)) {
             for (const auto& without : each_or_own(options.switched_off)) {
               for (const auto& resolution : each_or_own(options.resolutions)) {
-                configurations.push_back(
-                    {flow, segmentation, depth, controller, law, without, resolution});
+                for (const auto& noise : each_or_own(options.camera_noise_levels)) {
+                  configurations.push_back(
+                      {flow, segmentation, depth, controller, law, without, resolution, noise});
+                }
               }
             }
           }

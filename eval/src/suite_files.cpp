@@ -23,8 +23,24 @@ const char* const kHeader =
     "goals_reached,"
     "agents_with_goal,collisions,obstacle_collisions,min_clearance_m,mean_time_to_goal_s,"
     "mean_path_length_m,mean_path_length_ratio,mean_time_ratio,composite01,turn_flip_ratio,error";
-constexpr std::size_t kLabelColumns = 10;  // run ... status
+constexpr std::size_t kLabelColumns = 10;  // run ... status, without camera_noise
 constexpr std::size_t kScoreColumns = 12;  // agents ... turn_flip_ratio
+
+// A suite that varies the camera noise has a camera_noise column after resolution; one that
+// does not writes the file it wrote before the axis existed.
+bool has_noise_column(const std::vector<SuiteRun>& runs) {
+  return std::any_of(runs.begin(), runs.end(), [](const SuiteRun& run) {
+    return run.configuration.camera_noise_levels.has_value();
+  });
+}
+
+std::string csv_header(bool noise_column) {
+  std::string header = kHeader;
+  if (noise_column) {
+    header.insert(header.find(",status,"), ",camera_noise");
+  }
+  return header;
+}
 
 std::vector<std::string> split(const std::string& line, char separator) {
   std::vector<std::string> cells;
@@ -52,8 +68,11 @@ const char* status(const SuiteRun& run) {
   return run.failed() ? "failed" : run.clean() ? "clean" : "not_clean";
 }
 
-std::string csv_row(const SuiteRun& run) {
+std::string csv_row(const SuiteRun& run, bool noise_column) {
   std::string configuration = to_string(run.configuration);  // flow/segmentation/...
+  if (noise_column && !run.configuration.camera_noise_levels) {
+    configuration += "/own";
+  }
   std::replace(configuration.begin(), configuration.end(), '/', ',');
   std::ostringstream row;
   row << run.index << ',' << run.case_name << ',' << configuration << ',' << status(run) << ','
@@ -96,12 +115,12 @@ std::optional<Method> own_or(const std::string& cell, Parse parse, const std::st
   return parse_cell(cell, parse, what);
 }
 
-SuiteRun parse_csv_row(const std::string& line, const std::string& where) {
+SuiteRun parse_csv_row(const std::string& line, bool noise_column, const std::string& where) {
   const std::vector<std::string> cells = split(line, ',');
-  if (cells.size() != kLabelColumns + kScoreColumns + 1) {
-    throw std::runtime_error(where + ": expected " +
-                             std::to_string(kLabelColumns + kScoreColumns + 1) + " cells, got " +
-                             std::to_string(cells.size()));
+  const std::size_t labels = kLabelColumns + (noise_column ? 1 : 0);
+  if (cells.size() != labels + kScoreColumns + 1) {
+    throw std::runtime_error(where + ": expected " + std::to_string(labels + kScoreColumns + 1) +
+                             " cells, got " + std::to_string(cells.size()));
   }
   SuiteRun run;
   run.index = static_cast<std::size_t>(parse_cell(cells[0], parse_int, where + ": run"));
@@ -119,14 +138,18 @@ SuiteRun parse_csv_row(const std::string& line, const std::string& where) {
   run.configuration.without = own_or<servo::LawMechanism>(
       cells[7], [](const std::string& s) { return servo::parse_law_mechanism(s); }, where);
   run.configuration.resolution = own_or<int>(cells[8], parse_int, where + ": resolution");
+  if (noise_column) {
+    run.configuration.camera_noise_levels =
+        own_or<double>(cells[9], parse_double, where + ": camera_noise");
+  }
   run.error = cells.back();
-  if (cells[9] == "failed") {
+  if (cells[labels - 1] == "failed") {
     run.error = run.error.empty() ? "failed" : run.error;
     return run;
   }
   std::string scores;
-  for (std::size_t k = kLabelColumns; k < kLabelColumns + kScoreColumns; ++k) {
-    if (k > kLabelColumns) {
+  for (std::size_t k = labels; k < labels + kScoreColumns; ++k) {
+    if (k > labels) {
       scores += ',';
     }
     scores += cells[k];
@@ -238,9 +261,10 @@ sim::RunSummary parse_summary_fields(const std::string& text, const std::string&
 }
 
 void write_suite_files(const SuiteResult& result, base::OutputDir& out) {
-  std::string csv = std::string(kHeader) + "\n";
+  const bool noise_column = has_noise_column(result.runs);
+  std::string csv = csv_header(noise_column) + "\n";
   for (const SuiteRun& run : result.runs) {
-    csv += csv_row(run) + "\n";
+    csv += csv_row(run, noise_column) + "\n";
   }
   base::write_text(out.staging_path("suite.csv"), csv);
   std::ostringstream table;
@@ -275,13 +299,16 @@ SuiteResult read_suite_files(const std::filesystem::path& dir) {
   const std::string csv_path = (dir / "suite.csv").string();
   std::ifstream csv(csv_path);
   std::string line;
-  if (!std::getline(csv, line) || line != kHeader) {
+  if (!std::getline(csv, line) || (line != csv_header(false) && line != csv_header(true))) {
     throw base::ConfigError(csv_path, 1, 1, "",
-                            "not a suite.csv: expected the header " + std::string(kHeader));
+                            "not a suite.csv: expected the header " + csv_header(false) +
+                                " (with camera_noise after resolution where the suite varies it)");
   }
+  const bool noise_column = line == csv_header(true);
   for (int line_number = 2; std::getline(csv, line); ++line_number) {
     try {
-      result.runs.push_back(parse_csv_row(line, csv_path + ":" + std::to_string(line_number)));
+      result.runs.push_back(
+          parse_csv_row(line, noise_column, csv_path + ":" + std::to_string(line_number)));
     } catch (const std::runtime_error& e) {
       throw base::ConfigError(csv_path, e.what());
     }

@@ -471,6 +471,8 @@ sim_camera::WorldSpec with_overrides(sim_camera::WorldSpec spec, const SimOption
   for (sim_camera::AgentSpec& a : spec.agents) {
     if (options.resolution)
       a.camera.width_px = a.camera.height_px = *options.resolution;
+    if (options.camera_noise_levels)
+      a.camera.noise_sigma_levels = *options.camera_noise_levels;
     if (options.flow)
       a.perception.flow = *options.flow;
     if (options.segmentation)

@@ -28,6 +28,7 @@
 
 #include "flowsteer/servo/flow_field.hpp"
 #include "flowsteer/servo/segmentation.hpp"
+#include "flowsteer/sim_camera/camera_noise.hpp"
 #include "shaders.hpp"
 
 namespace flowsteer::sim_camera {
@@ -1410,6 +1411,12 @@ Renderer::~Renderer() = default;
 void Renderer::render(const World& world, const View& view, RenderedView& out,
                       RenderChannels channels) {
   impl_->render(world, view, channels, out);
+  if (channels == RenderChannels::all) {
+    // Seeded by the world's step, not a counter of this renderer's: a run's pixels do not depend
+    // on which thread's renderer drew them.
+    const auto step = std::llround(world.time_s() / world.spec().step_s);
+    add_camera_noise(out.image, view.camera.noise_sigma_levels, camera_noise_seed(view.self, step));
+  }
 }
 
 void Renderer::render_geometry(const World& world, std::span<const View> views,

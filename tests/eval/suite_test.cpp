@@ -360,5 +360,44 @@ TEST_F(SuiteRunTest, TheDepthSourceIsAConfigurationOfItsOwn) {
             std::string::npos);
 }
 
+// The camera noise is a configuration of its own, after the resolution, with a column of its own
+// that a suite without it does not have (its suite.csv is the one it wrote before the axis was).
+TEST_F(SuiteRunTest, TheCameraNoiseIsAConfigurationOfItsOwn) {
+  std::ostringstream log;
+  SuiteOptions o = options("noise");
+  o.controllers = {servo::SteeringModel::geometric};
+  o.camera_noise_levels = {0.0, 2.5};
+  const SuiteResult result = run_suite({walk_case("near", 1.5)}, o, log);
+  ASSERT_EQ(result.runs.size(), 2U);
+  EXPECT_TRUE(result.runs[1].clean()) << result.runs[1].error;
+  const std::string csv = file_text(o.out_dir / "suite.csv");
+  EXPECT_EQ(csv.rfind("run,case,flow,segmentation,depth,controller,law,without,resolution,"
+                      "camera_noise,status,",
+                      0),
+            0U)
+      << csv;
+  EXPECT_NE(csv.find("0,near,own,own,own,geometric,own,own,24,0,clean,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("1,near,own,own,own,geometric,own,own,24,2.5,clean,"), std::string::npos)
+      << csv;
+  const SuiteResult merged = merge_suite_shards({o.out_dir}, dir_ / "merged");
+  ASSERT_EQ(merged.runs.size(), 2U);
+  EXPECT_EQ(merged.runs[1].configuration.camera_noise_levels, 2.5);
+  EXPECT_EQ(merged.runs[1].folder_name(), "near.own.own.own.geometric.own.own.24.2.5");
+  EXPECT_EQ(file_text(dir_ / "merged" / "suite.csv"), csv);
+
+  SuiteOptions plain = options("plain");
+  plain.controllers = {servo::SteeringModel::geometric};
+  run_suite({walk_case("near", 1.5)}, plain, log);
+  EXPECT_EQ(file_text(plain.out_dir / "suite.csv")
+                .rfind("run,case,flow,segmentation,depth,controller,law,without,resolution,"
+                       "status,agents,",
+                       0),
+            0U);
+
+  o.camera_noise_levels = {2.0, 2.0};
+  EXPECT_NE(error_of([&] { run_suite(cases_, o, log); }).find("--camera-noise 2: given twice"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace flowsteer::eval

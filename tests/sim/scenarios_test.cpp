@@ -291,6 +291,44 @@ TEST(ScenarioFile, MaxSpeedRatioIsTheFlowsteerLawsOnlyAndAtLeastOne) {
             std::string::npos);
 }
 
+// The camera's noise: none unless asked for, per scenario or per agent, from 0 to 50 grey levels.
+TEST(ScenarioFile, CameraNoiseIsZeroUnlessGivenAndWithinItsBounds) {
+  const auto plain =
+      parse_scenario("agents:\n  - {start: [0, 0], goal: [9, 0]}\n", "scenario.yaml");
+  EXPECT_EQ(plain.agents[0].camera.noise_sigma_levels, 0.0);
+  const auto w = parse_scenario(
+      "camera: {noise_sigma: 2}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n"
+      "  - {start: [0, 3], goal: [9, 3], camera: {noise_sigma: 0.5}}\n",
+      "scenario.yaml");
+  EXPECT_EQ(w.agents[0].camera.noise_sigma_levels, 2.0);
+  EXPECT_EQ(w.agents[1].camera.noise_sigma_levels, 0.5);
+  EXPECT_EQ(error_of("camera: {noise_sigma: -1}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n"),
+            "scenario.yaml:1:23: camera.noise_sigma: must be from 0 to 50, got -1");
+  EXPECT_EQ(error_of("agents:\n  - {start: [0, 0], goal: [9, 0], camera: {noise_sigma: 50.5}}\n"),
+            "scenario.yaml:2:57: agents[0].camera.noise_sigma: must be from 0 to 50, got 50.5");
+  EXPECT_NE(error_of("camera: {noise_sigma: .nan}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n")
+                .find("camera.noise_sigma: expected a finite number"),
+            std::string::npos);
+}
+
+// Every scene of the robot scene set loads, with the robot as its first agent.
+TEST(RobotScenes, EveryFileLoads) {
+  int scenes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(FLOWSTEER_ROBOT_SCENES_DIR)) {
+    if (entry.path().extension() != ".yaml") {
+      continue;
+    }
+    SCOPED_TRACE(entry.path().string());
+    const sim_camera::WorldSpec w = load_scenario(entry.path().string());
+    ASSERT_FALSE(w.agents.empty());
+    EXPECT_EQ(w.agents[0].name, "robot");
+    EXPECT_EQ(w.agents[0].camera.width_px, 320);
+    EXPECT_EQ(w.agents[0].camera.height_px, 240);
+    ++scenes;
+  }
+  EXPECT_GE(scenes, 8);
+}
+
 TEST(SteerSuite, TestCaseBecomesAWorld) {
   const sim_camera::WorldSpec w = load_steersuite(FLOWSTEER_CORRIDOR_CASE).world;
   EXPECT_EQ(w.name, "corridor");

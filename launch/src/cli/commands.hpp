@@ -46,6 +46,9 @@ servo::SegmentationMethod segmentation_method_option(const std::string& option,
 servo::DepthSource depth_source_option(const std::string& option, const std::string& name);
 servo::NavigationLaw navigation_law_option(const std::string& option, const std::string& name);
 servo::LawMechanism law_mechanism_option(const std::string& option, const std::string& name);
+// A camera noise σ in grey levels, the value of --camera-noise; CLI::ValidationError unless it is
+// a number from 0 to sim_camera::kMaxCameraNoiseLevels.
+double camera_noise_option(double sigma_levels);
 
 // The scenario a command runs: the scenario file or the built-in scenario `scenario` names (a
 // name of `flowsteer scenarios` first, else a file), or a SteerSuite test case; "room" when none

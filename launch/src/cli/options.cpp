@@ -1,10 +1,12 @@
 #include <iostream>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include "commands.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/sim/simulation.hpp"
+#include "flowsteer/sim_camera/camera_noise.hpp"
 
 namespace flowsteer::cli {
 
@@ -95,6 +97,17 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
     sim::switch_off(world, *without);
   }
   return world;
+}
+
+double camera_noise_option(double sigma_levels) {
+  // Written so that NaN fails too.
+  if (!(sigma_levels >= 0.0 && sigma_levels <= sim_camera::kMaxCameraNoiseLevels)) {
+    std::ostringstream message;
+    message << "must be from 0 to " << sim_camera::kMaxCameraNoiseLevels << " grey levels, got "
+            << sigma_levels;
+    throw CLI::ValidationError("--camera-noise", message.str());
+  }
+  return sigma_levels;
 }
 
 void one_value_per_use(CLI::App& command) {

@@ -17,6 +17,7 @@ struct SimCommand {
   ScenarioChoice scenario;
   std::string out_dir = "flowsteer_out";
   std::optional<int> resolution;
+  std::optional<double> camera_noise_levels;
   std::optional<int> steps;
   bool video = false;
   int threads = 0;
@@ -63,6 +64,9 @@ int run_sim(const SimCommand& command) {
   sim::SimOptions options;
   options.out_dir = command.out_dir;
   options.resolution = command.resolution;
+  if (command.camera_noise_levels) {
+    options.camera_noise_levels = camera_noise_option(*command.camera_noise_levels);
+  }
   options.steps = command.steps;
   if (!command.flow.empty()) {
     options.flow = flow_method_option("--flow", command.flow, "method", servo::flow_method_names());
@@ -95,6 +99,9 @@ Subcommand add_sim(CLI::App& app) {
   sim->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   sim->add_option("--resolution", command->resolution, "every agent's camera: N x N pixels")
       ->check(CLI::Range(8, 4096));
+  sim->add_option("--camera-noise", command->camera_noise_levels,
+                  "every agent's camera noise: σ of the Gaussian noise on each channel of the "
+                  "image, grey levels from 0 to 50 (scenario key camera: {noise_sigma})");
   sim->add_option("--steps", command->steps, "stop after N control steps")
       ->check(CLI::PositiveNumber);
   sim->add_flag("--video", command->video, "an MP4 per agent: its view, the flow and the features");

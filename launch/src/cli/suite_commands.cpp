@@ -24,6 +24,7 @@ struct EvalSuiteCommand {
   std::vector<std::string> laws;
   std::vector<std::string> switched_off;
   std::vector<int> resolutions;
+  std::vector<double> camera_noise_levels;
   int jobs = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
   std::string shard = "0/1";
   std::string keep_runs = "failed";
@@ -86,6 +87,9 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
   }
   options.keep_runs = *keep;
   options.resolutions = command.resolutions;
+  for (const double sigma : command.camera_noise_levels) {
+    options.camera_noise_levels.push_back(camera_noise_option(sigma));
+  }
   options.steps = command.steps;
   options.seed = command.seed;
   options.jobs = command.jobs;
@@ -152,6 +156,9 @@ Subcommand add_eval_suite(CLI::App& eval) {
                         servo::law_mechanism_names());
   suite->add_option("--resolution", command->resolutions,
                     "every agent's camera, N x N pixels (default: the case's); repeat for several");
+  suite->add_option("--camera-noise", command->camera_noise_levels,
+                    "every agent's camera noise, σ in grey levels from 0 to 50 (default: the "
+                    "case's); repeat for several");
   suite->add_option("--jobs,-j", command->jobs, "runs at once, each in its own process")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();

@@ -102,6 +102,17 @@ class YamlReader {
     return value;
   }
 
+  double in_range(const YAML::Node& map, const std::string& field, const char* key,
+                  double min_value, double max_value, double fallback) const {
+    const double value = number(map, field, key, fallback);
+    if (value < min_value || value > max_value) {
+      fail(map[key] ? map[key] : map, join(field, key),
+           "must be from " + format(min_value) + " to " + format(max_value) + ", got " +
+               format(value));
+    }
+    return value;
+  }
+
   int integer(const YAML::Node& node, const std::string& field, int min_value) const {
     int value = 0;
     if (!node.IsScalar() || !YAML::convert<int>::decode(node, value)) {

@@ -34,9 +34,11 @@ struct SuiteConfiguration {
   std::optional<servo::NavigationLaw> law;
   std::optional<servo::LawMechanism> without;  // the flowsteer law's, switched off
   std::optional<int> resolution;               // N × N pixels
+  std::optional<double> camera_noise_levels;   // σ, grey levels (sim::SimOptions)
   bool operator==(const SuiteConfiguration&) const = default;
 };
-// "flow/segmentation/depth/controller/law/without/resolution", "own" for what is not overridden.
+// "flow/segmentation/depth/controller/law/without/resolution", "own" for what is not overridden,
+// then "/σ" where the camera noise is: a suite without that axis keeps its names and its id.
 std::string to_string(const SuiteConfiguration& configuration);
 
 // The i-th of n slices of a suite's runs (runs i, i + n, i + 2n, ...).
@@ -60,9 +62,10 @@ struct SuiteOptions {
   std::vector<servo::NavigationLaw> laws;
   std::vector<servo::LawMechanism> switched_off;  // an ablation: `none` is the law as it is
   std::vector<int> resolutions;
-  std::optional<int> steps;  // stop each run after this many steps
-  std::uint32_t seed = 1;    // the seed the cases were placed with, recorded with the suite
-  int jobs = 1;              // worker processes at once
+  std::vector<double> camera_noise_levels;  // σ in grey levels, each a configuration
+  std::optional<int> steps;                 // stop each run after this many steps
+  std::uint32_t seed = 1;  // the seed the cases were placed with, recorded with the suite
+  int jobs = 1;            // worker processes at once
   Shard shard;
   KeepRuns keep_runs = KeepRuns::failed;
   std::filesystem::path out_dir = "flowsteer_suite";
@@ -79,7 +82,7 @@ struct SuiteRun {
   bool failed() const { return !error.empty(); }
   bool clean() const { return !failed() && summary.clean(); }
   // The run's folder and top view are named this:
-  // "case.flow.segmentation.depth.controller.law.without.resolution".
+  // "case.flow.segmentation.depth.controller.law.without.resolution[.camera_noise]".
   std::string folder_name() const;
 };
 
@@ -94,8 +97,9 @@ struct SuiteResult {
 };
 
 // The suite's configurations, every flow × segmentation × depth × controller × law × mechanism
-// switched off × resolution in that nesting. Throws base::ConfigError for a resolution out of
-// 16..4096, any value given twice, or a mechanism switched off under a law other than flowsteer.
+// switched off × resolution × camera noise in that nesting. Throws base::ConfigError for a
+// resolution out of 16..4096, any value given twice, or a mechanism switched off under a law
+// other than flowsteer.
 std::vector<SuiteConfiguration> suite_configurations(const SuiteOptions& options);
 
 // Runs the shard's runs in options.jobs worker processes, each as `flowsteer sim` runs a

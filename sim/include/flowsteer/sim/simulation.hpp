@@ -39,7 +39,9 @@ class AgentDriver {
 struct SimOptions {
   std::filesystem::path out_dir = "flowsteer_out";
   std::optional<int> resolution;  // overrides every agent's camera: N×N pixels
-  std::optional<int> steps;       // stop after this many steps
+  // Overrides every agent's camera noise (CameraSpec::noise_sigma_levels), in grey levels.
+  std::optional<double> camera_noise_levels;
+  std::optional<int> steps;  // stop after this many steps
   // Override every agent's perception (scenario key perception:).
   std::optional<servo::FlowMethod> flow;
   std::optional<servo::SegmentationMethod> segmentation;

@@ -33,7 +33,8 @@ enum class RenderChannels { all, geometry };
 
 // One render: its channels for the same instant, row-major from the top-left pixel.
 struct RenderedView {
-  cv::Mat image;       // CV_8UC3 BGR, lit, gamma-encoded; empty for RenderChannels::geometry
+  // CV_8UC3 BGR, lit, gamma-encoded, with the camera's noise; empty for RenderChannels::geometry
+  cv::Mat image;
   cv::Mat depth_m;     // CV_32F, depth along the optical axis, +inf for the sky
   cv::Mat object_ids;  // CV_32S, agent_render_id()..., servo::kGroundId, servo::kSkyId
   cv::Mat flow;        // CV_32FC2, CGF Eq. 1 (rotation included), normalised units per second
@@ -69,7 +70,9 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   // Renders the world as it is now from `view`. Reuses out's buffers when the size is the same.
-  // The geometry channels are the same to the last bit whichever `channels` draws them.
+  // The geometry channels are the same to the last bit whichever `channels` draws them. The
+  // image has the view's camera noise (CameraSpec::noise_sigma_levels), seeded by the view's
+  // agent and the world's step: the same view of the same world gives the same pixels.
   void render(const World& world, const View& view, RenderedView& out,
               RenderChannels channels = RenderChannels::all);
 

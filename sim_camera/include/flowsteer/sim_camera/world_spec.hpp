@@ -72,6 +72,9 @@ struct CameraSpec {
   double hfov_rad = 1.5707963267948966;
   double height_m = 1.6;
   double pitch_rad = 0.0;
+  // σ of the sensor's Gaussian noise on each channel of the image, in grey levels (of 255): what
+  // a real camera adds, which numerical flow must live with. The geometry channels stay exact.
+  double noise_sigma_levels = 0.0;
 };
 
 struct AgentSpec {
