@@ -5,7 +5,8 @@
 //     synthetic flow and semantic segmentation, beside the per-agent update times of CGF
 //     Fig. 14 (UE4, Quadro M2000M); targets on a CPU-only machine (Mesa llvmpipe): ≤ 5 ms at
 //     256², ≤ 60 ms at 1024².
-//   AgentStepNumerical/<flow>/<width>/<height>: the full step with flow computed from the images and
+//   AgentStepNumerical/<flow>/<width>/<height>: the full step with flow computed from the images
+//   and
 //     objects found in it (flow_graph_fast). MIG 2019's FlowNet2 step took 100 ms at 256² and
 //     200 ms at 512² on a GPU; targets here ≤ 10 ms and ≤ 25 ms.
 //   RobotStepNumerical/<flow>/<width>/<height>: the same step without the renderer, on the same
@@ -196,8 +197,9 @@ void RobotStepNumerical(benchmark::State& state) {
 
 void numerical_args(benchmark::internal::Benchmark* b) {
   b->ArgNames({"flow", "width", "height"});
-  for (const servo::FlowMethod flow : {servo::FlowMethod::dis_ultrafast,
-                                       servo::FlowMethod::dis_fast, servo::FlowMethod::dis_medium}) {
+  for (const servo::FlowMethod flow :
+       {servo::FlowMethod::dis_ultrafast, servo::FlowMethod::dis_fast,
+        servo::FlowMethod::dis_medium}) {
     for (const auto& [width_px, height_px] :
          {std::pair{128, 128}, std::pair{320, 240}, std::pair{256, 256}, std::pair{512, 512}}) {
       b->Args({static_cast<int>(flow), width_px, height_px});

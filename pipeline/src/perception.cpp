@@ -87,8 +87,7 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   const cv::Mat& image = frame.image;
   // Grey for the fill and the dark regions: an estimator converts the frame into the grey image it
   // keeps, and a grey image handed to it is copied (which costs less than converting twice).
-  const bool needs_grey =
-      !image.empty() && (flow_source_->estimated() || options_.dark_regions);
+  const bool needs_grey = !image.empty() && (flow_source_->estimated() || options_.dark_regions);
   if (needs_grey) {
     if (image.channels() == 3) {
       cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);

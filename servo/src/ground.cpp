@@ -162,8 +162,7 @@ int GroundRegionMarker::mark(const FlowField& derotated, const base::CameraMount
   const auto flow = derotated.flow();
   const double interval_s = derotated.interval_s();
   for (int row = 0; row < derotated.height(); ++row) {
-    const auto expected_row =
-        ground_row_flow(ground, derotated.y(row), speed_mps, interval_s);
+    const auto expected_row = ground_row_flow(ground, derotated.y(row), speed_mps, interval_s);
     std::int32_t label = Segmentation::kNoRegion;
     Tally run;
     const auto flush = [&] {

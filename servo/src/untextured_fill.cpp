@@ -1,9 +1,9 @@
 #include "flowsteer/servo/untextured_fill.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
-#include <cstdlib>
 
 #include "flowsteer/servo/ground.hpp"
 
@@ -30,8 +30,7 @@ int UntexturedFill::fill(FlowField& derotated, const cv::Mat& grey, double image
   if (!options_.enabled) {
     return 0;
   }
-  if (grey.type() != CV_8UC1 || grey.cols != derotated.width() ||
-      grey.rows != derotated.height()) {
+  if (grey.type() != CV_8UC1 || grey.cols != derotated.width() || grey.rows != derotated.height()) {
     throw std::invalid_argument("UntexturedFill: the grey image must be 8-bit, one channel, " +
                                 std::to_string(derotated.width()) + "x" +
                                 std::to_string(derotated.height()));
@@ -56,8 +55,7 @@ int UntexturedFill::fill(FlowField& derotated, const cv::Mat& grey, double image
         continue;
       }
       derotated.flow()[i] =
-          ground.static_flow_at(derotated.x(col), y, *depth_m, speed_mps, interval_s)
-              .cast<float>();
+          ground.static_flow_at(derotated.x(col), y, *depth_m, speed_mps, interval_s).cast<float>();
       filled_[i] = 1;
       ++filled;
     }

@@ -443,3 +443,46 @@ TEST(FlowSegmenter, FastGraphFindsOpenCvsRegionsWhereEdgesWeighTheSame) {
 
 }  // namespace
 }  // namespace flowsteer::servo
+
+namespace flowsteer::servo {
+namespace {
+
+// A plain grey image with Gaussian noise of sigma_grey, seeded.
+cv::Mat noisy_plain(double sigma_grey, unsigned seed) {
+  cv::Mat noise(96, 128, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma_grey);
+  cv::Mat image;
+  noise.convertTo(image, CV_8U, 1.0, 128.0);
+  return image;
+}
+
+TEST(FlowSource, AnEstimatorMeasuresItsImagesNoise) {
+  const std::unique_ptr<FlowSource> flow = make_flow_source(FlowMethod::dis_medium);
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(128, 96, 90.0 * kDeg));
+  for (const double sigma_grey : {1.0, 2.0, 4.0}) {
+    flow->reset();
+    flow->update({noisy_plain(sigma_grey, 1), 0.0}, {}, field);
+    ASSERT_EQ(flow->update({noisy_plain(sigma_grey, 2), 0.1}, {}, field), FlowStatus::ok);
+    // The estimate is quantised to 1 / (0.6745 · 6) ≈ 0.25 grey levels.
+    EXPECT_NEAR(flow->image_noise_grey(), sigma_grey, 0.15 * sigma_grey + 0.25) << sigma_grey;
+  }
+  // Noise as strong as the texture test's floor leaves none of a plain image with flow.
+  std::size_t with_flow = 0;
+  for (const Eigen::Vector2f& v : field.flow()) {
+    with_flow += v.allFinite() ? 1 : 0;
+  }
+  EXPECT_LT(with_flow, field.size() / 20);
+}
+
+TEST(FlowSource, ARenderedTextureHasNoNoise) {
+  const std::unique_ptr<FlowSource> flow = make_flow_source(FlowMethod::dis_medium);
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(128, 96, 90.0 * kDeg));
+  const cv::Mat texture = textured_image(128, 96, 3);
+  flow->update({shifted(texture, 128, 96, 0, 0), 0.0}, {}, field);
+  ASSERT_EQ(flow->update({shifted(texture, 128, 96, 1, 0), 0.1}, {}, field), FlowStatus::ok);
+  EXPECT_LT(flow->image_noise_grey(), 0.5);
+}
+
+}  // namespace
+}  // namespace flowsteer::servo

@@ -126,8 +126,7 @@ TEST(UntexturedFill, NoiseRaisesTheEdgeThreshold) {
   UntexturedFill fill;
   EXPECT_GT(fill.fill(v.field, v.grey, 1.0, v.mount, kSpeedMps, v.ground_mask), 0);
   View noisy = wall_view([](double) { return 1.2; });
-  EXPECT_EQ(fill.fill(noisy.field, noisy.grey, 25.0, noisy.mount, kSpeedMps, noisy.ground_mask),
-            0);
+  EXPECT_EQ(fill.fill(noisy.field, noisy.grey, 25.0, noisy.mount, kSpeedMps, noisy.ground_mask), 0);
 }
 
 }  // namespace

@@ -57,7 +57,7 @@ struct FlowEvalRow {
   // frames measured (objects of at least min_object_px): what the controller remembers about an
   // object is lost with each change.
   double flicker_per_s = 0.0;
-  double ms_per_frame = 0.0;               // flow computation alone
+  double ms_per_frame = 0.0;  // flow computation alone
 };
 
 // Renders the world's agent 0 walking (steered by its own controller on synthetic flow) and runs

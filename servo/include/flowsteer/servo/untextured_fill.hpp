@@ -59,7 +59,7 @@ class UntexturedFill {
   int lowest_edge(const cv::Mat& grey, int col, int top, int bottom) const;
 
   UntexturedFillOptions options_;
-  double edge_threshold_ = 0.0;  // grey levels per column, this frame's
+  double edge_threshold_ = 0.0;          // grey levels per column, this frame's
   std::vector<float> inverse_distance_;  // per pixel, 1 / metres ahead; 0 where not filled
   std::vector<std::uint8_t> filled_;
 };
