@@ -6,8 +6,8 @@
 //     Fig. 14 (UE4, Quadro M2000M); targets on a CPU-only machine (Mesa llvmpipe): ≤ 5 ms at
 //     256², ≤ 60 ms at 1024².
 //   AgentStepNumerical/<flow>/<width>/<height>: the full step with flow computed from the
-//     images and objects found in it (flow_graph_fast). MIG 2019's FlowNet2 step took 100 ms at 256² and
-//     200 ms at 512² on a GPU; targets here ≤ 10 ms and ≤ 25 ms.
+//     images and objects found in it (flow_graph_fast). MIG 2019's FlowNet2 step took 100 ms
+//     at 256² and 200 ms at 512² on a GPU; targets here ≤ 10 ms and ≤ 25 ms.
 //   RobotStepNumerical/<flow>/<width>/<height>: the same step without the renderer, on the same
 //     views rendered beforehand: what a robot runs per frame (RobotBrain: flow,
 //     segmentation, features, control). Perception's budget on one core (perception_ms: flow,
