@@ -17,11 +17,6 @@ bool synthetic(const PerceptionOptions& options) {
   return options.flow == servo::FlowMethod::synthetic;
 }
 
-// Whether the field carries the renderer's depth at every pixel.
-bool per_pixel_depth(const PerceptionOptions& options) {
-  return synthetic(options) && options.use_depth && options.depth == servo::DepthSource::renderer;
-}
-
 servo::FeatureOptions feature_options(const PerceptionOptions& options,
                                       const servo::FlowSource& flow) {
   servo::FeatureOptions features;
@@ -61,6 +56,14 @@ Perception::Perception(const base::CameraIntrinsics& intrinsics, const Perceptio
           static_cast<std::size_t>(options.optical_flow.max_kept_images) + 2)) {
   if (options.segmentation != servo::SegmentationMethod::semantic) {
     segmenter_.emplace(options.segmentation, options.flow_segmentation);
+  }
+  if (options.obstacle_memory) {
+    // Its points are ground contacts, which only flow segmentation without depth gives.
+    if (!segmenter_ || per_pixel_depth(options)) {
+      throw std::invalid_argument(
+          "Perception: the obstacle memory needs flow segmentation without the renderer's depth");
+    }
+    memory_.emplace(options.mount, options.memory);
   }
 }
 
@@ -149,8 +152,31 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
 
   stage.restart();
   objects_ = extractor_.extract(field_, segmentation_);
+  if (memory_) {
+    objects_ = with_remembered(frame.timestamp_s, speed_mps, turn_rate_cy);
+  }
   times.features = stage.elapsed_ms();
   return status_;
+}
+
+std::span<const servo::ObjectFeatures> Perception::with_remembered(double timestamp_s,
+                                                                   double speed_mps,
+                                                                   double turn_rate_cy) {
+  const MotionHistory::Motion measured{speed_mps, turn_rate_cy};
+  // Carried by what the base measured since the memory last saw a frame, which a frame without
+  // flow may have made longer than one frame.
+  const double since_s = memory_time_s_.value_or(timestamp_s);
+  const MotionHistory::Motion moved = motions_->mean(since_s, timestamp_s, measured);
+  memory_->carry(moved.speed_mps, moved.turn_rate_cy, timestamp_s - since_s);
+  memory_time_s_ = timestamp_s;
+  const double flow_speed_mps =
+      motions_->mean(timestamp_s - field_.interval_s(), timestamp_s, measured).speed_mps;
+  memory_->observe({field_, segmentation_, ground_mask_, objects_, extractor_.contacts()},
+                   flow_speed_mps, timestamp_s - since_s);
+  const auto recalled = memory_->recall(speed_mps);
+  percept_objects_.assign(objects_.begin(), objects_.end());
+  percept_objects_.insert(percept_objects_.end(), recalled.begin(), recalled.end());
+  return percept_objects_;
 }
 
 void MotionHistory::remember(double timestamp_s, const Motion& motion) {

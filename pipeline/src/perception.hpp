@@ -15,6 +15,7 @@
 #include "flowsteer/servo/flow_field.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/ground.hpp"
+#include "flowsteer/servo/obstacle_memory.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/segmentation.hpp"
 #include "flowsteer/servo/untextured_fill.hpp"
@@ -54,6 +55,11 @@ class Perception {
   std::span<const std::uint8_t> filled_pixels() const { return untextured_fill_.filled(); }
 
  private:
+  // Carries the memory to this frame, shows it the frame's static obstacles, and returns the
+  // extracted objects with the memory's recalled ones after them.
+  std::span<const servo::ObjectFeatures> with_remembered(double timestamp_s, double speed_mps,
+                                                         double turn_rate_cy);
+
   PerceptionOptions options_;
   servo::FlowField field_;
   std::unique_ptr<servo::FlowSource> flow_source_;
@@ -66,6 +72,9 @@ class Perception {
   std::vector<std::uint8_t> ground_mask_;
   std::unique_ptr<MotionHistory> motions_;  // what the base measured, frame by frame
   cv::Mat grey_;
+  std::optional<servo::ObstacleMemory> memory_;
+  std::optional<double> memory_time_s_;                 // of the last frame the memory saw
+  std::vector<servo::ObjectFeatures> percept_objects_;  // the features' and the memory's
   std::span<const servo::ObjectFeatures> objects_;
   servo::FlowStatus status_ = servo::FlowStatus::no_previous_frame;
 };

@@ -736,19 +736,18 @@ bool stands_on_ground(const FlowField& field, const Segmentation& segmentation,
   return true;
 }
 
-// Adds to each visible region the points where it stands on the ground (stands_on_ground), at
-// the ground's depth one row below the pixel: the foot lies above the next row's centre, which
-// the region does not cover, so the depth is never further than the foot's. A region in the
-// bottom row stands below the image, nearer than the ground at the image's lower edge: that
-// depth bounds its foot's from above (a neighbour a step away, whose feet a level camera does
-// not see).
-template <typename Accumulators>
-void add_ground_contacts(const FlowField& field, const Segmentation& segmentation,
-                         const base::CameraMount& mount, Accumulators& accumulators) {
+// The points where each visible region stands on the ground (stands_on_ground), at the ground's
+// depth one row below the pixel: the foot lies above the next row's centre, which the region
+// does not cover, so the depth is never further than the foot's. A region in the bottom row
+// stands below the image, nearer than the ground at the image's lower edge: that depth bounds
+// its foot's from above (a neighbour a step away, whose feet a level camera does not see).
+void find_ground_contacts(const FlowField& field, const Segmentation& segmentation,
+                          const base::CameraMount& mount, std::vector<GroundContact>& contacts) {
+  contacts.clear();
   const FlatGround ground(mount);
   // A row's ground depth does not depend on the column.
-  const std::optional<double> below_image_m =
-      ground.depth_at(0.0, field.y(field.height() - 1) + 0.5 / field.intrinsics().fy_px);
+  const double below_image_y = field.y(field.height() - 1) + 0.5 / field.intrinsics().fy_px;
+  const std::optional<double> below_image_m = ground.depth_at(0.0, below_image_y);
   for_each_region_pixel(
       field, segmentation, [&](std::size_t, int col, int row, std::int32_t label) {
         if (segmentation.kinds[static_cast<std::size_t>(label)] != RegionKind::visible) {
@@ -756,8 +755,8 @@ void add_ground_contacts(const FlowField& field, const Segmentation& segmentatio
         }
         if (row + 1 == field.height()) {
           if (below_image_m) {
-            accumulators[static_cast<std::size_t>(label)].add_contact(field.x(col), field.y(row),
-                                                                      *below_image_m);
+            contacts.push_back(
+                {label, field.x(col), field.y(row), below_image_y, *below_image_m, true});
           }
           return;
         }
@@ -766,8 +765,7 @@ void add_ground_contacts(const FlowField& field, const Segmentation& segmentatio
         }
         const auto depth = ground.depth_at(field.x(col), field.y(row + 1));
         if (depth && stands_on_ground(field, segmentation, mount, col, row, label)) {
-          accumulators[static_cast<std::size_t>(label)].add_contact(field.x(col), field.y(row),
-                                                                    *depth);
+          contacts.push_back({label, field.x(col), field.y(row), field.y(row + 1), *depth, false});
         }
       });
 }
@@ -881,7 +879,12 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
         }
       });
   if (depth.empty() && options_.ground_mount) {
-    add_ground_contacts(field, segmentation, *options_.ground_mount, accumulators_);
+    find_ground_contacts(field, segmentation, *options_.ground_mount, contacts_);
+    for (const GroundContact& c : contacts_) {
+      accumulators_[static_cast<std::size_t>(c.label)].add_contact(c.x, c.y, c.depth_m);
+    }
+  } else {
+    contacts_.clear();
   }
 
   // Every region with enough valid vectors gets up to max_fit_samples of them, taken at an even

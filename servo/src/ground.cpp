@@ -8,7 +8,10 @@
 namespace flowsteer::servo {
 
 FlatGround::FlatGround(const base::CameraMount& mount)
-    : mount_(mount), cos_pitch_(std::cos(mount.pitch_rad)), sin_pitch_(std::sin(mount.pitch_rad)) {
+    : mount_(mount),
+      camera_to_body_(mount.camera_to_body()),
+      cos_pitch_(std::cos(mount.pitch_rad)),
+      sin_pitch_(std::sin(mount.pitch_rad)) {
   mount_.validate();
 }
 
@@ -53,6 +56,25 @@ std::optional<double> FlatGround::depth_at_distance_ahead(double y, double dista
     return std::nullopt;
   }
   return distance_ahead_m / ahead;
+}
+
+std::optional<Eigen::Vector2d> FlatGround::point_at(double x, double y) const {
+  const auto depth = depth_at(x, y);
+  if (!depth) {
+    return std::nullopt;
+  }
+  return (camera_to_body_ * (*depth * Eigen::Vector3d(x, y, 1.0))).head<2>().eval();
+}
+
+std::optional<Eigen::Vector3d> FlatGround::image_of(const Eigen::Vector2d& point_m,
+                                                    double height_m) const {
+  const Eigen::Vector3d camera =
+      camera_to_body_.transpose() *
+      Eigen::Vector3d(point_m.x(), point_m.y(), height_m - mount_.height_m);
+  if (camera.z() <= 1e-9) {
+    return std::nullopt;
+  }
+  return Eigen::Vector3d(camera.x() / camera.z(), camera.y() / camera.z(), camera.z());
 }
 
 namespace {

@@ -4,6 +4,7 @@
 #include "flowsteer/servo/dark_regions.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/ground.hpp"
+#include "flowsteer/servo/obstacle_memory.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/steering.hpp"
 #include "flowsteer/servo/untextured_fill.hpp"
@@ -44,6 +45,16 @@ struct PerceptionOptions {
   // Numerical flow's error in pixels over its interval: the ground test allows it on top of its
   // relative tolerance, since the ground left over joins every object standing on it.
   double numerical_flow_noise_px = 0.3;
+  // Remember what stood still and recall it where the view no longer shows it
+  // (servo::ObstacleMemory): for flow segmentation without the renderer's depth, a camera's.
+  bool obstacle_memory = false;
+  servo::ObstacleMemoryOptions memory;
 };
+
+// Whether the field carries the renderer's depth at every pixel.
+inline bool per_pixel_depth(const PerceptionOptions& options) {
+  return options.flow == servo::FlowMethod::synthetic && options.use_depth &&
+         options.depth == servo::DepthSource::renderer;
+}
 
 }  // namespace flowsteer::pipeline

@@ -162,6 +162,18 @@ struct FeatureOptions {
   std::optional<base::CameraMount> ground_mount;
 };
 
+// A point where a visible region stands on the ground (FeatureOptions::ground_mount): the
+// region's pixel (x, y), and the ground's depth at (x, ground_y), the row below it.
+struct GroundContact {
+  int label = Segmentation::kNoRegion;
+  double x = 0.0;  // normalised
+  double y = 0.0;
+  double ground_y = 0.0;
+  double depth_m = 0.0;
+  // In the bottom row: the foot is below the image, and depth_m only bounds its depth from above.
+  bool below_image = false;
+};
+
 // Extracts per-region features from a derotated flow field. Keeps its scratch buffers between
 // calls so that a steady stream of frames does not allocate per pixel; one extractor per
 // thread.
@@ -178,6 +190,8 @@ class FeatureExtractor {
   // when the segmentation does not match the field's size.
   std::span<const ObjectFeatures> extract(const FlowField& derotated,
                                           const Segmentation& segmentation);
+  // The ground contacts the last extract found (without depth and with a ground_mount only).
+  std::span<const GroundContact> contacts() const { return contacts_; }
 
  private:
   struct Accumulator;
@@ -187,6 +201,7 @@ class FeatureExtractor {
   std::vector<FlowSample> samples_;
   std::vector<int> sample_offsets_;
   std::vector<ObjectFeatures> features_;
+  std::vector<GroundContact> contacts_;
   std::unique_ptr<RadialFitWorkspace> fit_workspace_;
 };
 

@@ -34,9 +34,17 @@ class FlatGround {
   double distance_ahead_m(double y, double depth_m) const;
   // Empty where the ray through row y does not reach forward (pointing straight up or back).
   std::optional<double> depth_at_distance_ahead(double y, double distance_ahead_m) const;
+  // The ground's point seen at (x, y), in the body frame below the camera (x forward, y left,
+  // metres); empty at or above the horizon.
+  std::optional<Eigen::Vector2d> point_at(double x, double y) const;
+  // Where the point height_m above the ground's point (body frame, as point_at's) is seen:
+  // (x, y) normalised and its depth Z; empty where it is not in front of the camera.
+  std::optional<Eigen::Vector3d> image_of(const Eigen::Vector2d& point_m,
+                                          double height_m = 0.0) const;
 
  private:
   base::CameraMount mount_;
+  Eigen::Matrix3d camera_to_body_;
   double cos_pitch_;
   double sin_pitch_;
 };

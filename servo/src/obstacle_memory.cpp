@@ -1,0 +1,261 @@
+#include "flowsteer/servo/obstacle_memory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace flowsteer::servo {
+
+namespace {
+
+// sin(φ)/φ, exact to rounding at φ = 0.
+double sinc(double phi) {
+  return std::abs(phi) < 1e-4 ? 1.0 - phi * phi / 6.0 : std::sin(phi) / phi;
+}
+
+void require(bool ok, const std::string& what) {
+  if (!ok) {
+    throw std::invalid_argument("ObstacleMemoryOptions: " + what);
+  }
+}
+
+}  // namespace
+
+ObstacleMemory::ObstacleMemory(const base::CameraMount& mount, const ObstacleMemoryOptions& options)
+    : options_(options),
+      ground_(mount),
+      static_foe_(mount.forward_foe()),
+      cos_pitch_(std::cos(mount.pitch_rad)) {
+  require(options.spacing_m > 0.0, "spacing_m must be positive");
+  require(options.link_m >= 0.0, "link_m must not be negative");
+  require(options.range_m > 0.0 && options.behind_m >= 0.0, "range_m and behind_m out of range");
+  require(options.fade_s > 0.0 && options.confirm_s >= 0.0, "fade_s and confirm_s out of range");
+  require(options.ttc_tolerance >= 0.0, "ttc_tolerance must not be negative");
+  require(options.evidence_height_m > 0.0, "evidence_height_m must be positive");
+  require(options.min_forward_m > 0.0, "min_forward_m must be positive");
+  require(options.capacity > 0, "capacity must be positive");
+  const auto capacity = static_cast<std::size_t>(options.capacity);
+  points_.reserve(capacity);
+  recalled_.reserve(capacity);
+  parent_.reserve(capacity);
+  object_of_.reserve(capacity);
+  objects_.reserve(capacity);
+}
+
+void ObstacleMemory::carry(double speed_mps, double turn_rate, double dt_s) {
+  // The body turns by φ = ω_z dt (ω_z = −turn_rate, counter-clockwise) along an arc whose chord
+  // is v dt (sinc φ, (1 − cos φ)/φ), and (1 − cos φ)/φ = sin(φ/2) sinc(φ/2). A static point p
+  // is then R(−φ) (p − chord) in the new body frame.
+  const double phi = -turn_rate * dt_s;
+  const double travel_m = speed_mps * dt_s;
+  const Eigen::Vector2d chord =
+      travel_m * Eigen::Vector2d(sinc(phi), std::sin(0.5 * phi) * sinc(0.5 * phi));
+  const double c = std::cos(phi);
+  const double s = std::sin(phi);
+  for (Point& p : points_) {
+    const Eigen::Vector2d d = p.position_m - chord;
+    p.position_m = {c * d.x() + s * d.y(), -s * d.x() + c * d.y()};
+  }
+  std::erase_if(points_, [&](const Point& p) {
+    return p.position_m.norm() > options_.range_m || p.position_m.x() < -options_.behind_m;
+  });
+}
+
+bool ObstacleMemory::stands_still(const View& view, const GroundContact& contact,
+                                  double speed_mps) const {
+  // A contact below the image only bounds its foot's depth: no point is taken from it.
+  if (!(speed_mps >= options_.min_speed_mps) || contact.below_image || contact.label < 0 ||
+      static_cast<std::size_t>(contact.label) >= view.objects.size()) {
+    return false;
+  }
+  const ObjectFeatures& o = view.objects[static_cast<std::size_t>(contact.label)];
+  // Ends with depths: the features found it rising above the horizon, standing on the ground
+  // at both ends, which a patch of ground the ground test missed does not.
+  if (o.kind != RegionKind::visible || o.status != MotionStatus::approaching || !o.fit.static_foe ||
+      !o.min_x_depth_m || !o.max_x_depth_m) {
+    return false;
+  }
+  // A static point at depth Z closes in at v cos θ along the optical axis: τ = Z / (v cos θ)
+  // (CGF Eq. 5). A contact far from the depth the region's τ gives is not where it stands: floor
+  // the segmentation joined to something further, or the feet of someone walking.
+  const double static_depth_m = o.ttc_s * speed_mps * cos_pitch_;
+  return std::abs(contact.depth_m - static_depth_m) <= options_.ttc_tolerance * static_depth_m;
+}
+
+void ObstacleMemory::remember(const Eigen::Vector2d& position_m) {
+  Point* nearest = nullptr;
+  double nearest2 = options_.spacing_m * options_.spacing_m;
+  for (Point& p : points_) {
+    if (const double d2 = (p.position_m - position_m).squaredNorm(); d2 < nearest2) {
+      nearest2 = d2;
+      nearest = &p;
+    }
+  }
+  if (nearest != nullptr) {
+    if (nearest->sight != Point::Sight::observed) {
+      // A running mean over the last few sightings: odometry drifts, and a new sighting is
+      // measured where the point is now.
+      ++nearest->sightings;
+      nearest->position_m += (position_m - nearest->position_m) / std::min(nearest->sightings, 4);
+      nearest->unseen_s = 0.0;
+      nearest->contradicted_s = 0.0;
+      nearest->sight = Point::Sight::observed;
+    }
+    return;
+  }
+  if (points_.size() == points_.capacity()) {
+    return;
+  }
+  points_.push_back({position_m, next_id_, 1, 0.0, 0.0, Point::Sight::observed});
+  next_id_ = next_id_ == std::numeric_limits<std::int32_t>::max() ? kFirstId : next_id_ + 1;
+}
+
+ObstacleMemory::Point::Sight ObstacleMemory::sight_of(const View& view, const Point& point) const {
+  const auto foot = ground_.image_of(point.position_m);
+  const auto top = ground_.image_of(point.position_m, options_.evidence_height_m);
+  if (!foot || !top) {
+    return Point::Sight::out_of_view;
+  }
+  const FlowField& field = view.field;
+  const base::CameraIntrinsics& k = field.intrinsics();
+  const auto col = static_cast<int>(std::lround(k.fx_px * foot->x() + k.cx_px));
+  const auto foot_row = static_cast<int>(std::lround(k.fy_px * foot->y() + k.cy_px));
+  if (col < 0 || col >= field.width() || foot_row < 1 || foot_row >= field.height()) {
+    return Point::Sight::out_of_view;
+  }
+  // The obstacle would stand in the rows above its foot, up to evidence_height_m.
+  const int last = foot_row - 1;
+  const int first =
+      std::clamp(static_cast<int>(std::lround(k.fy_px * top->y() + k.cy_px)), 0, last);
+  int floor_rows = 0;
+  for (int row = first; row <= last; ++row) {
+    const std::size_t i = field.index(col, row);
+    const std::int32_t label = view.segmentation.labels[i];
+    if (label < 0) {
+      floor_rows += !view.ground_mask.empty() && view.ground_mask[i] != 0;
+      continue;
+    }
+    const RegionKind kind = view.segmentation.kinds[static_cast<std::size_t>(label)];
+    if (kind == RegionKind::visible) {
+      return Point::Sight::covered;
+    }
+    floor_rows += kind == RegionKind::ground;
+  }
+  return floor_rows == last - first + 1 ? Point::Sight::contradicted : Point::Sight::unknown;
+}
+
+void ObstacleMemory::observe(const View& view, double speed_mps, double dt_s) {
+  for (Point& p : points_) {
+    p.unseen_s += dt_s;
+    p.sight = Point::Sight::unknown;
+  }
+  for (const GroundContact& c : view.contacts) {
+    if (!stands_still(view, c, speed_mps)) {
+      continue;
+    }
+    if (const auto p = ground_.point_at(c.x, c.ground_y); p && p->norm() <= options_.range_m) {
+      remember(*p);
+    }
+  }
+  for (Point& p : points_) {
+    if (p.sight != Point::Sight::observed) {
+      p.sight = sight_of(view, p);
+      if (p.sight == Point::Sight::contradicted) {
+        p.contradicted_s += dt_s;
+      }
+    }
+  }
+  std::erase_if(points_, [&](const Point& p) {
+    return p.contradicted_s >= options_.fade_s ||
+           (p.sightings < 2 && p.unseen_s > options_.confirm_s);
+  });
+}
+
+std::size_t ObstacleMemory::find(std::size_t i) {
+  while (parent_[i] != i) {
+    parent_[i] = parent_[parent_[i]];  // path halving
+    i = parent_[i];
+  }
+  return i;
+}
+
+std::span<const ObjectFeatures> ObstacleMemory::recall(double speed_mps) {
+  recalled_.clear();
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    const Point& p = points_[i];
+    if (p.sightings >= 2 && p.sight == Point::Sight::out_of_view &&
+        p.position_m.x() >= options_.min_forward_m) {
+      recalled_.push_back(i);
+    }
+  }
+  const std::size_t n = recalled_.size();
+  parent_.resize(n);
+  std::iota(parent_.begin(), parent_.end(), std::size_t{0});
+  const double link2 = options_.link_m * options_.link_m;
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = a + 1; b < n; ++b) {
+      if ((points_[recalled_[a]].position_m - points_[recalled_[b]].position_m).squaredNorm() <=
+          link2) {
+        parent_[find(a)] = find(b);
+      }
+    }
+  }
+  // Each object in the image's terms at depths along the course: a point (forward, left) is at
+  // Z = forward and image x = −left / forward, as the law places (x Z, Z) on the ground.
+  object_of_.assign(n, -1);
+  objects_.clear();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < n; ++k) {
+    int& object = object_of_[find(k)];
+    if (object < 0) {
+      object = static_cast<int>(objects_.size());
+      ObjectFeatures& f = objects_.emplace_back();
+      f.source_id = std::numeric_limits<std::int32_t>::max();
+      f.min_x = inf;
+      f.max_x = -inf;
+      f.ttc_s = inf;  // the nearest depth along the course, until the end
+    }
+    ObjectFeatures& f = objects_[static_cast<std::size_t>(object)];
+    const Point& p = points_[recalled_[k]];
+    const double z = p.position_m.x();
+    const double x = -p.position_m.y() / z;
+    f.source_id = std::min(f.source_id, p.id);  // the oldest point's: stable
+    ++f.pixel_count;
+    f.centre.x() += x;
+    f.ttc_s = std::min(f.ttc_s, z);
+    if (x < f.min_x) {
+      f.min_x = x;
+      f.min_x_depth_m = z;
+    }
+    if (x > f.max_x) {
+      f.max_x = x;
+      f.max_x_depth_m = z;
+    }
+    // The nearest point is at Z √(1 + x²).
+    if (!f.nearest_depth_m ||
+        p.position_m.norm() < *f.nearest_depth_m * std::sqrt(1.0 + f.nearest_x * f.nearest_x)) {
+      f.nearest_x = x;
+      f.nearest_depth_m = z;
+    }
+  }
+  for (ObjectFeatures& f : objects_) {
+    f.centre = {f.centre.x() / f.pixel_count, static_foe_.y()};
+    f.width = f.max_x - f.min_x;
+    f.fit.static_foe = true;
+    // A static point closes in at the agent's speed: τ = Z / v, its FOE the static one.
+    if (speed_mps > 0.0) {
+      f.status = MotionStatus::approaching;
+      f.ttc_s /= speed_mps;
+      f.foe = static_foe_;
+    } else {
+      f.status = MotionStatus::lateral;
+      f.ttc_s = inf;
+    }
+  }
+  return objects_;
+}
+
+}  // namespace flowsteer::servo

@@ -1,0 +1,212 @@
+#include "flowsteer/servo/obstacle_memory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "flowsteer/servo/ground.hpp"
+
+namespace flowsteer::servo {
+namespace {
+
+using Sight = ObstacleMemory::Point::Sight;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr double kSpeed_mps = 1.0;
+constexpr double kFrame_s = 0.1;
+
+// A 64×48 camera of 90° a metre above the floor, pitched down 0.1 rad, whose frames show what
+// each test says: one visible region (label 0) standing on the ground at the points given.
+class ObstacleMemoryTest : public ::testing::Test {
+ protected:
+  ObstacleMemoryTest()
+      : mount_{1.0, 0.1},
+        field_(base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg)),
+        ground_(mount_),
+        memory_(mount_) {
+    segmentation_.width = field_.width();
+    segmentation_.height = field_.height();
+    segmentation_.labels.assign(field_.size(), Segmentation::kNoRegion);
+    segmentation_.kinds = {RegionKind::visible};
+    segmentation_.source_ids = {1};
+    floor_.assign(field_.size(), 1);  // the floor everywhere, unless a test covers it
+  }
+
+  // One frame in which region 0 stands on the ground at `points_m` (body frame), its fitted τ
+  // `ttc_scale` times a static point's at its nearest contact.
+  void observe(const std::vector<Eigen::Vector2d>& points_m, double ttc_scale = 1.0) {
+    contacts_.clear();
+    double nearest_depth_m = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector2d& p : points_m) {
+      const auto seen = ground_.image_of(p);
+      ASSERT_TRUE(seen);
+      const double pixel = 1.0 / field_.intrinsics().fy_px;
+      contacts_.push_back({0, seen->x(), seen->y() - pixel, seen->y(), seen->z(), false});
+      nearest_depth_m = std::min(nearest_depth_m, seen->z());
+    }
+    ObjectFeatures region;
+    region.label = 0;
+    region.status = MotionStatus::approaching;
+    region.fit.static_foe = true;
+    region.ttc_s = ttc_scale * nearest_depth_m / (kSpeed_mps * std::cos(mount_.pitch_rad));
+    region.min_x_depth_m = nearest_depth_m;  // it stands on the ground at both ends
+    region.max_x_depth_m = nearest_depth_m;
+    objects_ = {region};
+    memory_.observe({field_, segmentation_, floor_, objects_, contacts_}, kSpeed_mps, kFrame_s);
+  }
+  // One frame in which nothing stands anywhere: only floor, where the mask shows it.
+  void observe_nothing() {
+    contacts_.clear();
+    memory_.observe({field_, segmentation_, floor_, {}, contacts_}, kSpeed_mps, kFrame_s);
+  }
+
+  base::CameraMount mount_;
+  FlowField field_;
+  FlatGround ground_;
+  ObstacleMemory memory_;
+  Segmentation segmentation_;
+  std::vector<std::uint8_t> floor_;
+  std::vector<ObjectFeatures> objects_;
+  std::vector<GroundContact> contacts_;
+};
+
+TEST_F(ObstacleMemoryTest, CarriesPointsExactlyAlongStraightAndArcMotion) {
+  // Straight on: 1 m at 0.5 m/s in twenty steps.
+  observe({{3.0, 0.5}});
+  for (int step = 0; step < 20; ++step) {
+    memory_.carry(0.5, 0.0, 0.1);
+  }
+  ASSERT_EQ(memory_.points().size(), 1u);
+  EXPECT_NEAR(memory_.points()[0].position_m.x(), 2.0, 1e-9);
+  EXPECT_NEAR(memory_.points()[0].position_m.y(), 0.5, 1e-9);
+
+  // A quarter circle of radius 2 m to the left (turn rate negative, CONVENTIONS.md) in ten steps:
+  // the agent ends at (2, 2) of the old frame facing +y. (2, 3) is then 1 m ahead, (1, 3.5)
+  // 1.5 m ahead and 1 m to the left.
+  memory_ = ObstacleMemory(mount_);
+  observe({{2.0, 3.0}});
+  observe({{1.0, 3.5}});
+  ASSERT_EQ(memory_.points().size(), 2u);
+  const double radius_m = 2.0;
+  const double turn_rate = -kSpeed_mps / radius_m;
+  const double duration_s = 0.5 * std::numbers::pi * radius_m / kSpeed_mps;
+  for (int step = 0; step < 10; ++step) {
+    memory_.carry(kSpeed_mps, turn_rate, duration_s / 10.0);
+  }
+  ASSERT_EQ(memory_.points().size(), 2u);
+  EXPECT_NEAR(memory_.points()[0].position_m.x(), 1.0, 1e-9);
+  EXPECT_NEAR(memory_.points()[0].position_m.y(), 0.0, 1e-9);
+  EXPECT_NEAR(memory_.points()[1].position_m.x(), 1.5, 1e-9);
+  EXPECT_NEAR(memory_.points()[1].position_m.y(), 1.0, 1e-9);
+}
+
+TEST_F(ObstacleMemoryTest, DropsPointsOutOfRangeOrBehind) {
+  observe({{3.5, 0.0}, {1.0, 1.0}});
+  memory_.carry(-1.0, 0.0, 1.0);  // the first is now 4.5 m away
+  ASSERT_EQ(memory_.points().size(), 1u);
+  memory_.carry(1.0, 0.0, 2.6);  // the second 0.6 m behind
+  EXPECT_TRUE(memory_.points().empty());
+}
+
+TEST_F(ObstacleMemoryTest, KeepsAPointSeenTwiceNotOneSeenOnce) {
+  observe({{2.0, 0.0}});
+  for (int frame = 0; frame < 6; ++frame) {
+    floor_.assign(field_.size(), 0);  // nothing says it has gone: it only lacks a second look
+    observe_nothing();
+  }
+  EXPECT_TRUE(memory_.points().empty());
+
+  observe({{2.0, 0.0}});
+  observe({{2.02, 0.01}});
+  ASSERT_EQ(memory_.points().size(), 1u);
+  EXPECT_EQ(memory_.points()[0].sightings, 2);
+  for (int frame = 0; frame < 30; ++frame) {
+    observe_nothing();
+  }
+  EXPECT_EQ(memory_.points().size(), 1u);
+}
+
+TEST_F(ObstacleMemoryTest, DoesNotRememberWhatClosesInFasterThanAStaticObject) {
+  for (int frame = 0; frame < 3; ++frame) {
+    observe({{2.0, 0.0}}, 0.4);  // someone walking towards the agent faster than it walks
+  }
+  EXPECT_TRUE(memory_.points().empty());
+}
+
+TEST_F(ObstacleMemoryTest, DropsARemovedObstacleWithinItsFadeTime) {
+  observe({{2.0, 0.0}});
+  observe({{2.0, 0.0}});
+  const auto fade_frames = std::lround(ObstacleMemoryOptions{}.fade_s / kFrame_s);
+  long frames = 0;
+  for (; !memory_.points().empty() && frames < 100; ++frames) {
+    observe_nothing();  // the floor shows where it stood
+    if (!memory_.points().empty()) {
+      EXPECT_EQ(memory_.points()[0].sight, Sight::contradicted);
+    }
+  }
+  EXPECT_GE(frames, fade_frames - 1);
+  EXPECT_LE(frames, fade_frames + 1);
+}
+
+TEST_F(ObstacleMemoryTest, KeepsAnObstacleHiddenBehindANearerOne) {
+  observe({{2.0, 0.0}});
+  observe({{2.0, 0.0}});
+  // Something nearer covers the column above its foot.
+  const auto foot = ground_.image_of({2.0, 0.0});
+  const base::CameraIntrinsics& k = field_.intrinsics();
+  const auto col = static_cast<int>(std::lround(k.fx_px * foot->x() + k.cx_px));
+  for (int row = 0; row < field_.height(); ++row) {
+    segmentation_.labels[field_.index(col, row)] = 0;
+  }
+  for (int frame = 0; frame < 30; ++frame) {
+    observe_nothing();
+  }
+  ASSERT_EQ(memory_.points().size(), 1u);
+  EXPECT_EQ(memory_.points()[0].sight, Sight::covered);
+  EXPECT_TRUE(memory_.recall(kSpeed_mps).empty());  // the percept has it
+}
+
+TEST_F(ObstacleMemoryTest, RecallsAWallBesideTheAgentAsOneStaticObject) {
+  std::vector<Eigen::Vector2d> wall;
+  for (int k = 0; k < 4; ++k) {
+    wall.push_back({1.2 + 0.12 * k, 0.8});
+  }
+  observe(wall);
+  observe(wall);
+  EXPECT_TRUE(memory_.recall(kSpeed_mps).empty());  // in view: the percept has it
+  // One metre on, the wall's foot has left the 90° view on the left.
+  memory_.carry(kSpeed_mps, 0.0, 1.0);
+  for (int frame = 0; frame < 30; ++frame) {
+    observe_nothing();  // floor everywhere in view: nothing says the wall has gone
+  }
+  ASSERT_EQ(memory_.points().size(), wall.size());
+  const auto objects = memory_.recall(kSpeed_mps);
+  ASSERT_EQ(objects.size(), 1u);
+  const ObjectFeatures& o = objects[0];
+  EXPECT_EQ(o.kind, RegionKind::visible);
+  EXPECT_GE(o.source_id, ObstacleMemory::kFirstId);
+  EXPECT_EQ(o.status, MotionStatus::approaching);
+  EXPECT_TRUE(o.fit.static_foe);
+  EXPECT_NEAR(o.foe.x(), mount_.forward_foe().x(), 1e-12);
+  EXPECT_NEAR(o.foe.y(), mount_.forward_foe().y(), 1e-12);
+  // Its nearest point 0.2 m ahead closes in at the agent's speed.
+  EXPECT_NEAR(o.ttc_s, 0.2 / kSpeed_mps, 1e-6);
+  // Left of the heading, from 0.2 m to 0.56 m ahead: x = −left / forward.
+  EXPECT_NEAR(o.min_x, -0.8 / 0.2, 1e-6);
+  EXPECT_NEAR(*o.min_x_depth_m, 0.2, 1e-6);
+  EXPECT_NEAR(o.max_x, -0.8 / 0.56, 1e-6);
+  EXPECT_NEAR(*o.max_x_depth_m, 0.56, 1e-6);
+  EXPECT_NEAR(*o.nearest_depth_m, 0.2, 1e-6);
+  EXPECT_GT(o.width, 0.0);
+  // The same object next frame, by its id.
+  const std::int32_t id = o.source_id;
+  EXPECT_EQ(memory_.recall(kSpeed_mps)[0].source_id, id);
+}
+
+}  // namespace
+}  // namespace flowsteer::servo
