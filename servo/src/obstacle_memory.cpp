@@ -32,7 +32,8 @@ ObstacleMemory::ObstacleMemory(const base::CameraMount& mount, const ObstacleMem
   require(options.spacing_m > 0.0, "spacing_m must be positive");
   require(options.link_m >= 0.0, "link_m must not be negative");
   require(options.range_m > 0.0 && options.behind_m >= 0.0, "range_m and behind_m out of range");
-  require(options.fade_s > 0.0 && options.confirm_s >= 0.0, "fade_s and confirm_s out of range");
+  require(options.fade_s > 0.0 && options.confirm_s >= 0.0 && options.forget_s >= options.confirm_s,
+          "fade_s, confirm_s or forget_s out of range");
   require(options.ttc_tolerance >= 0.0, "ttc_tolerance must not be negative");
   require(options.evidence_height_m > 0.0, "evidence_height_m must be positive");
   require(options.min_forward_m > 0.0, "min_forward_m must be positive");
@@ -169,7 +170,7 @@ void ObstacleMemory::observe(const View& view, double speed_mps, double dt_s) {
     }
   }
   std::erase_if(points_, [&](const Point& p) {
-    return p.contradicted_s >= options_.fade_s ||
+    return p.contradicted_s >= options_.fade_s || p.unseen_s > options_.forget_s ||
            (p.sightings < 2 && p.unseen_s > options_.confirm_s);
   });
 }

@@ -125,10 +125,14 @@ TEST_F(ObstacleMemoryTest, KeepsAPointSeenTwiceNotOneSeenOnce) {
   observe({{2.02, 0.01}});
   ASSERT_EQ(memory_.points().size(), 1u);
   EXPECT_EQ(memory_.points()[0].sightings, 2);
-  for (int frame = 0; frame < 30; ++frame) {
+  for (int frame = 0; frame < 25; ++frame) {
     observe_nothing();
   }
   EXPECT_EQ(memory_.points().size(), 1u);
+  for (int frame = 0; frame < 10; ++frame) {
+    observe_nothing();  // not seen for longer than forget_s
+  }
+  EXPECT_TRUE(memory_.points().empty());
 }
 
 TEST_F(ObstacleMemoryTest, DoesNotRememberWhatClosesInFasterThanAStaticObject) {
@@ -163,7 +167,7 @@ TEST_F(ObstacleMemoryTest, KeepsAnObstacleHiddenBehindANearerOne) {
   for (int row = 0; row < field_.height(); ++row) {
     segmentation_.labels[field_.index(col, row)] = 0;
   }
-  for (int frame = 0; frame < 30; ++frame) {
+  for (int frame = 0; frame < 25; ++frame) {
     observe_nothing();
   }
   ASSERT_EQ(memory_.points().size(), 1u);
@@ -181,7 +185,7 @@ TEST_F(ObstacleMemoryTest, RecallsAWallBesideTheAgentAsOneStaticObject) {
   EXPECT_TRUE(memory_.recall(kSpeed_mps).empty());  // in view: the percept has it
   // One metre on, the wall's foot has left the 90° view on the left.
   memory_.carry(kSpeed_mps, 0.0, 1.0);
-  for (int frame = 0; frame < 30; ++frame) {
+  for (int frame = 0; frame < 25; ++frame) {
     observe_nothing();  // floor everywhere in view: nothing says the wall has gone
   }
   ASSERT_EQ(memory_.points().size(), wall.size());

@@ -28,6 +28,9 @@ struct ObstacleMemoryOptions {
   // A point seen once is dropped unless it is seen again within this: one frame's phantom is
   // not remembered.
   double confirm_s = 0.5;
+  // Any point not seen for this long is dropped: out of view nothing says that what stood there
+  // still does (people stand, then walk on), and a wall passed at walking speed is behind by then.
+  double forget_s = 3.0;
   // A ground contact of a region with the static FOE is taken where the region's fitted τ puts
   // a static point within this fraction of the contact's depth: someone walking towards the
   // agent has the static FOE too, and a τ a fraction of that.
