@@ -134,6 +134,8 @@ servo::PerceptionConfig read_perception(const base::YamlReader& r, const YAML::N
     }
     perception.depth = *source;
   }
+  perception.obstacle_memory =
+      r.boolean(node, field, "obstacle_memory", perception.obstacle_memory);
   return perception;
 }
 

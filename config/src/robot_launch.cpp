@@ -127,7 +127,8 @@ PerceptionSection read_robot_perception(const base::YamlReader& r, const YAML::N
     return p;
   }
   r.only_keys(node, "perception",
-              {"flow", "segmentation", "dark_regions", "mount", "height_m", "pitch_deg"});
+              {"flow", "segmentation", "dark_regions", "obstacle_memory", "mount", "height_m",
+               "pitch_deg"});
   servo::PerceptionConfig methods{p.flow, p.segmentation};
   methods = read_perception(r, node, "perception", methods);
   if (methods.flow == servo::FlowMethod::synthetic) {
@@ -142,6 +143,7 @@ PerceptionSection read_robot_perception(const base::YamlReader& r, const YAML::N
   }
   p.flow = methods.flow;
   p.segmentation = methods.segmentation;
+  p.obstacle_memory = methods.obstacle_memory;
   p.dark_regions = r.boolean(node, "perception", "dark_regions", p.dark_regions);
   if (node["mount"] && (node["height_m"] || node["pitch_deg"])) {
     r.fail(node["mount"], "perception.mount",

@@ -172,7 +172,7 @@ servo::PerceptionConfig read_scenario_perception(const base::YamlReader& r, cons
                                                  const std::string& field,
                                                  const servo::PerceptionConfig& p) {
   if (node) {
-    r.only_keys(node, field, {"flow", "segmentation", "depth"});
+    r.only_keys(node, field, {"flow", "segmentation", "depth", "obstacle_memory"});
   }
   return read_perception(r, node, field, p);
 }

@@ -55,6 +55,9 @@ std::string suite_id(const std::vector<SuiteCase>& cases,
   }
   fingerprint.add(std::to_string(options.seed))
       .add(options.steps ? std::to_string(*options.steps) : "all");
+  if (options.obstacle_memory) {
+    fingerprint.add("obstacle memory");
+  }
   return fingerprint.hex();
 }
 
@@ -101,6 +104,9 @@ sim::RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& 
   sim.flow = configuration.flow;
   sim.segmentation = configuration.segmentation;
   sim.depth = configuration.depth;
+  if (options.obstacle_memory) {
+    sim.obstacle_memory = true;
+  }
   std::ostream quiet(nullptr);
   return sim::summarize(sim::run_simulation(world, sim, quiet));
 }

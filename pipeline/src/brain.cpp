@@ -21,11 +21,11 @@ PerceptionOptions perception_options(const servo::PerceptionConfig& perception,
   options.dark_regions = servo::navigation_weights(controller).delta > 0.0;
   options.use_depth = controller.use_depth;
   options.mount = mount;
-  // A camera's perception remembers what stood still; the papers' laws keep the perception they
-  // were recorded with.
-  options.obstacle_memory = controller.law == servo::NavigationLaw::flowsteer &&
-                            options.segmentation != servo::SegmentationMethod::semantic &&
-                            !per_pixel_depth(options);
+  // Its points are ground contacts, which only flow segmentation with a camera's depths gives; the
+  // papers' laws keep the perception they were recorded with.
+  options.obstacle_memory =
+      perception.obstacle_memory && controller.law == servo::NavigationLaw::flowsteer &&
+      options.segmentation != servo::SegmentationMethod::semantic && !per_pixel_depth(options);
   return options;
 }
 

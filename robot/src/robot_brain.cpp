@@ -15,9 +15,10 @@ pipeline::BrainConfig robot_brain_config(const config::PerceptionSection& percep
   // controller.delta > 0, as in the simulator; the reader has checked that
   // perception.dark_regions says the same.
   config.controller.use_depth = controller.spec.use_depth && perception.mount.has_value();
-  config.perception =
-      pipeline::perception_options({perception.flow, perception.segmentation}, config.controller,
-                                   perception.mount.value_or(base::CameraMount{}));
+  servo::PerceptionConfig methods{perception.flow, perception.segmentation};
+  methods.obstacle_memory = perception.obstacle_memory;
+  config.perception = pipeline::perception_options(methods, config.controller,
+                                                   perception.mount.value_or(base::CameraMount{}));
   config.agent_width_m = controller.robot_width_m;
   config.preferred_speed_mps = controller.preferred_speed_mps;
   return config;

@@ -479,6 +479,8 @@ sim_camera::WorldSpec with_overrides(sim_camera::WorldSpec spec, const SimOption
       a.perception.segmentation = *options.segmentation;
     if (options.depth)
       a.perception.depth = *options.depth;
+    if (options.obstacle_memory)
+      a.perception.obstacle_memory = *options.obstacle_memory;
   }
   return spec;
 }

@@ -71,6 +71,21 @@ TEST(RobotLaunchSections, TheGroundsDepthNeedsTheMount) {
   EXPECT_FALSE(robot::robot_brain_config({}, {}).controller.use_depth);
 }
 
+// The obstacle memory is the launch file's choice, off unless it asks; the Brain uses it since a
+// robot's perception is flow segmentation with a camera's depths.
+TEST(RobotLaunchSections, ObstacleMemoryIsOffUnlessAskedFor) {
+  const auto memory = [](const std::string& perception) {
+    const config::RobotLaunch l =
+        config::parse_robot_launch(std::string(kCamera) + kDrive + perception, "memory.yaml", "");
+    EXPECT_EQ(l.perception.obstacle_memory,
+              robot::robot_brain_config(l.perception, l.controller).perception.obstacle_memory);
+    return l.perception.obstacle_memory;
+  };
+  EXPECT_FALSE(memory("perception: {flow: dis_fast, height_m: 0.3, pitch_deg: 5}\n"));
+  EXPECT_TRUE(
+      memory("perception: {flow: dis_fast, height_m: 0.3, pitch_deg: 5, obstacle_memory: true}\n"));
+}
+
 TEST(RobotLaunchSections, BadSectionsNameTheLineAndField) {
   const std::string camera(kCamera);
   EXPECT_EQ(error_of(camera + "perception: {segmentation: semantic}\n"),

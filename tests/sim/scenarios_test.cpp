@@ -311,6 +311,21 @@ TEST(ScenarioFile, CameraNoiseIsZeroUnlessGivenAndWithinItsBounds) {
             std::string::npos);
 }
 
+// The obstacle memory: off unless a scenario's perception asks for it, which a boolean does.
+TEST(ScenarioFile, ObstacleMemoryIsOffUnlessAskedFor) {
+  const auto plain =
+      parse_scenario("agents:\n  - {start: [0, 0], goal: [9, 0]}\n", "scenario.yaml");
+  EXPECT_FALSE(plain.agents[0].perception.obstacle_memory);
+  const auto w = parse_scenario(
+      "perception: {flow: dis_medium, segmentation: flow_graph_fast, obstacle_memory: true}\n"
+      "agents:\n  - {start: [0, 0], goal: [9, 0]}\n",
+      "scenario.yaml");
+  EXPECT_TRUE(w.agents[0].perception.obstacle_memory);
+  EXPECT_EQ(
+      error_of("perception: {obstacle_memory: 3}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n"),
+      "scenario.yaml:1:31: perception.obstacle_memory: expected true or false, got '3'");
+}
+
 // Every scene of the robot scene set loads, with the robot as its first agent.
 TEST(RobotScenes, EveryFileLoads) {
   int scenes = 0;

@@ -17,6 +17,11 @@
 
 namespace flowsteer::cli {
 
+// --obstacle-memory on sim and eval suite.
+inline constexpr const char* kObstacleMemoryHelp =
+    "every agent remembers what stood still and recalls it once out of view, where it applies: "
+    "the flowsteer law on flow segmentation with a camera's depths (docs/NAVIGATION.md)";
+
 struct Subcommand {
   const CLI::App* app;
   std::function<int()> run;  // returns the exit status

@@ -24,6 +24,7 @@ struct SimCommand {
   std::string flow;
   std::string segmentation;
   std::string depth;
+  bool obstacle_memory = false;
 };
 
 // Seconds and metres with two decimals, the unit after the number.
@@ -77,6 +78,9 @@ int run_sim(const SimCommand& command) {
   if (!command.depth.empty()) {
     options.depth = depth_source_option("--depth", command.depth);
   }
+  if (command.obstacle_memory) {
+    options.obstacle_memory = true;
+  }
   options.video = command.video;
   options.threads = command.threads;
   if (command.threads != 1 && world.agents.size() > 1) {
@@ -117,6 +121,7 @@ Subcommand add_sim(CLI::App& app) {
                   "where every agent's features take depths from with synthetic flow: " +
                       servo::depth_source_names() +
                       " (ground: only where objects stand on it, as a camera)");
+  sim->add_flag("--obstacle-memory", command->obstacle_memory, kObstacleMemoryHelp);
   return {sim, [command] { return run_sim(*command); }};
 }
 

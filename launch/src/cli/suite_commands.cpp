@@ -30,6 +30,7 @@ struct EvalSuiteCommand {
   std::string keep_runs = "failed";
   std::uint32_t seed = 1;
   std::optional<int> steps;
+  bool obstacle_memory = false;
   std::string out_dir = "flowsteer_suite";
 };
 
@@ -91,6 +92,7 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
     options.camera_noise_levels.push_back(camera_noise_option(sigma));
   }
   options.steps = command.steps;
+  options.obstacle_memory = command.obstacle_memory;
   options.seed = command.seed;
   options.jobs = command.jobs;
   options.shard = eval::parse_shard(command.shard);
@@ -176,6 +178,7 @@ Subcommand add_eval_suite(CLI::App& eval) {
       ->capture_default_str();
   suite->add_option("--steps", command->steps, "stop each run after N control steps")
       ->check(CLI::PositiveNumber);
+  suite->add_flag("--obstacle-memory", command->obstacle_memory, kObstacleMemoryHelp);
   suite->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   one_value_per_use(*suite);
   return {suite, [command] { return run_eval_suite(*command); }};

@@ -41,7 +41,8 @@ struct GoalSection {
 struct PerceptionSection {
   servo::FlowMethod flow = servo::FlowMethod::dis_fast;
   servo::SegmentationMethod segmentation = servo::SegmentationMethod::flow_graph_fast;
-  bool dark_regions = false;  // MIG 2019's dark regions; needs controller.delta > 0
+  bool dark_regions = false;     // MIG 2019's dark regions; needs controller.delta > 0
+  bool obstacle_memory = false;  // servo::PerceptionConfig::obstacle_memory
   // From `mount: FILE` (calibration's camera mount file) or inline height_m / pitch_deg; none
   // when the file gives neither. Required with a drive: the flat-ground test predicts the
   // floor's flow from it. Without a drive the measured speed is zero and the test is skipped,

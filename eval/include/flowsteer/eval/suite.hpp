@@ -64,6 +64,7 @@ struct SuiteOptions {
   std::vector<int> resolutions;
   std::vector<double> camera_noise_levels;  // σ in grey levels, each a configuration
   std::optional<int> steps;                 // stop each run after this many steps
+  bool obstacle_memory = false;             // every run's agents: PerceptionConfig's
   std::uint32_t seed = 1;  // the seed the cases were placed with, recorded with the suite
   int jobs = 1;            // worker processes at once
   Shard shard;

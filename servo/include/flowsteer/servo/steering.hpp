@@ -115,6 +115,10 @@ struct PerceptionConfig {
   FlowMethod flow = FlowMethod::synthetic;
   SegmentationMethod segmentation = SegmentationMethod::semantic;
   DepthSource depth = DepthSource::renderer;
+  // Remember what stood still and recall it once out of view (servo::ObstacleMemory;
+  // docs/NAVIGATION.md, "Obstacle memory"). Used where it applies: the flowsteer law on flow
+  // segmentation with a camera's depths; off by default, since the suite's crowds lose goals to it.
+  bool obstacle_memory = false;
 };
 
 // A config's weights, the law's own where it sets none:

@@ -46,6 +46,7 @@ struct SimOptions {
   std::optional<servo::FlowMethod> flow;
   std::optional<servo::SegmentationMethod> segmentation;
   std::optional<servo::DepthSource> depth;
+  std::optional<bool> obstacle_memory;  // every agent's PerceptionConfig::obstacle_memory
   bool video = false;         // an MP4 per agent of its view with the features drawn on it
   bool progress_bar = false;  // a bar that redraws itself, for terminals
   bool write_outputs = true;  // false: only the returned result (tests, benchmarks)
