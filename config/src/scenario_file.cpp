@@ -370,13 +370,15 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
   const base::YamlReader r(source_name);
   const YAML::Node root =
       base::load_yaml_map(yaml_text, source_name, "at least agents:",
-                          {"name", "description", "step_s", "duration_s", "camera", "controller",
-                           "perception", "lighting", "ground", "obstacles", "moving", "agents"});
+                          {"name", "description", "step_s", "duration_s", "arrival", "camera",
+                           "controller", "perception", "lighting", "ground", "obstacles", "moving",
+                           "agents"});
   sim_camera::WorldSpec w;
   w.name = r.text(root, "", "name", source_name);
   w.description = r.text(root, "", "description", "");
   w.step_s = r.positive(root, "", "step_s", w.step_s);
   w.duration_s = r.positive(root, "", "duration_s", w.duration_s);
+  w.arrival = *sim_camera::parse_arrival(r.word(root, "", "arrival", {"stay", "leave"}, "stay"));
   AgentDefaults defaults;
   defaults.camera = read_camera(r, root["camera"], "camera", {});
   defaults.controller = read_scenario_controller(r, root["controller"], "controller", {});

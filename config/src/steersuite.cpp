@@ -794,6 +794,9 @@ LoadedCase parse_steersuite(const std::string& xml_text, const std::string& sour
   LoadedCase out;
   sim_camera::WorldSpec& w = out.world;
   w.duration_s = 60.0;
+  // SteerSuite disables an agent at its last target and takes it out of the world; its cases
+  // were written for that rule.
+  w.arrival = sim_camera::Arrival::leave;
   TestCase tc;
   read_header(r, root->FirstChildElement(), w, tc);
   for (const XMLElement* e = root->FirstChildElement()->NextSiblingElement(); e != nullptr;

@@ -58,6 +58,9 @@ std::string suite_id(const std::vector<SuiteCase>& cases,
   if (options.obstacle_memory) {
     fingerprint.add("obstacle memory");
   }
+  if (options.arrival) {
+    fingerprint.add("arrival " + std::string(sim_camera::to_string(*options.arrival)));
+  }
   return fingerprint.hex();
 }
 
@@ -89,6 +92,7 @@ void check_switched_off(const SuiteOptions& options) {
 sim::RunSummary run_case(const SuiteCase& suite_case, const SuiteConfiguration& configuration,
                          const SuiteOptions& options, const std::filesystem::path& folder) {
   sim_camera::WorldSpec world = suite_case.world;
+  world.arrival = options.arrival.value_or(world.arrival);
   for (sim_camera::AgentSpec& agent : world.agents) {
     agent.controller.model = configuration.controller.value_or(agent.controller.model);
     agent.controller.law = configuration.law.value_or(agent.controller.law);
@@ -353,6 +357,9 @@ SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& o
   SuiteResult result;
   result.suite_id = suite_id(cases, configurations, options);
   result.seed = options.seed;
+  if (options.arrival) {
+    result.arrival = sim_camera::to_string(*options.arrival);
+  }
   result.shard = options.shard;
   result.suite_runs = cases.size() * configurations.size();
   result.jobs = options.jobs;

@@ -161,7 +161,8 @@ SuiteRun parse_csv_row(const std::string& line, bool noise_column, const std::st
 std::string suite_json(const SuiteResult& result) {
   std::ostringstream out;
   out << std::setprecision(6) << "{\n  \"suite_id\": \"" << result.suite_id
-      << "\",\n  \"seed\": " << result.seed << ",\n  \"shard\": " << result.shard.index
+      << "\",\n  \"seed\": " << result.seed << ",\n  \"arrival\": \"" << result.arrival
+      << "\",\n  \"shard\": " << result.shard.index
       << ",\n  \"shards\": " << result.shard.count << ",\n  \"suite_runs\": " << result.suite_runs
       << ",\n  \"runs\": " << result.runs.size() << ",\n  \"jobs\": " << result.jobs
       << ",\n  \"wall_s\": " << result.wall_s << "\n}\n";
@@ -290,6 +291,7 @@ SuiteResult read_suite_files(const std::filesystem::path& dir) {
   SuiteResult result;
   result.suite_id = reader.text(json, "", "suite_id", "");
   result.seed = static_cast<std::uint32_t>(reader.non_negative(json, "", "seed", 1));
+  result.arrival = reader.word(json, "", "arrival", {"own", "stay", "leave"}, "own");
   result.shard = {static_cast<int>(reader.non_negative(json, "", "shard", 0)),
                   static_cast<int>(reader.positive(json, "", "shards", 1))};
   result.suite_runs = static_cast<std::size_t>(reader.non_negative(json, "", "suite_runs", 0));

@@ -48,6 +48,7 @@ void write_image(const std::filesystem::path& path, const cv::Mat& image) {
 void write_summary_json(const std::filesystem::path& path, const SimResult& result) {
   std::ostringstream out;
   out << "{\n  \"scenario\": " << base::json_string(result.scenario)
+      << ",\n  \"arrival\": " << base::json_string(std::string(to_string(result.arrival)))
       << ",\n  \"steps\": " << result.steps
       << ",\n  \"duration_s\": " << base::json_number(result.duration_s) << ",\n  \"agents\": [\n";
   for (std::size_t i = 0; i < result.agents.size(); ++i) {
@@ -112,9 +113,10 @@ cv::Mat draw_topview(const sim_camera::World& world,
   const Eigen::Vector2d lo = bounds.min() - margin;
   const Eigen::Vector2d extent = bounds.max() + margin - lo;
   const double scale = 900.0 / std::max(extent.x(), extent.y());
-  char caption[160];
-  std::snprintf(caption, sizeof caption, "%s  t = %.1f s  collisions: %zu  (1 m = %.0f px)",
-                spec.name.c_str(), world.time_s(), collisions.size(), scale);
+  char caption[200];
+  std::snprintf(caption, sizeof caption, "%s  t = %.1f s  collisions: %zu  (1 m = %.0f px)%s",
+                spec.name.c_str(), world.time_s(), collisions.size(), scale,
+                spec.arrival == sim_camera::Arrival::leave ? "  ring: left on arrival" : "");
   const int caption_width = cv::getTextSize(caption, kCaptionFont, kCaptionScale, 1, nullptr).width;
   // A narrow world (a corridor) is centred in an image wide enough for the caption.
   const int world_width = static_cast<int>(extent.x() * scale);
@@ -163,8 +165,9 @@ cv::Mat draw_topview(const sim_camera::World& world,
     cv::circle(image, px(agent.start_m), static_cast<int>(agent.radius_m * scale), color, 1,
                cv::LINE_AA);
     if (!path.empty()) {
+      // Filled where the agent ended in the world, a thick ring where it left it.
       cv::circle(image, px(path.back()), static_cast<int>(agent.radius_m * scale), color,
-                 cv::FILLED, cv::LINE_AA);
+                 world.present(i) ? cv::FILLED : 3, cv::LINE_AA);
     }
     for (const auto& g : agent.goals) {
       cv::drawMarker(image, px(g), color, cv::MARKER_CROSS, 14, 2);

@@ -255,6 +255,7 @@ class SimulationRun {
   SimResult result(int steps) {
     SimResult result;
     result.scenario = spec_.name;
+    result.arrival = spec_.arrival;
     result.steps = steps;
     result.duration_s = world_.time_s();
     for (std::size_t i = 0; i < loops_.size(); ++i) {

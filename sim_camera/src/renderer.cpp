@@ -459,6 +459,9 @@ class Frustum {
 struct DrawItem {
   const Mesh* mesh;
   bool hidden;  // from this view: its own camera's body (it still casts a shadow)
+  // An agent that has left the world: nothing draws it, but it keeps its place among the items,
+  // whose shapes a geometry batch builds once per world.
+  bool gone;
   Eigen::Matrix4f model;
   Material material;  // a copy: moving obstacles' poses are temporaries
   std::int32_t id;
@@ -892,6 +895,7 @@ struct Renderer::Impl {
       const Eigen::Vector2d v = s.velocity_mps();
       items.push_back({&cylinder,
                        self && *self == i,
+                       !world.present(i),
                        model_matrix(s.position_m, 0.0, {a.radius_m, a.radius_m, a.height_m}),
                        a.material,
                        agent_render_id(i),
@@ -903,6 +907,7 @@ struct Renderer::Impl {
                                         ? Eigen::Vector3d(s.size_m.x(), s.size_m.y(), s.height_m)
                                         : Eigen::Vector3d(s.radius_m, s.radius_m, s.height_m);
       items.push_back({box_shape ? &box : &cylinder,
+                       false,
                        false,
                        model_matrix(s.centre_m, s.yaw_rad, scale),
                        s.material,
@@ -939,6 +944,9 @@ struct Renderer::Impl {
       return s.shape == Solid::Shape::box ? 0.5 * s.size_m.norm() : s.radius_m;
     };
     for (std::size_t i = 0; i < world.agents().size(); ++i) {
+      if (!world.present(i)) {
+        continue;
+      }
       const AgentSpec& a = world.spec().agents[i];
       extend(world.agents()[i].position_m, a.radius_m, a.height_m);
     }
@@ -984,8 +992,10 @@ struct Renderer::Impl {
     glUniformMatrix4fv(shadow.light_view_projection, 1, GL_FALSE, light_view_projection.data());
     collect_items(world, std::nullopt);
     for (const DrawItem& item : items) {
-      glUniformMatrix4fv(shadow.model, 1, GL_FALSE, item.model.data());
-      item.mesh->draw();
+      if (!item.gone) {
+        glUniformMatrix4fv(shadow.model, 1, GL_FALSE, item.model.data());
+        item.mesh->draw();
+      }
     }
     check_gl("rendering the shadow map");
   }
@@ -1006,7 +1016,7 @@ struct Renderer::Impl {
       points.add(p.position_m, p.intensity, p.range_m);
     }
     for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-      if (const auto& carried = spec.agents[i].carried_light) {
+      if (const auto& carried = spec.agents[i].carried_light; carried && world.present(i)) {
         const AgentState& a = world.agents()[i];
         const Eigen::Vector2d offset =
             Eigen::Rotation2Dd(a.yaw_rad) * carried->position_m.head<2>();
@@ -1184,7 +1194,7 @@ struct Renderer::Impl {
     };
     collect_items(world, view.self);
     for (const DrawItem& item : items) {
-      if (!item.hidden) {
+      if (!item.hidden && !item.gone) {
         draw(*item.mesh, item.model, item.material, item.id, item.velocity_mps);
       }
     }
@@ -1333,7 +1343,7 @@ struct Renderer::Impl {
         const bool own_body = view.self && item.id == agent_render_id(*view.self);
         // Both unit meshes lie within [-1, 1]² × [0, 1].
         const bool seen =
-            !own_body && frustum.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5});
+            !own_body && !item.gone && frustum.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5});
         batch.add_seen(relative(item.velocity_mps), seen ? item.id : kHiddenId);
       }
       batch.add_seen(relative(Eigen::Vector3d::Zero()), servo::kGroundId);

@@ -25,6 +25,20 @@ std::string describe(const AgentSpec& a, std::size_t i) {
 
 }  // namespace
 
+std::string_view to_string(Arrival arrival) {
+  return arrival == Arrival::leave ? "leave" : "stay";
+}
+
+std::optional<Arrival> parse_arrival(std::string_view name) {
+  if (name == "stay") {
+    return Arrival::stay;
+  }
+  if (name == "leave") {
+    return Arrival::leave;
+  }
+  return std::nullopt;
+}
+
 std::int32_t agent_render_id(std::size_t agent) {
   return static_cast<std::int32_t>(agent);
 }
@@ -144,6 +158,12 @@ World::World(WorldSpec spec) : spec_(std::move(spec)), serial_(next_serial()) {
                                 " point lights (carried ones included), at most " +
                                 std::to_string(kMaxPointLights));
   }
+  followed_.assign(agents_.size(), false);
+  for (const AgentSpec& a : spec_.agents) {
+    if (a.leader) {
+      followed_[static_cast<std::size_t>(*a.leader)] = true;
+    }
+  }
   const std::size_t bodies = agents_.size() + spec_.obstacles.size() + spec_.moving.size();
   in_contact_.assign(agents_.size(), std::vector<bool>(bodies, false));
 }
@@ -215,6 +235,7 @@ void World::advance_goals(std::size_t i) {
   if (!a.goals.empty() && s.next_goal == a.goals.size() && !s.reached_goal) {
     s.reached_goal = true;
     s.time_to_goal_s = time_s_;
+    s.left_world = spec_.arrival == Arrival::leave && !followed_[i];
   }
 }
 
@@ -222,8 +243,11 @@ double World::clearance(std::size_t i) const {
   const AgentState& s = agents_[i];
   const double r = spec_.agents[i].radius_m;
   double best = std::numeric_limits<double>::infinity();
+  if (!present(i)) {
+    return best;
+  }
   for (std::size_t j = 0; j < agents_.size(); ++j) {
-    if (j != i) {
+    if (j != i && present(j)) {
       best = std::min(best,
                       (agents_[j].position_m - s.position_m).norm() - r - spec_.agents[j].radius_m);
     }
@@ -242,6 +266,8 @@ void World::detect_collisions() {
   for (std::size_t i = 0; i < agents_.size(); ++i) {
     const Eigen::Vector2d p = agents_[i].position_m;
     const double r = spec_.agents[i].radius_m;
+    // An agent that has left touches nothing; its contacts end.
+    const bool here = present(i);
     std::size_t body = 0;
     // The name of what was hit is built only when a contact starts.
     auto check = [&](bool touching, Body kind, std::size_t index) {
@@ -263,15 +289,15 @@ void World::detect_collisions() {
     };
     for (std::size_t j = 0; j < agents_.size(); ++j) {
       // Each pair once, on the lower index; the higher one's slot stays unused.
-      const bool touching =
-          j > i && (agents_[j].position_m - p).norm() < r + spec_.agents[j].radius_m;
+      const bool touching = here && j > i && present(j) &&
+                            (agents_[j].position_m - p).norm() < r + spec_.agents[j].radius_m;
       check(touching, Body::agent, j);
     }
     for (std::size_t k = 0; k < spec_.obstacles.size(); ++k) {
-      check(footprint_distance(spec_.obstacles[k], p) < r, Body::obstacle, k);
+      check(here && footprint_distance(spec_.obstacles[k], p) < r, Body::obstacle, k);
     }
     for (std::size_t k = 0; k < moving_.size(); ++k) {
-      check(footprint_distance(moving_now(k), p) < r, Body::moving, k);
+      check(here && footprint_distance(moving_now(k), p) < r, Body::moving, k);
     }
   }
 }

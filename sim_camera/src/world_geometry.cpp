@@ -65,7 +65,7 @@ std::span<const servo::GeometricBody> WorldGeometry::bodies_seen_by(const World&
 
   const WorldSpec& spec = world.spec();
   for (std::size_t j = 0; j < spec.agents.size(); ++j) {
-    if (j != agent) {
+    if (j != agent && world.present(j)) {
       add_body(agent_render_id(j), spec.agents[j].height_m, world.agents()[j].velocity_mps());
       add_circle(world.agents()[j].position_m, spec.agents[j].radius_m);
     }

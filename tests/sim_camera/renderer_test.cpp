@@ -253,6 +253,36 @@ TEST(Renderer, ViewsRenderedTogetherAreTheViewsRenderedOneByOne) {
   }
 }
 
+// An agent that has left the world (Arrival::leave) is drawn by neither path, and a geometry
+// batch built while it was there draws the others as before.
+TEST(Renderer, AnAgentThatLeftIsNotDrawn) {
+  WorldSpec spec;
+  spec.arrival = Arrival::leave;
+  spec.agents = {observer({0.0, 0.0}, 0.0, 0.0), observer({3.0, 0.0}, 0.0, 0.0)};
+  spec.agents[1].goals = {spec.agents[1].start_m};  // at its goal: it leaves at the first step
+  spec.obstacles = {box({6.0, 0.0}, {0.3, 4.0}, 2.0)};
+  World world(spec);
+  const std::unique_ptr<Renderer> batch_renderer = Renderer::create();
+  auto seen = [&] {
+    RenderedView lit;
+    renderer().render(world, View::of_agent(world, 0), lit, RenderChannels::all);
+    RenderedView geometry;
+    RenderedView* target = &geometry;
+    const View view = View::of_agent(world, 0);
+    batch_renderer->render_geometry(world, std::span(&view, 1), std::span(&target, 1));
+    EXPECT_TRUE(same_bits(lit.object_ids, geometry.object_ids));
+    return std::set<std::int32_t>(lit.object_ids.begin<std::int32_t>(),
+                                  lit.object_ids.end<std::int32_t>());
+  };
+  const std::set<std::int32_t> before = seen();
+  EXPECT_TRUE(before.contains(agent_render_id(1)));
+  world.step({{0.0, 0.0}, {0.0, 0.0}});
+  ASSERT_FALSE(world.present(1));
+  const std::set<std::int32_t> after = seen();
+  EXPECT_FALSE(after.contains(agent_render_id(1)));
+  EXPECT_TRUE(after.contains(obstacle_render_id(0)));
+}
+
 TEST(SimCamera, DeliversFramesWithSimulatorChannels) {
   WorldSpec spec;
   spec.agents = {observer({0.0, 0.0}, 0.0, 1.0)};

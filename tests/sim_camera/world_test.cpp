@@ -71,6 +71,51 @@ TEST(World, AContactSaysWhatKindOfBodyWasTouched) {
   EXPECT_EQ(all[1].with, "moving 0");
 }
 
+// Agent 1 stands at its goal; agent 0 walks through where it stands.
+WorldSpec walk_through_standing(Arrival arrival) {
+  WorldSpec spec;
+  spec.arrival = arrival;
+  spec.agents = {walker({0, 0}, 0.0, {10, 0}), walker({3, 0}, 0.0, {3, 0})};
+  spec.agents[1].start_speed_mps = 0.0;
+  return spec;
+}
+
+TEST(World, UnderLeaveAnArrivedAgentIsTouchedByNoOne) {
+  for (const Arrival arrival : {Arrival::stay, Arrival::leave}) {
+    SCOPED_TRACE(std::string(to_string(arrival)));
+    World world(walk_through_standing(arrival));
+    int contacts = 0;
+    for (int k = 0; k < 60; ++k) {
+      world.step({{0.0, 0.0}, {0.0, 0.0}});
+      contacts += static_cast<int>(world.new_collisions().size());
+    }
+    EXPECT_TRUE(world.agents()[1].reached_goal);
+    EXPECT_NEAR(world.agents()[1].time_to_goal_s, 0.05, 1e-12);  // at the first step
+    EXPECT_EQ(world.present(1), arrival == Arrival::stay);
+    EXPECT_EQ(contacts, arrival == Arrival::stay ? 1 : 0);
+    // Agent 0 is 3 m past the standing one's place: under leave only the world is near it.
+    EXPECT_EQ(std::isinf(world.clearance(0)), arrival == Arrival::leave);
+    EXPECT_EQ(std::isinf(world.clearance(1)), arrival == Arrival::leave);
+  }
+}
+
+TEST(World, AnAgentOthersFollowStaysUnderLeave) {
+  WorldSpec spec = walk_through_standing(Arrival::leave);
+  spec.agents[0].goals.clear();
+  spec.agents[0].leader = 1;
+  World world(spec);
+  world.step({{0.0, 0.0}, {0.0, 0.0}});
+  EXPECT_TRUE(world.agents()[1].reached_goal);
+  EXPECT_TRUE(world.present(1));
+}
+
+TEST(World, ArrivalRulesHaveNames) {
+  for (const Arrival arrival : {Arrival::stay, Arrival::leave}) {
+    EXPECT_EQ(parse_arrival(to_string(arrival)), arrival);
+  }
+  EXPECT_FALSE(parse_arrival("go"));
+}
+
 TEST(World, CarsFollowTheirWaypoints) {
   WorldSpec spec;
   spec.agents = {walker({0, -5}, 0.0, {10, -5})};

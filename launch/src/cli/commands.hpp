@@ -22,6 +22,13 @@ inline constexpr const char* kObstacleMemoryHelp =
     "every agent remembers what stood still and recalls it once out of view, where it applies: "
     "the flowsteer law on flow segmentation with a camera's depths (docs/NAVIGATION.md)";
 
+// --arrival on the commands that run scenarios and on eval suite.
+inline constexpr const char* kArrivalHelp =
+    "what an agent does at its last goal: stay (stands there, an obstacle to the others) or leave "
+    "(taken out of the world, SteerSuite's rule); default: the scenario's arrival key, leave for "
+    "SteerSuite test cases, stay for scenario files";
+sim_camera::Arrival arrival_option(const std::string& name);
+
 struct Subcommand {
   const CLI::App* app;
   std::function<int()> run;  // returns the exit status
@@ -65,6 +72,7 @@ struct ScenarioChoice {
   std::uint32_t seed = 1;  // --seed: the SteerSuite test case's random placements
   std::string law;         // --law: every agent's navigation law, when given
   std::string without;     // --without: the flowsteer law's mechanism switched off, when given
+  std::string arrival;     // --arrival: the world's rule on arrival, when given
 };
 sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoice& choice);
 // Makes each of the command's repeatable options take one value per use (`--flow a --flow b`),

@@ -58,6 +58,14 @@ servo::LawMechanism law_mechanism_option(const std::string& option, const std::s
   return *mechanism;
 }
 
+sim_camera::Arrival arrival_option(const std::string& name) {
+  const auto arrival = sim_camera::parse_arrival(name);
+  if (!arrival) {
+    throw CLI::ValidationError("--arrival", "unknown rule '" + name + "' (known: stay, leave)");
+  }
+  return *arrival;
+}
+
 namespace {
 
 sim_camera::WorldSpec load_chosen_world(const std::string& command, const ScenarioChoice& choice) {
@@ -89,7 +97,12 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
   if (!choice.without.empty()) {
     without = law_mechanism_option("--without", choice.without);
   }
+  std::optional<sim_camera::Arrival> arrival;
+  if (!choice.arrival.empty()) {
+    arrival = arrival_option(choice.arrival);
+  }
   sim_camera::WorldSpec world = load_chosen_world(command, choice);
+  world.arrival = arrival.value_or(world.arrival);
   for (sim_camera::AgentSpec& agent : world.agents) {
     agent.controller.law = law.value_or(agent.controller.law);
   }
@@ -136,6 +149,7 @@ void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
                      "every agent's flowsteer law with this mechanism switched off, an ablation "
                      "(default: the scenario's): " +
                          servo::law_mechanism_names());
+  command.add_option("--arrival", choice.arrival, kArrivalHelp);
 }
 
 }  // namespace flowsteer::cli

@@ -31,6 +31,7 @@ struct EvalSuiteCommand {
   std::uint32_t seed = 1;
   std::optional<int> steps;
   bool obstacle_memory = false;
+  std::string arrival;
   std::string out_dir = "flowsteer_suite";
 };
 
@@ -93,6 +94,9 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
   }
   options.steps = command.steps;
   options.obstacle_memory = command.obstacle_memory;
+  if (!command.arrival.empty()) {
+    options.arrival = arrival_option(command.arrival);
+  }
   options.seed = command.seed;
   options.jobs = command.jobs;
   options.shard = eval::parse_shard(command.shard);
@@ -179,6 +183,7 @@ Subcommand add_eval_suite(CLI::App& eval) {
   suite->add_option("--steps", command->steps, "stop each run after N control steps")
       ->check(CLI::PositiveNumber);
   suite->add_flag("--obstacle-memory", command->obstacle_memory, kObstacleMemoryHelp);
+  suite->add_option("--arrival", command->arrival, kArrivalHelp);
   suite->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   one_value_per_use(*suite);
   return {suite, [command] { return run_eval_suite(*command); }};

@@ -65,6 +65,7 @@ struct SuiteOptions {
   std::vector<double> camera_noise_levels;  // σ in grey levels, each a configuration
   std::optional<int> steps;                 // stop each run after this many steps
   bool obstacle_memory = false;             // every run's agents: PerceptionConfig's
+  std::optional<sim_camera::Arrival> arrival;  // every case's rule on arrival; none: its own
   std::uint32_t seed = 1;  // the seed the cases were placed with, recorded with the suite
   int jobs = 1;            // worker processes at once
   Shard shard;
@@ -90,6 +91,7 @@ struct SuiteRun {
 struct SuiteResult {
   std::string suite_id;  // the same for every shard of one suite, different for another suite
   std::uint32_t seed = 1;
+  std::string arrival = "own";  // the rule on arrival every run had: stay, leave; own: its case's
   Shard shard;
   std::size_t suite_runs = 0;  // runs in the whole suite, all shards together
   std::vector<SuiteRun> runs;  // this shard's, by index

@@ -80,6 +80,7 @@ struct AgentResult {
 
 struct SimResult {
   std::string scenario;
+  sim_camera::Arrival arrival = sim_camera::Arrival::stay;  // the world's rule on arrival
   int steps = 0;
   double duration_s = 0.0;
   std::vector<AgentResult> agents;

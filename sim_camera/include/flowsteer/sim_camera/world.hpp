@@ -21,6 +21,8 @@ struct AgentState {
   std::size_t next_goal = 0;
   bool reached_goal = false;
   double time_to_goal_s = -1.0;
+  // Under Arrival::leave, once it has reached its last goal: no longer drawn, touched or moved.
+  bool left_world = false;
 
   Eigen::Vector2d velocity_mps() const;
   // Moves on for dt_s at this speed and turn rate, as the world's step integrates them.
@@ -58,6 +60,9 @@ class World {
   std::uint64_t serial() const { return serial_; }
   double time_s() const { return time_s_; }
   const std::vector<AgentState>& agents() const { return agents_; }
+  // Whether agent i is still in the world (see Arrival): what views, distances and contacts
+  // take in.
+  bool present(std::size_t agent) const { return !agents_[agent].left_world; }
   const std::vector<MovingState>& moving() const { return moving_; }
 
   // Advances by one step with one command per agent; agents that reached their last goal stop.
@@ -81,6 +86,7 @@ class World {
   double time_s_ = 0.0;
   std::vector<AgentState> agents_;
   std::vector<MovingState> moving_;
+  std::vector<bool> followed_;                 // per agent: some agent's leader
   std::vector<std::vector<bool>> in_contact_;  // per agent, per body
   std::vector<Collision> new_collisions_;
 };

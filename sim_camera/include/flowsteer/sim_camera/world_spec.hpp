@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -96,6 +97,16 @@ struct AgentSpec {
   std::optional<PointLight> carried_light;  // position_m is the offset in the agent's frame
 };
 
+// What becomes of an agent once it has reached its last goal. An agent that others follow
+// stays under either rule: its followers go on following it.
+enum class Arrival {
+  stay,   // it stands there, a body the others see and go round: people, robots
+  leave,  // it leaves the world, seen and touched by no one: SteerSuite's rule
+          // (SimpleAgent::disable), for which its published cases were written
+};
+std::string_view to_string(Arrival arrival);
+std::optional<Arrival> parse_arrival(std::string_view name);
+
 // Everything a scenario describes, at t = 0.
 struct WorldSpec {
   std::string name;
@@ -103,6 +114,7 @@ struct WorldSpec {
   double step_s = 0.05;
   double duration_s = 30.0;
   double ground_size_m = 80.0;
+  Arrival arrival = Arrival::stay;
   Material ground{{0.45F, 0.45F, 0.42F}, Material::Pattern::noise, 0.5F, 0.45F};
   Lighting lighting;
   std::vector<Solid> obstacles;
