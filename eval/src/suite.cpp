@@ -207,6 +207,7 @@ void print_configuration_totals(const std::vector<SuiteRun>& runs, std::ostream&
     int collisions = 0;
     int obstacle_collisions = 0;
     double score = 0.0;
+    double spinning_s = 0.0;
     for (const SuiteRun& run : runs) {
       if (to_string(run.configuration) != configuration) {
         continue;
@@ -216,12 +217,14 @@ void print_configuration_totals(const std::vector<SuiteRun>& runs, std::ostream&
       failed += run.failed() ? 1 : 0;
       collisions += run.failed() ? 0 : run.summary.collisions;
       obstacle_collisions += run.failed() ? 0 : run.summary.obstacle_collisions;
+      spinning_s += run.failed() ? 0.0 : run.summary.spinning_s;
       score +=
           run.failed() || !std::isfinite(run.summary.composite01) ? 0.0 : run.summary.composite01;
     }
     out << "configuration " << configuration << ": clean " << clean << " of " << cases
         << " cases, total composite01 " << measure(score, "") << ", " << collisions
-        << " collisions (" << obstacle_collisions << " with obstacles)";
+        << " collisions (" << obstacle_collisions << " with obstacles), "
+        << measure(spinning_s, " s") << " spinning";
     if (failed > 0) {
       out << " (" << failed << " failed runs not scored)";
     }
@@ -431,7 +434,7 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
         << "obstacles" << std::setw(8) << "goals" << std::setw(15) << "min_clearance"
         << std::setw(14) << "time_to_goal" << std::setw(11) << "path_ratio" << std::setw(11)
         << "time_ratio" << std::setw(12) << "composite01" << std::setw(11) << "turn_flips"
-        << "\n";
+        << std::setw(10) << "spinning" << "\n";
   for (const SuiteRun& run : runs) {
     table << std::left << w(case_width) << run.case_name << w(configuration_width)
           << to_string(run.configuration) << std::setw(11)
@@ -450,7 +453,8 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
           << measure(s.mean_time_to_goal_s, " s") << std::setw(11)
           << measure(s.mean_path_length_ratio, "") << std::setw(11)
           << measure(s.mean_time_ratio, "") << std::setw(12) << measure(s.composite01, "")
-          << std::setw(11) << measure(100.0 * s.turn_flip_ratio, " %") << "\n";
+          << std::setw(11) << measure(100.0 * s.turn_flip_ratio, " %") << std::setw(10)
+          << measure(s.spinning_s, " s") << "\n";
   }
   print_configuration_totals(runs, table);
   out << table.str();

@@ -22,9 +22,10 @@ const char* const kHeader =
     "run,case,flow,segmentation,depth,controller,law,without,resolution,status,agents,"
     "goals_reached,"
     "agents_with_goal,collisions,obstacle_collisions,min_clearance_m,mean_time_to_goal_s,"
-    "mean_path_length_m,mean_path_length_ratio,mean_time_ratio,composite01,turn_flip_ratio,error";
+    "mean_path_length_m,mean_path_length_ratio,mean_time_ratio,composite01,turn_flip_ratio,"
+    "spinning_s,error";
 constexpr std::size_t kLabelColumns = 10;  // run ... status, without camera_noise
-constexpr std::size_t kScoreColumns = 12;  // agents ... turn_flip_ratio
+constexpr std::size_t kScoreColumns = 13;  // agents ... spinning_s
 
 // A suite that varies the camera noise has a camera_noise column after resolution; one that
 // does not writes the file it wrote before the axis existed.
@@ -226,7 +227,8 @@ std::string summary_fields(const sim::RunSummary& s) {
                                         s.mean_path_length_ratio,
                                         s.mean_time_ratio,
                                         s.composite01,
-                                        s.turn_flip_ratio};
+                                        s.turn_flip_ratio,
+                                        s.spinning_s};
   std::string fields;
   for (std::size_t k = 0; k < kScoreColumns; ++k) {
     if (k > 0) {
@@ -258,6 +260,7 @@ sim::RunSummary parse_summary_fields(const std::string& text, const std::string&
   s.mean_time_ratio = real(9);
   s.composite01 = real(10);
   s.turn_flip_ratio = real(11);
+  s.spinning_s = real(12);
   return s;
 }
 

@@ -58,7 +58,8 @@ void write_summary_json(const std::filesystem::path& path, const SimResult& resu
         << (a.reached_goal ? base::json_number(a.time_to_goal_s) : "null")
         << ", \"path_length_m\": " << base::json_number(a.path_length_m)
         << ", \"min_clearance_m\": " << base::json_number(a.min_clearance_m)
-        << ", \"collisions\": " << a.collisions;
+        << ", \"collisions\": " << a.collisions
+        << ", \"spinning_s\": " << base::json_number(a.spinning_s);
     if (a.final_distance_to_leader_m >= 0.0) {
       out << ", \"final_distance_to_leader_m\": "
           << base::json_number(a.final_distance_to_leader_m);
@@ -66,7 +67,12 @@ void write_summary_json(const std::filesystem::path& path, const SimResult& resu
     out << "}" << (i + 1 < result.agents.size() ? "," : "") << "\n";
   }
   const pipeline::StageTimes& t = result.per_agent_step_ms;
+  double spinning_s = 0.0;
+  for (const AgentResult& a : result.agents) {
+    spinning_s += a.spinning_s;
+  }
   out << "  ],\n  \"collisions_total\": " << result.collisions.size()
+      << ",\n  \"spinning_s_total\": " << base::json_number(spinning_s)
       << ",\n  \"per_agent_step_ms\": {\"render\": " << base::json_number(t.render)
       << ", \"flow\": " << base::json_number(t.flow)
       << ", \"segment\": " << base::json_number(t.segment)

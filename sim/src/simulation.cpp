@@ -38,6 +38,7 @@ struct AgentLoop {
   // This step's: whether it steered, what its stages took and, where its view was rendered with
   // others', its share of their render.
   bool steered = false;
+  int spin_steps = 0;  // of the spell of spinning (kSpin) that goes on, if one does
   pipeline::StageTimes times;
   double render_ms = 0.0;
 };
@@ -381,6 +382,7 @@ class SimulationRun {
     const servo::ControlOutput& output = loop.agent->brain().output();
     commands_[i] = output.command;
     loop.result.turn_rates.push_back(output.command.turn_rate);
+    account_spin(i, output.command.turn_rate);
     sum_ += loop.times;
     ++agent_steps_;
     costs_.add(world_.time_s(), i, output);
@@ -394,6 +396,22 @@ class SimulationRun {
     }
   }
 
+  // Adds this step to agent i's spinning time once its spell is longer than kSpin.spell_s, and
+  // the spell's earlier steps with it.
+  void account_spin(std::size_t i, double turn_rate) {
+    AgentLoop& loop = loops_[i];
+    const double limit = spec_.agents[i].controller.max_turn_rate;
+    const bool spinning = std::abs(turn_rate) >= kSpin.limit_share * limit &&
+                          world_.agents()[i].speed_mps < kSpin.speed_mps;
+    loop.spin_steps = spinning ? loop.spin_steps + 1 : 0;
+    const int spell_steps = static_cast<int>(std::floor(kSpin.spell_s / spec_.step_s + 1e-9)) + 1;
+    if (loop.spin_steps == spell_steps) {
+      loop.result.spinning_s += spell_steps * spec_.step_s;
+    } else if (loop.spin_steps > spell_steps) {
+      loop.result.spinning_s += spec_.step_s;
+    }
+  }
+
   // The driven agent's command. The driver is asked every step, also once the agent is at its
   // goal: a robot in the loop needs its frames until it is told to stop.
   void drive(std::size_t i) {
@@ -401,6 +419,7 @@ class SimulationRun {
     if (!world_.agents()[i].reached_goal) {
       commands_[i] = command;
       loops_[i].result.turn_rates.push_back(command.turn_rate);
+      account_spin(i, command.turn_rate);
     }
   }
 
@@ -567,6 +586,7 @@ RunSummary summarize(const SimResult& result) {
       }
     }
     score_sum += composite01(a.collisions, {a.active_time_s, a.kinetic_energy_sum});
+    summary.spinning_s += a.spinning_s;
     if (a.final_distance_to_leader_m >= 0.0) {
       ++summary.followers;
     }

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -326,6 +328,63 @@ TEST(ScenarioFile, ObstacleMemoryIsOffUnlessAskedFor) {
       "scenario.yaml:1:31: perception.obstacle_memory: expected true or false, got '3'");
 }
 
+TEST(ScenarioFile, ArrivalIsStayUnlessToldAndSteerSuiteCasesLeave) {
+  const std::string agents = "agents:\n  - {start: [0, 0], goal: [9, 0]}\n";
+  EXPECT_EQ(parse_scenario(agents, "scenario.yaml").arrival, sim_camera::Arrival::stay);
+  EXPECT_EQ(parse_scenario("arrival: leave\n" + agents, "scenario.yaml").arrival,
+            sim_camera::Arrival::leave);
+  EXPECT_EQ(error_of("arrival: go\n" + agents),
+            "scenario.yaml:1:10: arrival: expected one of: stay, leave; got 'go'");
+  EXPECT_EQ(load_steersuite(std::string(FLOWSTEER_SUITE_DIR) + "/goal_beside_standing.xml")
+                .world.arrival,
+            sim_camera::Arrival::leave);
+}
+
+// Steers the one agent of a world: turns at `turn_rate` on the spot for each spell's steps, then
+// stands still for a step.
+class SpinningDriver : public AgentDriver {
+ public:
+  SpinningDriver(double turn_rate, std::vector<int> spells_steps)
+      : turn_rate_(turn_rate), spells_(std::move(spells_steps)) {}
+  base::Command step(const sim_camera::World&, sim_camera::Renderer&) override {
+    if (step_in_spell_ == spells_[spell_]) {
+      step_in_spell_ = 0;
+      ++spell_;
+      return {0.0, 0.0};
+    }
+    ++step_in_spell_;
+    return {0.0, turn_rate_};
+  }
+  bool finished() const override { return spell_ == spells_.size(); }
+  void finish(base::OutputDir*) override {}
+
+ private:
+  double turn_rate_;
+  std::vector<int> spells_;
+  std::size_t spell_ = 0;
+  int step_in_spell_ = 0;
+};
+
+TEST(SimOutputs, SpinningCountsOnlySpellsLongerThanTwoSeconds) {
+  sim_camera::WorldSpec spec;
+  sim_camera::AgentSpec agent;
+  agent.goals = {{9.0, 0.0}};
+  agent.controller.max_turn_rate = 1.5;
+  spec.agents = {agent};
+  for (const auto& [turn_rate, spells, spinning_s] :
+       {std::tuple{1.5, std::vector<int>{40, 60}, 3.0}, {-1.5, {40, 41, 50}, 2.05 + 2.5},
+        {1.4, {80}, 0.0}}) {
+    SpinningDriver driver(turn_rate, spells);
+    SimOptions options;
+    options.write_outputs = false;
+    options.driver = &driver;
+    std::ostringstream log;
+    const SimResult r = run_simulation(spec, options, log);
+    EXPECT_NEAR(r.agents[0].spinning_s, spinning_s, 1e-9) << turn_rate << " rad/s";
+    EXPECT_NEAR(summarize(r).spinning_s, spinning_s, 1e-9);
+  }
+}
+
 // Every scene of the robot scene set loads, with the robot as its first agent.
 TEST(RobotScenes, EveryFileLoads) {
   int scenes = 0;
@@ -423,7 +482,8 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
   summary << std::ifstream(dir / "summary.json").rdbuf();
   for (const char* key : {"\"reached_goal\"", "\"time_to_goal_s\"", "\"path_length_m\"",
                           "\"min_clearance_m\"", "\"collisions\"", "\"collisions_total\"",
-                          "\"per_agent_step_ms\"", "\"render\"", "\"features\"", "\"total\""}) {
+                          "\"per_agent_step_ms\"", "\"render\"", "\"features\"", "\"total\"",
+                          "\"arrival\": \"stay\"", "\"spinning_s\"", "\"spinning_s_total\""}) {
     EXPECT_NE(summary.str().find(key), std::string::npos) << key;
   }
   const cv::Mat top = cv::imread((dir / "topview.png").string());

@@ -72,6 +72,9 @@ struct AgentResult {
   // SteerSuite's effort over the steps the agent steered (see steersuite_effort).
   double active_time_s = 0.0;
   double kinetic_energy_sum = 0.0;
+  // Time spent spinning (see kSpin): turning at its turn-rate limit while nearly at rest, in
+  // spells longer than kSpin.spell_s.
+  double spinning_s = 0.0;
   // The commanded turn rate ω (rad/s, positive right) at every step the agent was steering.
   std::vector<double> turn_rates;
   // Where the agent was (world frame, m) when it chose each of those turn rates.
@@ -129,11 +132,19 @@ struct RunSummary {
   // the step before by kTurnFlipRadPerS or more: chatter, which a real drive cannot follow (NaN
   // without such steps).
   double turn_flip_ratio = 0.0;
+  double spinning_s = 0.0;  // the agents' AgentResult::spinning_s, summed
   int agents_with_goal() const { return agents - followers; }
   // No collision, and every agent that has a goal reached it.
   bool clean() const { return collisions == 0 && goals_reached == agents_with_goal(); }
 };
 inline constexpr double kTurnFlipRadPerS = 1.0;
+// An agent spins when it turns at 95 % of its controller's turn-rate limit or more while slower
+// than 0.05 m/s for longer than 2 s: it has no way it likes and turns on the spot looking for one.
+inline constexpr struct {
+  double limit_share = 0.95;
+  double speed_mps = 0.05;
+  double spell_s = 2.0;
+} kSpin;
 RunSummary summarize(const SimResult& result);
 
 // Switches `mechanism` off in every agent's controller: an ablation (`--without`). Throws
