@@ -120,7 +120,7 @@ std::unique_ptr<pipeline::Brain> seeing_brain(const base::CameraIntrinsics& intr
 // What a brain sees of the frame agent 0 sees, with agent 0's speed and turn rate.
 void see(pipeline::Brain& brain, const camera_io::Frame& view,
          const sim_camera::AgentState& state) {
-  brain.step({view, state.speed_mps, state.turn_rate, {}, {}, {}});
+  brain.step({view, state.speed_mps, state.turn_rate, {}, {}, {}, {}, false});
 }
 
 // One run per method, each perceiving like the truth but with the method's flow, without depth.

@@ -80,6 +80,11 @@ const base::CameraIntrinsics& Brain::intrinsics() const {
   return perception_->intrinsics();
 }
 
+bool Brain::makes_room() const {
+  return config_.controller.law == servo::NavigationLaw::flowsteer &&
+         config_.controller.kind == servo::NavigationKind::goal_reaching && !motion_energy_;
+}
+
 bool Brain::uses_flow() const {
   switch (model()) {
     case servo::SteeringModel::vision:
@@ -107,14 +112,31 @@ const servo::ControlOutput& Brain::step(const BrainInput& input) {
   const base::Stopwatch control;
   percept_ = servo::Percept{oracle_ ? oracle_->perceive(input.speed_mps) : perception_->objects(),
                             input.goal_bearing_rad, input.goal_distance_m, input.leader_id};
-  if (motion_energy_) {
+  // The command is held until the next frame; the last interval between frames is the best
+  // guess of how long that is.
+  const servo::AgentState agent{
+      input.speed_mps,
+      previous_frame_s_ ? std::max(0.0, input.frame.timestamp_s - *previous_frame_s_) : 0.0};
+  const bool at_last_goal = input.last_goal_radius_m && makes_room();
+  if (at_last_goal && !make_room_) {
+    make_room_.emplace(servo::MakeRoomOptions{.agent_width_m = config_.agent_width_m});
+  }
+  std::optional<base::Command> standing;
+  if (at_last_goal && input.arrived) {
+    standing = make_room_->step(percept_, agent, input.turn_rate, *input.last_goal_radius_m);
+  }
+  if (standing) {
+    output_.command = output_.unclamped = *standing;
+    output_.cost = 0.0;
+    output_.terms.clear();
+  } else if (motion_energy_) {
     motion_energy_->step(input.frame, perception_->flow(), percept_, {input.speed_mps}, output_);
   } else {
-    // The command is held until the next frame; the last interval between frames is the best
-    // guess of how long that is.
-    const double period_s =
-        previous_frame_s_ ? std::max(0.0, input.frame.timestamp_s - *previous_frame_s_) : 0.0;
-    controller_.step(percept_, {input.speed_mps, period_s}, output_);
+    controller_.step(percept_, agent, output_);
+    if (at_last_goal && !input.arrived) {
+      output_.command =
+          make_room_->approach(percept_, agent, output_.command, *input.last_goal_radius_m);
+    }
   }
   if (blind()) {
     // A blind frame has no objects, so only the goal term turns; the speed term's acceleration

@@ -84,14 +84,20 @@ const servo::ControlOutput& SimulatedAgent::think(double render_ms, pipeline::St
   const sim_camera::AgentState& state = world_.agents()[agent_];
   sim_camera::point_frame_at(view_, world_, frame_);
   frame_.sequence = sequence_++;
-  pipeline::BrainInput input{frame_, state.speed_mps, state.turn_rate, {}, {}, {}};
+  pipeline::BrainInput input{frame_, state.speed_mps, state.turn_rate, {}, {}, {}, {}, false};
   if (agent.leader) {
     input.leader_id = sim_camera::agent_render_id(static_cast<std::size_t>(*agent.leader));
-  } else if (state.next_goal < agent.goals.size()) {
-    // The goal is a known point (CGF §6.1): its bearing, positive to the right.
-    const Eigen::Vector2d to_goal = agent.goals[state.next_goal] - state.position_m;
+  } else if (state.next_goal < agent.goals.size() || world_.steers_after_arrival(agent_)) {
+    // The goal is a known point (CGF §6.1): its bearing, positive to the right. Once arrived,
+    // the last one, where it stays.
+    const std::size_t goal = std::min(state.next_goal, agent.goals.size() - 1);
+    const Eigen::Vector2d to_goal = agent.goals[goal] - state.position_m;
     input.goal_bearing_rad = pipeline::goal_bearing_rad(to_goal.x(), to_goal.y(), state.yaw_rad);
     input.goal_distance_m = to_goal.norm();
+    if (goal + 1 == agent.goals.size()) {
+      input.last_goal_radius_m = agent.goal_radius_m;
+      input.arrived = state.reached_goal;
+    }
   }
   const servo::ControlOutput& output = brain_.step(input);
   times = brain_.times();

@@ -39,6 +39,8 @@ struct AgentLoop {
   // others', its share of their render.
   bool steered = false;
   int spin_steps = 0;  // of the spell of spinning (kSpin) that goes on, if one does
+  // Steps it steered on its way (before it arrived, or all of a leader's): SteerSuite's effort.
+  int active_steps = 0;
   pipeline::StageTimes times;
   double render_ms = 0.0;
 };
@@ -201,6 +203,10 @@ class SimulationRun {
       AgentLoop loop;
       if (!driven(i)) {
         loop.agent = std::make_unique<SimulatedAgent>(world_, i, reads);
+        if (spec_.arrival == sim_camera::Arrival::stay && !spec_.agents[i].leader &&
+            loop.agent->brain().makes_room()) {
+          world_.keep_steering_after_arrival(i);
+        }
       }
       loop.last_position = spec_.agents[i].start_m;
       loop.result.name = spec_.agents[i].name;
@@ -331,7 +337,9 @@ class SimulationRun {
     batch_out_.clear();
     for (std::size_t i = 0; i < loops_.size(); ++i) {
       AgentLoop& loop = loops_[i];
-      loop.steered = !driven(i) && (!world_.agents()[i].reached_goal || spec_.agents[i].leader);
+      loop.steered = !driven(i) && world_.present(i) &&
+                     (!world_.agents()[i].reached_goal || spec_.agents[i].leader ||
+                      world_.steers_after_arrival(i));
       if (loop.steered && loop.agent->renders_geometry_only()) {
         batch_agents_.push_back(i);
         batch_views_.push_back(loop.agent->view());
@@ -382,6 +390,7 @@ class SimulationRun {
     const servo::ControlOutput& output = loop.agent->brain().output();
     commands_[i] = output.command;
     loop.result.turn_rates.push_back(output.command.turn_rate);
+    loop.active_steps += !world_.agents()[i].reached_goal || spec_.agents[i].leader ? 1 : 0;
     account_spin(i, output.command.turn_rate);
     sum_ += loop.times;
     ++agent_steps_;
@@ -419,6 +428,7 @@ class SimulationRun {
     if (!world_.agents()[i].reached_goal) {
       commands_[i] = command;
       loops_[i].result.turn_rates.push_back(command.turn_rate);
+      ++loops_[i].active_steps;
       account_spin(i, command.turn_rate);
     }
   }
@@ -442,9 +452,10 @@ class SimulationRun {
   }
 
   AgentResult agent_result(std::size_t i) {
+    const int active_steps = loops_[i].active_steps;
     AgentResult r = std::move(loops_[i].result);
-    // An agent steers until it reaches its goal: it chose its turn rates at its path's first
-    // points.
+    // An agent steers from the start, until it reaches its goal or to the end: it chose its turn
+    // rates at its path's first points.
     r.positions_m.assign(paths_[i].begin(),
                          paths_[i].begin() + static_cast<std::ptrdiff_t>(r.turn_rates.size()));
     const sim_camera::AgentState& s = world_.agents()[i];
@@ -459,7 +470,8 @@ class SimulationRun {
     r.straight_line_m = straight_line_m(spec);
     r.preferred_speed_mps = spec.preferred_speed_mps;
     const Effort effort =
-        steersuite_effort(std::span(paths_[i]).first(r.turn_rates.size() + 1), spec_.step_s);
+        steersuite_effort(std::span(paths_[i]).first(static_cast<std::size_t>(active_steps) + 1),
+                          spec_.step_s);
     r.active_time_s = effort.active_time_s;
     r.kinetic_energy_sum = effort.kinetic_energy_sum;
     return r;

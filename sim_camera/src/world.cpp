@@ -159,6 +159,7 @@ World::World(WorldSpec spec) : spec_(std::move(spec)), serial_(next_serial()) {
                                 std::to_string(kMaxPointLights));
   }
   followed_.assign(agents_.size(), false);
+  steers_after_arrival_.assign(agents_.size(), false);
   for (const AgentSpec& a : spec_.agents) {
     if (a.leader) {
       followed_[static_cast<std::size_t>(*a.leader)] = true;
@@ -184,7 +185,7 @@ void World::step(const std::vector<base::Command>& commands) {
   for (std::size_t i = 0; i < agents_.size(); ++i) {
     AgentState& s = agents_[i];
     const AgentSpec& a = spec_.agents[i];
-    if (s.reached_goal && !a.leader) {
+    if (s.reached_goal && !a.leader && (!steers_after_arrival_[i] || !present(i))) {
       s.speed_mps = 0.0;
       s.turn_rate = 0.0;
       continue;
@@ -236,6 +237,10 @@ void World::advance_goals(std::size_t i) {
     s.reached_goal = true;
     s.time_to_goal_s = time_s_;
     s.left_world = spec_.arrival == Arrival::leave && !followed_[i];
+    if (steers_after_arrival_[i]) {
+      s.speed_mps = 0.0;
+      s.turn_rate = 0.0;
+    }
   }
 }
 

@@ -233,7 +233,7 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
       rendered.push_back(frame.image.clone());
       speeds.push_back(state.speed_mps);
       direct_seen[f].timestamp_s = frame.timestamp_s;
-      direct.step({frame, state.speed_mps, 0.0, {}, {}, {}});
+      direct.step({frame, state.speed_mps, 0.0, {}, {}, {}, {}, false});
       direct_seen[f].status = direct.flow_status();
       if (direct_seen[f].status == servo::FlowStatus::ok) {
         direct_seen[f].labels = direct.segmentation().labels;
@@ -262,7 +262,7 @@ TEST(ReplayOfRenderedFrames, GivesTheFeaturesOfTheRender) {
     SCOPED_TRACE("frame " + std::to_string(f));
     const Seen& seen = direct_seen[f];
     EXPECT_DOUBLE_EQ(frame.timestamp_s, seen.timestamp_s);
-    replayed.step({frame, speeds[f], 0.0, {}, {}, {}});
+    replayed.step({frame, speeds[f], 0.0, {}, {}, {}, {}, false});
     ASSERT_EQ(replayed.flow_status(), seen.status);
     if (seen.status == servo::FlowStatus::ok) {
       EXPECT_EQ(replayed.segmentation().labels, seen.labels);

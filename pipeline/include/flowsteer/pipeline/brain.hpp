@@ -9,6 +9,7 @@
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/pipeline/perception_options.hpp"
 #include "flowsteer/servo/control.hpp"
+#include "flowsteer/servo/make_room.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/servo/steering.hpp"
 
@@ -48,6 +49,11 @@ struct BrainInput {
   std::optional<double> goal_bearing_rad;  // positive to the right
   std::optional<double> goal_distance_m;
   std::optional<std::int32_t> leader_id;  // ObjectFeatures::source_id of the leader
+  // Given when the goal above is the last one: how near it counts as at it. Where the brain
+  // makes room (makes_room()), it then waits its turn at a goal someone stands on and, once
+  // `arrived` there, makes room for others.
+  std::optional<double> last_goal_radius_m;
+  bool arrived = false;  // at the last goal, where it stays
 };
 
 // The bearing of a goal dx_m ahead and dy_m to the left (a frame with x forward, y left, such as
@@ -81,6 +87,11 @@ class Brain {
   const servo::ControlOutput& step(const BrainInput& input);
 
   servo::SteeringModel model() const { return config_.controller.model; }
+  // Whether it waits its turn at a taken last goal and, once arrived (BrainInput), makes room
+  // for others (servo::MakeRoom): with the flowsteer law reaching a goal, perceiving by flow or
+  // geometry. Otherwise an arrived agent has nothing to steer: the papers' laws keep their
+  // recorded runs.
+  bool makes_room() const;
   // Whether a step reads the frame's image (numerical flow, dark regions, motion energy); with
   // synthetic flow and no image term it reads only the simulator's channels, and a simulator
   // can leave the image out.
@@ -115,6 +126,7 @@ class Brain {
   servo::Controller controller_;
   std::unique_ptr<FeatureOracle> oracle_;
   std::unique_ptr<MotionEnergySteering> motion_energy_;
+  std::optional<servo::MakeRoom> make_room_;  // from the first step it has arrived
   servo::Percept percept_;
   servo::ControlOutput output_;
   servo::FlowStatus status_ = servo::FlowStatus::ok;

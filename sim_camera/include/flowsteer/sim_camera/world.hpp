@@ -65,8 +65,13 @@ class World {
   bool present(std::size_t agent) const { return !agents_[agent].left_world; }
   const std::vector<MovingState>& moving() const { return moving_; }
 
-  // Advances by one step with one command per agent; agents that reached their last goal stop.
+  // Advances by one step with one command per agent; agents that reached their last goal stop,
+  // except those that keep steering there.
   void step(const std::vector<base::Command>& commands);
+  // Agent i keeps steering at its goal once it has arrived and stays (Arrival::stay): it stops
+  // at once on arrival, as the others do, and then moves by its commands.
+  void keep_steering_after_arrival(std::size_t agent) { steers_after_arrival_.at(agent) = true; }
+  bool steers_after_arrival(std::size_t agent) const { return steers_after_arrival_[agent]; }
 
   // Collisions that started during the last step (a contact counts once until it ends).
   const std::vector<Collision>& new_collisions() const { return new_collisions_; }
@@ -87,6 +92,7 @@ class World {
   std::vector<AgentState> agents_;
   std::vector<MovingState> moving_;
   std::vector<bool> followed_;                 // per agent: some agent's leader
+  std::vector<bool> steers_after_arrival_;     // per agent
   std::vector<std::vector<bool>> in_contact_;  // per agent, per body
   std::vector<Collision> new_collisions_;
 };
