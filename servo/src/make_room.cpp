@@ -195,6 +195,8 @@ bool MakeRoom::goal_taken(const Percept& percept, double goal_radius_m) const {
 // Away from the comer and to the side nearer the agent's heading: 120° round from the comer's
 // bearing, which clears the comer's way whether it walks to the agent's place or past it.
 void MakeRoom::start_giving_way(const ObjectFeatures& comer) {
+  // It has been given its way: waiting near later is no reason to step aside again.
+  std::erase_if(comers_, [&comer](const Comer& c) { return c.id == comer.source_id; });
   const double comer_bearing = std::atan(comer.centre.x());
   const double away = comer_bearing >= 0.0 ? comer_bearing - 2.0 * kPi / 3.0
                                            : comer_bearing + 2.0 * kPi / 3.0;
