@@ -4,6 +4,7 @@
 // about its y axis as x' = x cos θ + z sin θ, z' = z cos θ − x sin θ: that is a yaw of +θ here.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <initializer_list>
 #include <map>
 #include <numbers>
@@ -407,10 +408,18 @@ bool is_unsupported_goal(std::string_view name) {
 }
 
 // An <idle> last is what a flowsteer agent does after its last goal; a lone one keeps it where
-// it starts. Before another goal it would wait out its <timeDuration>, which flowsteer cannot.
+// it starts. It idles for its <timeDuration> (to the end of the run without one) before it
+// leaves the world. Before another goal it would wait out its <timeDuration>, which flowsteer
+// cannot.
 void read_idle_goal(XmlReader& r, const XMLElement* g, AgentTemplate& a) {
   r.only_children(g, {"desiredSpeed", "timeDuration", "Behaviour", "state"});
   warn_ignored_goal_parts(r, g);
+  const XMLElement* duration = g->FirstChildElement("timeDuration");
+  a.spec.idle_s =
+      duration != nullptr ? r.number(duration) : std::numeric_limits<double>::infinity();
+  if (!(a.spec.idle_s >= 0.0)) {
+    r.fail(duration, "an <idle>'s <timeDuration> must be a number of seconds >= 0");
+  }
   if (g->NextSiblingElement() != nullptr) {
     r.fail(g,
            "an <idle> before another goal is not supported: flowsteer agents stop only after "

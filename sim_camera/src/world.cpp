@@ -236,12 +236,13 @@ void World::advance_goals(std::size_t i) {
   if (!a.goals.empty() && s.next_goal == a.goals.size() && !s.reached_goal) {
     s.reached_goal = true;
     s.time_to_goal_s = time_s_;
-    s.left_world = spec_.arrival == Arrival::leave && !followed_[i];
     if (steers_after_arrival_[i]) {
       s.speed_mps = 0.0;
       s.turn_rate = 0.0;
     }
   }
+  s.left_world = s.left_world || (s.reached_goal && spec_.arrival == Arrival::leave &&
+                                  !followed_[i] && time_s_ >= s.time_to_goal_s + a.idle_s - 1e-9);
 }
 
 double World::clearance(std::size_t i) const {

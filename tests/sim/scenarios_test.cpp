@@ -335,9 +335,13 @@ TEST(ScenarioFile, ArrivalIsStayUnlessToldAndSteerSuiteCasesLeave) {
             sim_camera::Arrival::leave);
   EXPECT_EQ(error_of("arrival: go\n" + agents),
             "scenario.yaml:1:10: arrival: expected one of: stay, leave; got 'go'");
-  EXPECT_EQ(load_steersuite(std::string(FLOWSTEER_SUITE_DIR) + "/goal_beside_standing.xml")
-                .world.arrival,
-            sim_camera::Arrival::leave);
+  const auto standing =
+      load_steersuite(std::string(FLOWSTEER_SUITE_DIR) + "/goal_beside_standing.xml").world;
+  EXPECT_EQ(standing.arrival, sim_camera::Arrival::leave);
+  // A lone <idle> stands where it starts for its <timeDuration>, the walker not at all.
+  EXPECT_EQ(standing.agents[0].idle_s, 1000.0);
+  EXPECT_EQ(standing.agents[0].goals, std::vector<Eigen::Vector2d>{standing.agents[0].start_m});
+  EXPECT_EQ(standing.agents[1].idle_s, 0.0);
 }
 
 // Steers the one agent of a world: turns at `turn_rate` on the spot for each spell's steps, then

@@ -99,6 +99,17 @@ TEST(World, UnderLeaveAnArrivedAgentIsTouchedByNoOne) {
   }
 }
 
+TEST(World, UnderLeaveAnIdlingAgentLeavesAfterItsIdleTime) {
+  WorldSpec spec = walk_through_standing(Arrival::leave);
+  spec.agents[1].idle_s = 1.0;
+  World world(spec);
+  for (int k = 0; k < 40 && world.present(1); ++k) {
+    world.step({{0.0, 0.0}, {0.0, 0.0}});
+  }
+  EXPECT_FALSE(world.present(1));
+  EXPECT_NEAR(world.time_s(), 0.05 + 1.0, 1e-9);  // arrived at the first step, idled 1 s
+}
+
 TEST(World, AnAgentOthersFollowStaysUnderLeave) {
   WorldSpec spec = walk_through_standing(Arrival::leave);
   spec.agents[0].goals.clear();

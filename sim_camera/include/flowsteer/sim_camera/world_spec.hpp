@@ -89,6 +89,9 @@ struct AgentSpec {
   double height_m = 1.8;
   std::vector<Eigen::Vector2d> goals;  // visited in order
   double goal_radius_m = 0.5;
+  // Under Arrival::leave, how long it stays at its last goal before it leaves: SteerSuite's
+  // trailing <idle> (infinity: to the end of the run).
+  double idle_s = 0.0;
   std::optional<int> leader;           // index of the agent to follow
   servo::ControllerConfig controller;  // how it steers
   CameraSpec camera;
