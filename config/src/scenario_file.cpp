@@ -368,11 +368,10 @@ AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& agents, std::s
 
 sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::string& source_name) {
   const base::YamlReader r(source_name);
-  const YAML::Node root =
-      base::load_yaml_map(yaml_text, source_name, "at least agents:",
-                          {"name", "description", "step_s", "duration_s", "arrival", "camera",
-                           "controller", "perception", "lighting", "ground", "obstacles", "moving",
-                           "agents"});
+  const YAML::Node root = base::load_yaml_map(
+      yaml_text, source_name, "at least agents:",
+      {"name", "description", "step_s", "duration_s", "arrival", "camera", "controller",
+       "perception", "lighting", "ground", "obstacles", "moving", "agents"});
   sim_camera::WorldSpec w;
   w.name = r.text(root, "", "name", source_name);
   w.description = r.text(root, "", "description", "");

@@ -4,8 +4,8 @@
 // about its y axis as x' = x cos θ + z sin θ, z' = z cos θ − x sin θ: that is a yaw of +θ here.
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <initializer_list>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>

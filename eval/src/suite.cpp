@@ -434,7 +434,8 @@ void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {
         << "obstacles" << std::setw(8) << "goals" << std::setw(15) << "min_clearance"
         << std::setw(14) << "time_to_goal" << std::setw(11) << "path_ratio" << std::setw(11)
         << "time_ratio" << std::setw(12) << "composite01" << std::setw(11) << "turn_flips"
-        << std::setw(10) << "spinning" << "\n";
+        << std::setw(10) << "spinning"
+        << "\n";
   for (const SuiteRun& run : runs) {
     table << std::left << w(case_width) << run.case_name << w(configuration_width)
           << to_string(run.configuration) << std::setw(11)

@@ -163,10 +163,9 @@ std::string suite_json(const SuiteResult& result) {
   std::ostringstream out;
   out << std::setprecision(6) << "{\n  \"suite_id\": \"" << result.suite_id
       << "\",\n  \"seed\": " << result.seed << ",\n  \"arrival\": \"" << result.arrival
-      << "\",\n  \"shard\": " << result.shard.index
-      << ",\n  \"shards\": " << result.shard.count << ",\n  \"suite_runs\": " << result.suite_runs
-      << ",\n  \"runs\": " << result.runs.size() << ",\n  \"jobs\": " << result.jobs
-      << ",\n  \"wall_s\": " << result.wall_s << "\n}\n";
+      << "\",\n  \"shard\": " << result.shard.index << ",\n  \"shards\": " << result.shard.count
+      << ",\n  \"suite_runs\": " << result.suite_runs << ",\n  \"runs\": " << result.runs.size()
+      << ",\n  \"jobs\": " << result.jobs << ",\n  \"wall_s\": " << result.wall_s << "\n}\n";
   return out.str();
 }
 

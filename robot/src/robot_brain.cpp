@@ -30,9 +30,9 @@ RobotBrain::RobotBrain(const base::CameraIntrinsics& intrinsics,
     : brain_(intrinsics, config), log_(log), frame_log_(frame_log), live_camera_(live_camera) {}
 
 base::Command RobotBrain::step(const LoopInput& input) {
-  const servo::ControlOutput& output =
-      brain_.step({input.frame, input.measured.speed_mps, input.measured.turn_rate,
-                   input.goal_bearing_rad, input.goal_distance_m, std::nullopt, std::nullopt, false});
+  const servo::ControlOutput& output = brain_.step(
+      {input.frame, input.measured.speed_mps, input.measured.turn_rate, input.goal_bearing_rad,
+       input.goal_distance_m, std::nullopt, std::nullopt, false});
   const servo::FlowStatus status = brain_.status();
   if (logged_status_ != status) {
     log_ << "flowsteer run: frame " << input.frame.sequence << ": ";

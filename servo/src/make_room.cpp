@@ -65,8 +65,8 @@ std::optional<base::Command> MakeRoom::step(Percept& percept, const AgentState& 
     mode_ = mode;
     mode_s_ = 0.0;
   };
-  if (mode_ == Mode::giving_way && ((aside_m_ - position_m_).norm() < kAsideReachedM ||
-                                    mode_s_ > options_.step_aside_max_s)) {
+  if (mode_ == Mode::giving_way &&
+      ((aside_m_ - position_m_).norm() < kAsideReachedM || mode_s_ > options_.step_aside_max_s)) {
     set_mode(Mode::aside);
     calm_s_ = 0.0;  // calm is what it sees once stopped, watching
   }
@@ -85,8 +85,8 @@ std::optional<base::Command> MakeRoom::step(Percept& percept, const AgentState& 
       return stop(agent, options_.look_turn_rate);
     case Mode::aside: {
       const double bearing = percept.goal_bearing_rad.value_or(0.0);
-      return stop(agent, std::clamp(2.0 * bearing, -options_.face_turn_rate,
-                                    options_.face_turn_rate));
+      return stop(agent,
+                  std::clamp(2.0 * bearing, -options_.face_turn_rate, options_.face_turn_rate));
     }
     case Mode::giving_way: {
       const auto [bearing, distance] = bearing_and_distance(aside_m_, position_m_, yaw_rad_);
@@ -106,16 +106,15 @@ base::Command MakeRoom::approach(const Percept& percept, const AgentState& agent
       !goal_taken(percept, goal_radius_m)) {
     return command;
   }
-  const bool crowded = std::any_of(
-      percept.objects.begin(), percept.objects.end(), [this](const ObjectFeatures& o) {
+  const bool crowded =
+      std::any_of(percept.objects.begin(), percept.objects.end(), [this](const ObjectFeatures& o) {
         const std::optional<double> depth_m = object_depth(o);
         return o.kind == RegionKind::visible && depth_m &&
                *depth_m < 0.5 * options_.agent_width_m + options_.wait_gap_m;
       });
   const double speed_mps = crowded ? 0.0 : options_.wait_speed_mps;
-  const double to_wait_speed = agent.period_s > 0.0
-                                   ? (speed_mps - agent.speed_mps) / agent.period_s
-                                   : -options_.stop_decel_mps2;
+  const double to_wait_speed = agent.period_s > 0.0 ? (speed_mps - agent.speed_mps) / agent.period_s
+                                                    : -options_.stop_decel_mps2;
   const double bearing = *percept.goal_bearing_rad;
   return {std::min(command.accel_mps2, std::max(-options_.stop_decel_mps2, to_wait_speed)),
           std::clamp(2.0 * bearing, -options_.face_turn_rate, options_.face_turn_rate)};
@@ -158,9 +157,8 @@ const ObjectFeatures* MakeRoom::coming_at(const Percept& percept) {
 
 void MakeRoom::remember(std::int32_t id, std::vector<Comer>::iterator known) {
   if (known == comers_.end() && comers_.size() == kComers) {
-    known = std::min_element(comers_.begin(), comers_.end(), [](const Comer& a, const Comer& b) {
-      return a.seen_s < b.seen_s;
-    });
+    known = std::min_element(comers_.begin(), comers_.end(),
+                             [](const Comer& a, const Comer& b) { return a.seen_s < b.seen_s; });
   }
   if (known == comers_.end()) {
     comers_.push_back({id, clock_s_});
@@ -198,19 +196,19 @@ void MakeRoom::start_giving_way(const ObjectFeatures& comer) {
   // It has been given its way: waiting near later is no reason to step aside again.
   std::erase_if(comers_, [&comer](const Comer& c) { return c.id == comer.source_id; });
   const double comer_bearing = std::atan(comer.centre.x());
-  const double away = comer_bearing >= 0.0 ? comer_bearing - 2.0 * kPi / 3.0
-                                           : comer_bearing + 2.0 * kPi / 3.0;
+  const double away =
+      comer_bearing >= 0.0 ? comer_bearing - 2.0 * kPi / 3.0 : comer_bearing + 2.0 * kPi / 3.0;
   const double heading = yaw_rad_ - away;  // bearings are positive right, yaw counter-clockwise
-  aside_m_ = position_m_ + options_.step_aside_m * Eigen::Vector2d(std::cos(heading),
-                                                                   std::sin(heading));
+  aside_m_ =
+      position_m_ + options_.step_aside_m * Eigen::Vector2d(std::cos(heading), std::sin(heading));
   mode_ = Mode::giving_way;
   mode_s_ = 0.0;
 }
 
 void MakeRoom::move_odometry(const AgentState& agent, double turn_rate) {
   yaw_rad_ -= agent.period_s * turn_rate;
-  position_m_ += agent.period_s * agent.speed_mps *
-                 Eigen::Vector2d(std::cos(yaw_rad_), std::sin(yaw_rad_));
+  position_m_ +=
+      agent.period_s * agent.speed_mps * Eigen::Vector2d(std::cos(yaw_rad_), std::sin(yaw_rad_));
 }
 
 base::Command MakeRoom::stop(const AgentState& agent, double turn_rate) const {

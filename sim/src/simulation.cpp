@@ -469,9 +469,8 @@ class SimulationRun {
     }
     r.straight_line_m = straight_line_m(spec);
     r.preferred_speed_mps = spec.preferred_speed_mps;
-    const Effort effort =
-        steersuite_effort(std::span(paths_[i]).first(static_cast<std::size_t>(active_steps) + 1),
-                          spec_.step_s);
+    const Effort effort = steersuite_effort(
+        std::span(paths_[i]).first(static_cast<std::size_t>(active_steps) + 1), spec_.step_s);
     r.active_time_s = effort.active_time_s;
     r.kinetic_energy_sum = effort.kinetic_energy_sum;
     return r;

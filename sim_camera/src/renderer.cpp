@@ -1342,8 +1342,8 @@ struct Renderer::Impl {
       for (const DrawItem& item : items) {
         const bool own_body = view.self && item.id == agent_render_id(*view.self);
         // Both unit meshes lie within [-1, 1]² × [0, 1].
-        const bool seen =
-            !own_body && !item.gone && frustum.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5});
+        const bool seen = !own_body && !item.gone &&
+                          frustum.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5});
         batch.add_seen(relative(item.velocity_mps), seen ? item.id : kHiddenId);
       }
       batch.add_seen(relative(Eigen::Vector3d::Zero()), servo::kGroundId);

@@ -141,8 +141,7 @@ TEST(MakeRoom, OnItsWayItWaitsItsTurnAtATakenGoal) {
       room.approach(percept_of(on_goal, 0.1, 1.5), {0.5, kStep}, law, kGoalRadius);
   EXPECT_LT(waiting.accel_mps2, 0.0);  // down to wait_speed_mps
   EXPECT_GT(waiting.turn_rate, 0.0);   // to the goal, on the right
-  EXPECT_GT(room.approach(percept_of(on_goal, 0.0, 1.5), {0.1, kStep}, law, kGoalRadius)
-                .accel_mps2,
+  EXPECT_GT(room.approach(percept_of(on_goal, 0.0, 1.5), {0.1, kStep}, law, kGoalRadius).accel_mps2,
             0.0);
   // A wall behind the goal, someone beside the way, a goal further than wait_range_m: the law's.
   for (const auto& [objects, distance_m] :
@@ -156,8 +155,7 @@ TEST(MakeRoom, OnItsWayItWaitsItsTurnAtATakenGoal) {
   }
   // Crowded, with someone 0.4 m away beside it: it stops edging in.
   const std::vector<ObjectFeatures> crowded = {on_goal[0], body(8, -0.8, 0.4, INFINITY)};
-  EXPECT_LT(room.approach(percept_of(crowded, 0.0, 1.5), {0.1, kStep}, law, kGoalRadius)
-                .accel_mps2,
+  EXPECT_LT(room.approach(percept_of(crowded, 0.0, 1.5), {0.1, kStep}, law, kGoalRadius).accel_mps2,
             0.0);
 }
 

@@ -376,7 +376,8 @@ TEST(SimOutputs, SpinningCountsOnlySpellsLongerThanTwoSeconds) {
   agent.controller.max_turn_rate = 1.5;
   spec.agents = {agent};
   for (const auto& [turn_rate, spells, spinning_s] :
-       {std::tuple{1.5, std::vector<int>{40, 60}, 3.0}, {-1.5, {40, 41, 50}, 2.05 + 2.5},
+       {std::tuple{1.5, std::vector<int>{40, 60}, 3.0},
+        {-1.5, {40, 41, 50}, 2.05 + 2.5},
         {1.4, {80}, 0.0}}) {
     SpinningDriver driver(turn_rate, spells);
     SimOptions options;

@@ -62,9 +62,9 @@ struct SuiteOptions {
   std::vector<servo::NavigationLaw> laws;
   std::vector<servo::LawMechanism> switched_off;  // an ablation: `none` is the law as it is
   std::vector<int> resolutions;
-  std::vector<double> camera_noise_levels;  // σ in grey levels, each a configuration
-  std::optional<int> steps;                 // stop each run after this many steps
-  bool obstacle_memory = false;             // every run's agents: PerceptionConfig's
+  std::vector<double> camera_noise_levels;     // σ in grey levels, each a configuration
+  std::optional<int> steps;                    // stop each run after this many steps
+  bool obstacle_memory = false;                // every run's agents: PerceptionConfig's
   std::optional<sim_camera::Arrival> arrival;  // every case's rule on arrival; none: its own
   std::uint32_t seed = 1;  // the seed the cases were placed with, recorded with the suite
   int jobs = 1;            // worker processes at once

@@ -30,11 +30,11 @@ struct MakeRoomOptions {
   double step_aside_m = 1.5;  // how far it steps aside
   // Stepping aside ends at its point, or after this long (something was in the way).
   double step_aside_max_s = 4.0;
-  double calm_s = 1.5;            // nobody coming at it for this long, aside: it walks back
-  double look_turn_rate = 0.75;   // rad/s while it stands at its goal, positive right
-  double face_turn_rate = 0.6;    // rad/s, at most, while it waits aside facing its goal
-  double agent_width_m = 0.5;     // its own width
-  double stop_decel_mps2 = 1.0;   // how it stops
+  double calm_s = 1.5;           // nobody coming at it for this long, aside: it walks back
+  double look_turn_rate = 0.75;  // rad/s while it stands at its goal, positive right
+  double face_turn_rate = 0.6;   // rad/s, at most, while it waits aside facing its goal
+  double agent_width_m = 0.5;    // its own width
+  double stop_decel_mps2 = 1.0;  // how it stops
   // On its way: within this of its goal and with the goal taken, it waits its turn, facing the
   // goal and edging in no faster than wait_speed_mps while nothing in view is nearer than
   // wait_gap_m, instead of going round and round it.
@@ -46,10 +46,10 @@ struct MakeRoomOptions {
 class MakeRoom {
  public:
   enum class Mode {
-    standing,     // at its goal, looking round
-    giving_way,   // walking to a point aside
-    aside,        // stopped aside (or short of its occupied goal), facing its goal
-    returning,    // walking back to its goal
+    standing,    // at its goal, looking round
+    giving_way,  // walking to a point aside
+    aside,       // stopped aside (or short of its occupied goal), facing its goal
+    returning,   // walking back to its goal
   };
 
   // Throws std::invalid_argument naming an option out of range.
