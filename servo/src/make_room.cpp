@@ -55,31 +55,7 @@ std::optional<base::Command> MakeRoom::step(Percept& percept, const AgentState& 
   move_odometry(agent, turn_rate);
   mode_s_ += agent.period_s;
   clock_s_ += agent.period_s;
-  const bool watching = mode_ == Mode::standing || mode_ == Mode::aside;
-  const ObjectFeatures* comer = watching ? coming_at(percept) : nullptr;
-  calm_s_ = comer != nullptr ? 0.0 : calm_s_ + agent.period_s;
-  if (comer != nullptr) {
-    start_giving_way(*comer);
-  }
-  const auto set_mode = [this](Mode mode) {
-    mode_ = mode;
-    mode_s_ = 0.0;
-  };
-  if (mode_ == Mode::giving_way &&
-      ((aside_m_ - position_m_).norm() < kAsideReachedM || mode_s_ > options_.step_aside_max_s)) {
-    set_mode(Mode::aside);
-    calm_s_ = 0.0;  // calm is what it sees once stopped, watching
-  }
-  if (mode_ == Mode::aside && calm_s_ >= options_.calm_s && !goal_taken(percept, goal_radius_m)) {
-    set_mode(Mode::returning);
-  }
-  if (mode_ == Mode::returning) {
-    if (percept.goal_distance_m && *percept.goal_distance_m <= goal_radius_m) {
-      set_mode(Mode::standing);
-    } else if (goal_taken(percept, goal_radius_m)) {
-      set_mode(Mode::aside);
-    }
-  }
+  next_mode(percept, agent.period_s, goal_radius_m);
   switch (mode_) {
     case Mode::standing:
       return stop(agent, options_.look_turn_rate);
@@ -98,6 +74,35 @@ std::optional<base::Command> MakeRoom::step(Percept& percept, const AgentState& 
       return std::nullopt;
   }
   return std::nullopt;
+}
+
+void MakeRoom::next_mode(const Percept& percept, double period_s, double goal_radius_m) {
+  const bool watching = mode_ == Mode::standing || mode_ == Mode::aside;
+  const ObjectFeatures* comer = watching ? coming_at(percept) : nullptr;
+  calm_s_ = comer != nullptr ? 0.0 : calm_s_ + period_s;
+  if (comer != nullptr) {
+    start_giving_way(*comer);
+  }
+  if (mode_ == Mode::giving_way &&
+      ((aside_m_ - position_m_).norm() < kAsideReachedM || mode_s_ > options_.step_aside_max_s)) {
+    set_mode(Mode::aside);
+    calm_s_ = 0.0;  // calm is what it sees once stopped, watching
+  }
+  if (mode_ == Mode::aside && calm_s_ >= options_.calm_s && !goal_taken(percept, goal_radius_m)) {
+    set_mode(Mode::returning);
+  }
+  if (mode_ == Mode::returning) {
+    if (percept.goal_distance_m && *percept.goal_distance_m <= goal_radius_m) {
+      set_mode(Mode::standing);
+    } else if (goal_taken(percept, goal_radius_m)) {
+      set_mode(Mode::aside);
+    }
+  }
+}
+
+void MakeRoom::set_mode(Mode mode) {
+  mode_ = mode;
+  mode_s_ = 0.0;
 }
 
 base::Command MakeRoom::approach(const Percept& percept, const AgentState& agent,
@@ -201,8 +206,7 @@ void MakeRoom::start_giving_way(const ObjectFeatures& comer) {
   const double heading = yaw_rad_ - away;  // bearings are positive right, yaw counter-clockwise
   aside_m_ =
       position_m_ + options_.step_aside_m * Eigen::Vector2d(std::cos(heading), std::sin(heading));
-  mode_ = Mode::giving_way;
-  mode_s_ = 0.0;
+  set_mode(Mode::giving_way);
 }
 
 void MakeRoom::move_odometry(const AgentState& agent, double turn_rate) {

@@ -74,6 +74,9 @@ class MakeRoom {
     double seen_s;
   };
 
+  // The mode for this step, from what it sees and where it is.
+  void next_mode(const Percept& percept, double period_s, double goal_radius_m);
+  void set_mode(Mode mode);
   // The object in view coming at the agent soonest, or near and seen coming at it before, if
   // any; remembers what it sees coming.
   const ObjectFeatures* coming_at(const Percept& percept);
