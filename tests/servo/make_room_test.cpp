@@ -32,14 +32,17 @@ ObjectFeatures body(std::int32_t id, double x, double depth_m, double ttc_s) {
   return o;
 }
 
+// A percept views `objects`, which must outlive it: a temporary list is refused.
 Percept percept_of(const std::vector<ObjectFeatures>& objects, double goal_bearing_rad,
                    double goal_distance_m) {
   return {objects, goal_bearing_rad, goal_distance_m, {}};
 }
+Percept percept_of(std::vector<ObjectFeatures>&& objects, double, double) = delete;
+const std::vector<ObjectFeatures> kNothing;
 
 TEST(MakeRoom, AtItsGoalItStandsLookingRound) {
   MakeRoom room;
-  Percept seen = percept_of({}, 0.0, 0.2);
+  Percept seen = percept_of(kNothing, 0.0, 0.2);
   const auto command = room.step(seen, {0.3, kStep}, 0.0, kGoalRadius);
   ASSERT_TRUE(command);
   EXPECT_LT(command->accel_mps2, 0.0);  // it stops
@@ -63,9 +66,9 @@ TEST(MakeRoom, OneComingAtItFromTheRightMakesItStepAsideToTheLeft) {
 
 TEST(MakeRoom, OnePassingByIsNoReasonToMove) {
   MakeRoom room;
-  ObjectFeatures passer = body(7, 0.3, 2.0, 1.5);
-  passer.foe = {1.5, 0.0};  // its course passes 2.4 m to the right
-  Percept seen = percept_of({passer}, 0.0, 0.2);
+  std::vector<ObjectFeatures> passer = {body(7, 0.3, 2.0, 1.5)};
+  passer[0].foe = {1.5, 0.0};  // its course passes 2.4 m to the right
+  Percept seen = percept_of(passer, 0.0, 0.2);
   EXPECT_TRUE(room.step(seen, {0.0, kStep}, 0.0, kGoalRadius));
   EXPECT_EQ(room.mode(), MakeRoom::Mode::standing);
 }
@@ -78,17 +81,17 @@ TEST(MakeRoom, ItWalksAsideWaitsThenComesBackWhenItsGoalIsFree) {
   ASSERT_EQ(room.mode(), MakeRoom::Mode::giving_way);
   // It turns to the point and walks there at 1 m/s (the odometry it keeps).
   const double turn = *seen.goal_bearing_rad / kStep;
-  Percept walking = percept_of({}, 0.0, 3.0);
+  Percept walking = percept_of(kNothing, 0.0, 3.0);
   room.step(walking, {0.0, kStep}, turn, kGoalRadius);
   for (int k = 0; k < 40 && room.mode() == MakeRoom::Mode::giving_way; ++k) {
-    walking = percept_of({}, 0.0, 3.0);
+    walking = percept_of(kNothing, 0.0, 3.0);
     room.step(walking, {1.0, kStep}, 0.0, kGoalRadius);
   }
   ASSERT_EQ(room.mode(), MakeRoom::Mode::aside);
   // Aside, its goal free: after calm_s it walks back (the law steers for the goal).
   int steps = 0;
   for (; room.mode() == MakeRoom::Mode::aside && steps < 100; ++steps) {
-    Percept free = percept_of({}, 0.0, 1.5);
+    Percept free = percept_of(kNothing, 0.0, 1.5);
     room.step(free, {0.0, kStep}, 0.0, kGoalRadius);
   }
   EXPECT_EQ(room.mode(), MakeRoom::Mode::returning);
@@ -103,10 +106,10 @@ TEST(MakeRoom, ItWalksAsideWaitsThenComesBackWhenItsGoalIsFree) {
     EXPECT_EQ(room.mode(), MakeRoom::Mode::aside);
   }
   // Free again: back, and standing once there.
-  Percept free = percept_of({}, 0.0, 1.5);
+  Percept free = percept_of(kNothing, 0.0, 1.5);
   EXPECT_FALSE(room.step(free, {0.0, kStep}, 0.0, kGoalRadius));
   EXPECT_EQ(room.mode(), MakeRoom::Mode::returning);
-  Percept home = percept_of({}, 0.0, 0.4);
+  Percept home = percept_of(kNothing, 0.0, 0.4);
   EXPECT_TRUE(room.step(home, {0.5, kStep}, 0.0, kGoalRadius));
   EXPECT_EQ(room.mode(), MakeRoom::Mode::standing);
 }
@@ -118,7 +121,7 @@ TEST(MakeRoom, OneSeenComingThatNowWaitsNearStillGetsThePlace) {
   Percept far = percept_of(coming, 0.0, 0.2);
   room.step(far, {0.0, kStep}, 0.0, kGoalRadius);
   EXPECT_EQ(room.mode(), MakeRoom::Mode::standing);
-  Percept nothing = percept_of({}, 0.0, 0.2);
+  Percept nothing = percept_of(kNothing, 0.0, 0.2);
   room.step(nothing, {0.0, kStep}, 0.0, kGoalRadius);
   const std::vector<ObjectFeatures> standing = {body(7, 0.0, 1.0, INFINITY)};
   Percept waiting = percept_of(standing, 0.0, 0.2);
