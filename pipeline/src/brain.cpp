@@ -117,12 +117,12 @@ const servo::ControlOutput& Brain::step(const BrainInput& input) {
   const servo::AgentState agent{
       input.speed_mps,
       previous_frame_s_ ? std::max(0.0, input.frame.timestamp_s - *previous_frame_s_) : 0.0};
-  const bool at_last_goal = input.last_goal_radius_m && makes_room();
-  if (at_last_goal && !make_room_) {
+  const bool to_last_goal = input.last_goal_radius_m && makes_room();
+  if (to_last_goal && !make_room_) {
     make_room_.emplace(servo::MakeRoomOptions{.agent_width_m = config_.agent_width_m});
   }
   std::optional<base::Command> standing;
-  if (at_last_goal && input.arrived) {
+  if (to_last_goal && input.arrived) {
     standing = make_room_->step(percept_, agent, input.turn_rate, *input.last_goal_radius_m);
   }
   if (standing) {
@@ -133,7 +133,7 @@ const servo::ControlOutput& Brain::step(const BrainInput& input) {
     motion_energy_->step(input.frame, perception_->flow(), percept_, {input.speed_mps}, output_);
   } else {
     controller_.step(percept_, agent, output_);
-    if (at_last_goal && !input.arrived) {
+    if (to_last_goal && !input.arrived) {
       output_.command =
           make_room_->approach(percept_, agent, output_.command, *input.last_goal_radius_m);
     }

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "cost_term_helpers.hpp"
+
 namespace flowsteer::servo {
 
 namespace {
@@ -139,9 +141,8 @@ const ObjectFeatures* MakeRoom::coming_at(const Percept& percept) {
     // Its FOE on it, widened by half the agent's width: its course meets the agent.
     const double margin =
         depth_m && *depth_m > 0.0 ? 0.5 * options_.agent_width_m / *depth_m : 0.5 * o.width;
-    const bool coming = o.status == MotionStatus::approaching && o.ttc_s > 0.0 &&
-                        o.foe.allFinite() && o.foe.x() >= o.min_x - margin &&
-                        o.foe.x() <= o.max_x + margin;
+    const bool coming = detail::is_threat(o, std::numeric_limits<double>::infinity()) &&
+                        o.foe.x() >= o.min_x - margin && o.foe.x() <= o.max_x + margin;
     const auto known = std::find_if(comers_.begin(), comers_.end(),
                                     [&o](const Comer& c) { return c.id == o.source_id; });
     const bool seen_coming = known != comers_.end();

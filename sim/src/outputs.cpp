@@ -67,12 +67,8 @@ void write_summary_json(const std::filesystem::path& path, const SimResult& resu
     out << "}" << (i + 1 < result.agents.size() ? "," : "") << "\n";
   }
   const pipeline::StageTimes& t = result.per_agent_step_ms;
-  double spinning_s = 0.0;
-  for (const AgentResult& a : result.agents) {
-    spinning_s += a.spinning_s;
-  }
   out << "  ],\n  \"collisions_total\": " << result.collisions.size()
-      << ",\n  \"spinning_s_total\": " << base::json_number(spinning_s)
+      << ",\n  \"spinning_s_total\": " << base::json_number(summarize(result).spinning_s)
       << ",\n  \"per_agent_step_ms\": {\"render\": " << base::json_number(t.render)
       << ", \"flow\": " << base::json_number(t.flow)
       << ", \"segment\": " << base::json_number(t.segment)

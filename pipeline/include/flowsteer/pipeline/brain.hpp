@@ -126,7 +126,7 @@ class Brain {
   servo::Controller controller_;
   std::unique_ptr<FeatureOracle> oracle_;
   std::unique_ptr<MotionEnergySteering> motion_energy_;
-  std::optional<servo::MakeRoom> make_room_;  // from the first step it has arrived
+  std::optional<servo::MakeRoom> make_room_;  // from the first step towards its last goal
   servo::Percept percept_;
   servo::ControlOutput output_;
   servo::FlowStatus status_ = servo::FlowStatus::ok;
