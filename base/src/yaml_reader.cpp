@@ -1,6 +1,7 @@
 #include "flowsteer/base/yaml_reader.hpp"
 
 #include <fstream>
+#include <sstream>
 
 namespace flowsteer::base {
 

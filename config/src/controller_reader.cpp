@@ -26,27 +26,19 @@ void read_motion_energy(const base::YamlReader& r, const YAML::Node& node, const
     }
     return;
   }
-  auto fraction = [&](const char* key, double value, bool zero_allowed) {
-    value = r.number(node, field, key, value);
-    if (!((zero_allowed ? value >= 0.0 : value > 0.0) && value <= 1.0)) {
-      r.fail(node[key], base::YamlReader::join(field, key),
-             std::string("must be in ") + (zero_allowed ? "[0, 1]" : "(0, 1]"));
-    }
-    return value;
-  };
   servo::MotionEnergyOptions& m = c.motion_energy;
   c.mass_from = *servo::parse_mass_source(
       r.word(node, field, "mass_from", {"ids", "ground"}, to_c_str(servo::to_string(c.mass_from))));
-  m.flow_weight = fraction("flow_weight", m.flow_weight, true);
-  m.steer_gain = r.non_negative(node, field, "steer_gain", m.steer_gain);
-  m.goal_gain = r.non_negative(node, field, "goal_gain", m.goal_gain);
-  m.head_on_energy = fraction("head_on_energy", m.head_on_energy, false);
-  m.head_on_balance = fraction("head_on_balance", m.head_on_balance, false);
-  m.danger_distance_m = r.positive(node, field, "danger_distance_m", m.danger_distance_m);
-  m.danger_fraction = fraction("danger_fraction", m.danger_fraction, false);
-  m.corner_step = fraction("corner_step", m.corner_step, false);
-  m.corner_rise = fraction("corner_rise", m.corner_rise, false);
-  m.free_path_range_m = r.positive(node, field, "free_path_range_m", m.free_path_range_m);
+  m.flow_weight = r.bounded(node, field, "flow_weight", m.flow_weight);
+  m.steer_gain = r.bounded(node, field, "steer_gain", m.steer_gain);
+  m.goal_gain = r.bounded(node, field, "goal_gain", m.goal_gain);
+  m.head_on_energy = r.bounded(node, field, "head_on_energy", m.head_on_energy);
+  m.head_on_balance = r.bounded(node, field, "head_on_balance", m.head_on_balance);
+  m.danger_distance_m = r.bounded(node, field, "danger_distance_m", m.danger_distance_m);
+  m.danger_fraction = r.bounded(node, field, "danger_fraction", m.danger_fraction);
+  m.corner_step = r.bounded(node, field, "corner_step", m.corner_step);
+  m.corner_rise = r.bounded(node, field, "corner_rise", m.corner_rise);
+  m.free_path_range_m = r.bounded(node, field, "free_path_range_m", m.free_path_range_m);
 }
 
 }  // namespace
@@ -68,7 +60,7 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
         std::pair{"delta", &c.delta}, std::pair{"braking", &c.braking},
         std::pair{"anticipation", &c.anticipation}}) {
     if (node[key]) {
-      *weight = r.non_negative(node, field, key, 0.0);
+      *weight = r.bounded(node, field, key, 0.0);
     }
   }
   if (c.law != servo::NavigationLaw::flowsteer) {
@@ -89,18 +81,20 @@ servo::ControllerConfig read_controller(const base::YamlReader& r, const YAML::N
     }
     c.without = *mechanism;
   }
-  c.follow_gap_m = r.non_negative(node, field, "follow_gap_m", c.follow_gap_m);
-  c.max_speed_ratio = r.at_least(node, field, "max_speed_ratio", 1.0, c.max_speed_ratio);
+  if (node["follow_gap_m"]) {  // a robot's file has no row for it: it does not follow
+    c.follow_gap_m = r.bounded(node, field, "follow_gap_m", c.follow_gap_m);
+  }
+  c.max_speed_ratio = r.bounded(node, field, "max_speed_ratio", c.max_speed_ratio);
   const servo::NavigationWeights weights = servo::navigation_weights(c);
   if (weights.delta > weights.gamma) {
     r.fail(node["delta"] ? node["delta"] : node, field + ".delta",
            "must not exceed gamma (MIG 2019: visible obstacles weigh at least as much)");
   }
-  c.lambda = r.positive(node, field, "lambda", c.lambda);
-  c.max_accel_mps2 = r.positive(node, field, "max_accel_mps2", c.max_accel_mps2);
-  c.max_turn_rate = r.positive(node, field, "max_turn_rate", c.max_turn_rate);
+  c.lambda = r.bounded(node, field, "lambda", c.lambda);
+  c.max_accel_mps2 = r.bounded(node, field, "max_accel_mps2", c.max_accel_mps2);
+  c.max_turn_rate = r.bounded(node, field, "max_turn_rate", c.max_turn_rate);
   c.use_depth = r.boolean(node, field, "use_depth", c.use_depth);
-  c.clearance_margin_m = r.non_negative(node, field, "clearance_margin_m", c.clearance_margin_m);
+  c.clearance_margin_m = r.bounded(node, field, "clearance_margin_m", c.clearance_margin_m);
   read_motion_energy(r, node, field, c);
   return c;
 }

@@ -10,6 +10,7 @@
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
 #include "flowsteer/config/controller_reader.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 
 namespace flowsteer::config {
 
@@ -22,24 +23,18 @@ void read_camera(const base::YamlReader& r, const YAML::Node& node, servo::Analy
   int width = scene.intrinsics.width_px;
   int height = scene.intrinsics.height_px;
   if (const YAML::Node res = node["resolution"]) {
+    const base::Bound& bound = base::bound_of(r.bounds(), "camera.resolution");
     if (res.IsSequence() && res.size() == 2) {
-      width = r.integer(res[0], "camera.resolution[0]", 8);
-      height = r.integer(res[1], "camera.resolution[1]", 8);
+      width = r.within_integer(res[0], "camera.resolution[0]", bound);
+      height = r.within_integer(res[1], "camera.resolution[1]", bound);
     } else {
-      width = height = r.integer(res, "camera.resolution", 8);
+      width = height = r.within_integer(res, "camera.resolution", bound);
     }
   }
-  const double hfov_deg = r.number(node, "camera", "hfov_deg", 90.0);
-  if (!(hfov_deg > 0.0 && hfov_deg < 180.0)) {
-    r.fail(node["hfov_deg"], "camera.hfov_deg", "must be in (0, 180)");
-  }
+  const double hfov_deg = r.bounded(node, "camera", "hfov_deg", 90.0);
   scene.intrinsics = base::CameraIntrinsics::from_horizontal_fov(width, height, hfov_deg * kDeg);
-  scene.mount.height_m = r.positive(node, "camera", "height_m", scene.mount.height_m);
-  const double pitch_deg = r.number(node, "camera", "pitch_deg", 0.0);
-  if (std::abs(pitch_deg) >= 89.0) {
-    r.fail(node["pitch_deg"], "camera.pitch_deg", "must be within (-89, 89)");
-  }
-  scene.mount.pitch_rad = pitch_deg * kDeg;
+  scene.mount.height_m = r.bounded(node, "camera", "height_m", scene.mount.height_m);
+  scene.mount.pitch_rad = r.bounded(node, "camera", "pitch_deg", 0.0) * kDeg;
 }
 
 servo::SceneObject read_object(const base::YamlReader& r, const YAML::Node& node,
@@ -53,25 +48,22 @@ servo::SceneObject read_object(const base::YamlReader& r, const YAML::Node& node
   if (!node["position"]) {
     r.fail(node, field + ".position", "missing: where is the object?");
   }
-  o.position_m = r.pair(node, field, "position", {0.0, 0.0});
-  o.velocity_mps = r.pair(node, field, "velocity", {0.0, 0.0});
-  o.height_m = r.positive(node, field, "height_m", 1.8);
+  o.position_m = r.bounded_pair(node, field, "position", {0.0, 0.0});
+  o.velocity_mps = r.bounded_pair(node, field, "velocity", {0.0, 0.0});
+  o.height_m = r.bounded(node, field, "height_m", 1.8);
   if (o.shape == servo::SceneObject::Shape::box) {
     if (node["radius_m"]) {
       r.fail(node["radius_m"], field + ".radius_m",
              "a box has a size [length, width], not a radius");
     }
-    const Eigen::Vector2d size = r.pair(node, field, "size", {1.0, 1.0});
-    if (!(size.x() > 0.0 && size.y() > 0.0)) {
-      r.fail(node["size"], field + ".size", "length and width must be positive");
-    }
+    const Eigen::Vector2d size = r.bounded_pair(node, field, "size", {1.0, 1.0});
     o.length_m = size.x();
     o.width_m = size.y();
   } else {
     if (node["size"]) {
       r.fail(node["size"], field + ".size", "a cylinder has radius_m, not a size");
     }
-    o.radius_m = r.positive(node, field, "radius_m", 0.3);
+    o.radius_m = r.bounded(node, field, "radius_m", 0.3);
   }
   return o;
 }
@@ -83,7 +75,7 @@ void read_controller(const base::YamlReader& r, const YAML::Node& node, DemoScen
   r.only_keys(node, "controller",
               {"kind", "law", "alpha", "beta", "gamma", "delta", "braking", "anticipation",
                "follow_gap_m", "preferred_speed_mps", "lambda", "max_accel_mps2", "max_turn_rate",
-               "max_speed_ratio", "use_depth", "leader"});
+               "max_speed_ratio", "use_depth", "clearance_margin_m", "leader"});
   const bool following = r.word(node, "controller", "kind", {"goal_reaching", "following"},
                                 "goal_reaching") == "following";
   if (following) {
@@ -102,7 +94,7 @@ void read_controller(const base::YamlReader& r, const YAML::Node& node, DemoScen
   }
   d.controller = config::read_controller(r, node, "controller", d.controller);
   d.preferred_speed_mps =
-      r.non_negative(node, "controller", "preferred_speed_mps", d.preferred_speed_mps);
+      r.bounded(node, "controller", "preferred_speed_mps", d.preferred_speed_mps);
 }
 
 }  // namespace
@@ -138,7 +130,7 @@ DemoScene default_demo_scene() {
 }
 
 DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& source_name) {
-  const base::YamlReader r(source_name);
+  const base::YamlReader r(source_name, demo_scene_bounds());
   const YAML::Node root = base::load_yaml_map(yaml_text, source_name, "camera, agent, objects",
                                               {"camera", "agent", "goal", "controller", "objects"});
 
@@ -151,12 +143,12 @@ DemoScene parse_demo_scene(const std::string& yaml_text, const std::string& sour
   }
   if (const YAML::Node agent = root["agent"]) {
     r.only_keys(agent, "agent", {"speed_mps", "turn_rate", "width_m"});
-    s.agent_speed_mps = r.number(agent, "agent", "speed_mps", 1.0);
-    s.agent_turn_rate = r.number(agent, "agent", "turn_rate", 0.0);
-    d.agent_width_m = r.non_negative(agent, "agent", "width_m", 0.5);
+    s.agent_speed_mps = r.bounded(agent, "agent", "speed_mps", 1.0);
+    s.agent_turn_rate = r.bounded(agent, "agent", "turn_rate", 0.0);
+    d.agent_width_m = r.bounded(agent, "agent", "width_m", 0.5);
   }
   if (const YAML::Node goal = root["goal"]) {
-    d.goal_m = r.pair(root, "", "goal", {0.0, 0.0});
+    d.goal_m = r.bounded_pair(root, "", "goal", {0.0, 0.0});
     if (d.goal_m->x() <= 0.0) {
       r.fail(goal, "goal", "must be ahead of the agent (x > 0) for the demo's single frame");
     }

@@ -1,6 +1,7 @@
 #include "flowsteer/config/drive_config.hpp"
 
 #include "drive_reader.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 
 namespace flowsteer::config {
 
@@ -13,8 +14,8 @@ drivers::SerialConfig read_serial(const base::YamlReader& r, const YAML::Node& n
     r.fail(node, field + ".device", "missing: which serial device, e.g. /dev/ttyACM0?");
   }
   serial.device = r.text(node, field, "device", "", true);
-  serial.baud = node["baud"] ? r.integer(node["baud"], field + ".baud", 1) : default_baud;
-  serial.timeout_s = r.positive(node, field, "timeout_s", serial.timeout_s);
+  serial.baud = node["baud"] ? r.bounded_integer(node["baud"], field + ".baud") : default_baud;
+  serial.timeout_s = r.bounded(node, field, "timeout_s", serial.timeout_s);
   return serial;
 }
 
@@ -25,11 +26,7 @@ drivers::OdriveAxisConfig read_axis(const base::YamlReader& r, const YAML::Node&
   }
   r.only_keys(node, field, {"node_id", "direction"});
   if (node["node_id"]) {
-    const int id = r.integer(node["node_id"], field + ".node_id", 0);
-    if (id > 63) {
-      r.fail(node["node_id"], field + ".node_id", "must be 0..63 (6 bits of the CAN id)");
-    }
-    axis.node_id = static_cast<std::uint8_t>(id);
+    axis.node_id = static_cast<std::uint8_t>(r.bounded_integer(node["node_id"], field + ".node_id"));
   }
   axis.direction = r.number(node, field, "direction", axis.direction);
   if (axis.direction != 1.0 && axis.direction != -1.0) {
@@ -65,29 +62,28 @@ void read_geometry(const base::YamlReader& r, const YAML::Node& g,
                    drivers::WheelGeometry& geometry) {
   r.only_keys(g, "drive.geometry", {"wheel_separation_m", "wheel_radius_m"});
   geometry.wheel_separation_m =
-      r.positive(g, "drive.geometry", "wheel_separation_m", geometry.wheel_separation_m);
-  geometry.wheel_radius_m =
-      r.positive(g, "drive.geometry", "wheel_radius_m", geometry.wheel_radius_m);
+      r.bounded(g, "drive.geometry", "wheel_separation_m", geometry.wheel_separation_m);
+  geometry.wheel_radius_m = r.bounded(g, "drive.geometry", "wheel_radius_m", geometry.wheel_radius_m);
 }
 
 void read_limits(const base::YamlReader& r, const YAML::Node& l, drivers::CommandLimits& lim) {
   r.only_keys(l, "drive.limits",
               {"max_speed_mps", "max_reverse_speed_mps", "max_accel_mps2", "max_turn_rate",
                "max_wheel_speed_radps"});
-  lim.max_speed_mps = r.positive(l, "drive.limits", "max_speed_mps", lim.max_speed_mps);
+  lim.max_speed_mps = r.bounded(l, "drive.limits", "max_speed_mps", lim.max_speed_mps);
   lim.max_reverse_speed_mps =
-      r.non_negative(l, "drive.limits", "max_reverse_speed_mps", lim.max_reverse_speed_mps);
-  lim.max_accel_mps2 = r.positive(l, "drive.limits", "max_accel_mps2", lim.max_accel_mps2);
-  lim.max_turn_rate = r.positive(l, "drive.limits", "max_turn_rate", lim.max_turn_rate);
+      r.bounded(l, "drive.limits", "max_reverse_speed_mps", lim.max_reverse_speed_mps);
+  lim.max_accel_mps2 = r.bounded(l, "drive.limits", "max_accel_mps2", lim.max_accel_mps2);
+  lim.max_turn_rate = r.bounded(l, "drive.limits", "max_turn_rate", lim.max_turn_rate);
   lim.max_wheel_speed_radps =
-      r.positive(l, "drive.limits", "max_wheel_speed_radps", lim.max_wheel_speed_radps);
+      r.bounded(l, "drive.limits", "max_wheel_speed_radps", lim.max_wheel_speed_radps);
 }
 
 void read_watchdog(const base::YamlReader& r, const YAML::Node& w,
                    drivers::WatchdogConfig& watchdog) {
   r.only_keys(w, "drive.watchdog", {"timeout_s", "ramp_s"});
-  watchdog.timeout_s = r.positive(w, "drive.watchdog", "timeout_s", watchdog.timeout_s);
-  watchdog.ramp_s = r.non_negative(w, "drive.watchdog", "ramp_s", watchdog.ramp_s);
+  watchdog.timeout_s = r.bounded(w, "drive.watchdog", "timeout_s", watchdog.timeout_s);
+  watchdog.ramp_s = r.bounded(w, "drive.watchdog", "ramp_s", watchdog.ramp_s);
   if (watchdog.ramp_s > watchdog.timeout_s) {
     r.fail(w["ramp_s"], "drive.watchdog.ramp_s", "must not exceed timeout_s");
   }
@@ -99,7 +95,7 @@ drivers::SimBaseConfig read_sim(const base::YamlReader& r, const YAML::Node& nod
   c.geometry = geometry;
   if (node) {
     r.only_keys(node, field, {"wheel_time_constant_s"});
-    c.wheel_time_constant_s = r.non_negative(node, field, "wheel_time_constant_s", 0.0);
+    c.wheel_time_constant_s = r.bounded(node, field, "wheel_time_constant_s", 0.0);
   }
   return c;
 }
@@ -119,8 +115,8 @@ drivers::OdriveCanConfig read_odrive_can(const base::YamlReader& r, const YAML::
     r.fail(node, field, "left and right need different node ids");
   }
   c.motor_turns_per_wheel_turn =
-      r.positive(node, field, "motor_turns_per_wheel_turn", c.motor_turns_per_wheel_turn);
-  c.timeout_s = r.positive(node, field, "timeout_s", c.timeout_s);
+      r.bounded(node, field, "motor_turns_per_wheel_turn", c.motor_turns_per_wheel_turn);
+  c.timeout_s = r.bounded(node, field, "timeout_s", c.timeout_s);
   return c;
 }
 
@@ -144,9 +140,9 @@ drivers::ArduinoBridgeConfig read_arduino_bridge(const base::YamlReader& r, cons
               {"device", "baud", "timeout_s", "ticks_per_wheel_rev", "pid_rate_hz", "boot_wait_s"});
   drivers::ArduinoBridgeConfig c;
   c.serial = read_serial(r, node, field, 57600);
-  c.ticks_per_wheel_rev = r.positive(node, field, "ticks_per_wheel_rev", 0.0);
-  c.pid_rate_hz = r.positive(node, field, "pid_rate_hz", c.pid_rate_hz);
-  c.boot_wait_s = r.non_negative(node, field, "boot_wait_s", c.boot_wait_s);
+  c.ticks_per_wheel_rev = r.bounded(node, field, "ticks_per_wheel_rev", 0.0);
+  c.pid_rate_hz = r.bounded(node, field, "pid_rate_hz", c.pid_rate_hz);
+  c.boot_wait_s = r.bounded(node, field, "boot_wait_s", c.boot_wait_s);
   return c;
 }
 
@@ -158,17 +154,10 @@ drivers::RoboClawConfig read_roboclaw(const base::YamlReader& r, const YAML::Nod
   drivers::RoboClawConfig c;
   c.serial = read_serial(r, node, field, 38400);
   if (node["address"]) {
-    const int address = r.integer(node["address"], field + ".address", 0x80);
-    if (address > 0x87) {
-      r.fail(node["address"], field + ".address", "must be 0x80..0x87");
-    }
-    c.address = static_cast<std::uint8_t>(address);
+    c.address = static_cast<std::uint8_t>(r.bounded_integer(node["address"], field + ".address"));
   }
-  c.ticks_per_wheel_rev = r.positive(node, field, "ticks_per_wheel_rev", 0.0);
-  c.board_timeout_s = r.positive(node, field, "board_timeout_s", c.board_timeout_s);
-  if (c.board_timeout_s < 0.1 || c.board_timeout_s > 25.5) {
-    r.fail(node["board_timeout_s"], field + ".board_timeout_s", "must be 0.1 .. 25.5 s");
-  }
+  c.ticks_per_wheel_rev = r.bounded(node, field, "ticks_per_wheel_rev", 0.0);
+  c.board_timeout_s = r.bounded(node, field, "board_timeout_s", c.board_timeout_s);
   c.left_is_m1 = r.boolean(node, field, "left_is_m1", c.left_is_m1);
   return c;
 }
@@ -182,7 +171,7 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
     throw base::ConfigError(source_name, 1, 1, "drive",
                             "missing: the launch file has no drive section");
   }
-  return read_drive(base::YamlReader(source_name), drive);
+  return read_drive(base::YamlReader(source_name, robot_launch_bounds()), drive);
 }
 
 DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
@@ -191,7 +180,7 @@ DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
                "arduino_bridge", "roboclaw"});
   DriveSection s;
   const std::string type = read_type(r, drive);
-  s.loop_rate_hz = r.positive(drive, "drive", "loop_rate_hz", s.loop_rate_hz);
+  s.loop_rate_hz = r.bounded(drive, "drive", "loop_rate_hz", s.loop_rate_hz);
   if (const YAML::Node g = drive["geometry"]) {
     read_geometry(r, g, s.stage.geometry);
   }

@@ -9,6 +9,7 @@
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/calibration/camera_mount.hpp"
 #include "flowsteer/config/controller_reader.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 
 namespace flowsteer::config {
 namespace {
@@ -25,14 +26,14 @@ template <typename Options>
 void read_size_and_rate(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
                         Options& o) {
   if (node["width_px"]) {
-    o.width_px = r.integer(node["width_px"], field + ".width_px", 1);
+    o.width_px = r.bounded_integer(node["width_px"], field + ".width_px");
   }
   if (node["height_px"]) {
-    o.height_px = r.integer(node["height_px"], field + ".height_px", 1);
+    o.height_px = r.bounded_integer(node["height_px"], field + ".height_px");
   }
-  o.frame_rate_hz = r.non_negative(node, field, "frame_rate_hz", o.frame_rate_hz);
+  o.frame_rate_hz = r.bounded(node, field, "frame_rate_hz", o.frame_rate_hz);
   if (node["buffer_count"]) {
-    o.buffer_count = r.integer(node["buffer_count"], field + ".buffer_count", 2);
+    o.buffer_count = r.bounded_integer(node["buffer_count"], field + ".buffer_count");
   }
 }
 
@@ -52,13 +53,10 @@ CameraSection read_camera(const base::YamlReader& r, const YAML::Node& camera,
     }
   }
   CameraSection s;
-  s.timeout_s = r.positive(camera, "camera", "timeout_s", s.timeout_s);
+  s.timeout_s = r.bounded(camera, "camera", "timeout_s", s.timeout_s);
   camera_io::LensOptions lens;
   lens.horizontal_fov_rad =
-      r.positive(camera, "camera", "horizontal_fov_rad", lens.horizontal_fov_rad);
-  if (lens.horizontal_fov_rad >= std::numbers::pi) {
-    r.fail(camera["horizontal_fov_rad"], "camera.horizontal_fov_rad", "must be below pi");
-  }
+      r.bounded(camera, "camera", "horizontal_fov_rad", lens.horizontal_fov_rad);
   if (camera["calibration"]) {
     s.calibration_file = resolve(r.text(camera, "camera", "calibration", "", true), base_dir);
     // The reader's base::ConfigError names the calibration file's own line and field.
@@ -94,7 +92,7 @@ CameraSection read_camera(const base::YamlReader& r, const YAML::Node& camera,
       r.fail(settings, field + ".path", "missing: the video file or image pattern to replay");
     }
     o.path = resolve(o.path, base_dir);
-    o.frame_rate_hz = r.non_negative(settings, field, "frame_rate_hz", 0.0);
+    o.frame_rate_hz = r.bounded(settings, field, "frame_rate_hz", 0.0);
     o.lens = lens;
     s.source = o;
   }
@@ -158,12 +156,8 @@ PerceptionSection read_robot_perception(const base::YamlReader& r, const YAML::N
       r.fail(node, "perception.height_m", "missing: the camera's height above the floor");
     }
     base::CameraMount mount;
-    mount.height_m = r.positive(node, "perception", "height_m", 0.0);
-    const double pitch_deg = r.number(node, "perception", "pitch_deg", 0.0);
-    if (std::abs(pitch_deg) >= 89.0) {
-      r.fail(node["pitch_deg"], "perception.pitch_deg", "must be within (-89, 89)");
-    }
-    mount.pitch_rad = pitch_deg * std::numbers::pi / 180.0;
+    mount.height_m = r.bounded(node, "perception", "height_m", 0.0);
+    mount.pitch_rad = r.bounded(node, "perception", "pitch_deg", 0.0) * std::numbers::pi / 180.0;
     p.mount = mount;
   }
   return p;
@@ -182,8 +176,8 @@ ControllerSection read_robot_controller(const base::YamlReader& r, const YAML::N
                "clearance_margin_m", "preferred_speed_mps", "robot_width_m"});
   c.spec = read_controller(r, node, "controller", c.spec);
   c.preferred_speed_mps =
-      r.non_negative(node, "controller", "preferred_speed_mps", c.preferred_speed_mps);
-  c.robot_width_m = r.positive(node, "controller", "robot_width_m", c.robot_width_m);
+      r.bounded(node, "controller", "preferred_speed_mps", c.preferred_speed_mps);
+  c.robot_width_m = r.bounded(node, "controller", "robot_width_m", c.robot_width_m);
   return c;
 }
 
@@ -191,7 +185,7 @@ ControllerSection read_robot_controller(const base::YamlReader& r, const YAML::N
 
 RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& source_name,
                                const std::string& base_dir) {
-  const base::YamlReader r(source_name);
+  const base::YamlReader r(source_name, robot_launch_bounds());
   const YAML::Node root =
       base::load_yaml_map(yaml_text, source_name, "camera, drive and goal",
                           {"camera", "drive", "goal", "perception", "controller"});
@@ -210,14 +204,11 @@ RobotLaunch parse_robot_launch(const std::string& yaml_text, const std::string& 
   if (const YAML::Node goal = root["goal"]) {
     r.only_keys(goal, "goal", {"bearing_rad", "distance_m"});
     GoalSection g;
-    g.bearing_rad = r.number(goal, "goal", "bearing_rad", 0.0);
-    if (std::abs(g.bearing_rad) > std::numbers::pi) {
-      r.fail(goal["bearing_rad"], "goal.bearing_rad", "must be within [-pi, pi]");
-    }
+    g.bearing_rad = r.bounded(goal, "goal", "bearing_rad", 0.0);
     if (!goal["distance_m"]) {
       r.fail(goal, "goal.distance_m", "missing: how far the goal is");
     }
-    g.distance_m = r.positive(goal, "goal", "distance_m", 0.0);
+    g.distance_m = r.bounded(goal, "goal", "distance_m", 0.0);
     launch.goal = g;
   }
   launch.perception = read_robot_perception(r, root["perception"], base_dir);

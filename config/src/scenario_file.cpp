@@ -7,6 +7,7 @@
 #include "builtin_scenarios.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
 #include "flowsteer/config/controller_reader.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/sim_camera/camera_noise.hpp"
 
 namespace flowsteer::config {
@@ -29,12 +30,10 @@ Material read_material(const base::YamlReader& r, const YAML::Node& node, const 
     if (!albedo.IsSequence() || albedo.size() != 3) {
       r.fail(albedo, field + ".albedo", "expected [r, g, b] in [0, 1]");
     }
+    const base::Bound& bound = base::bound_of(r.bounds(), field + ".albedo");
     for (int c = 0; c < 3; ++c) {
-      const double value = r.number(albedo[c], field + ".albedo[" + std::to_string(c) + "]");
-      if (value < 0.0 || value > 1.0) {
-        r.fail(albedo[c], field + ".albedo", "components must be in [0, 1]");
-      }
-      material.albedo[c] = static_cast<float>(value);
+      material.albedo[c] = static_cast<float>(
+          r.within(albedo[c], field + ".albedo[" + std::to_string(c) + "]", bound));
     }
   }
   const std::string pattern =
@@ -49,53 +48,59 @@ Material read_material(const base::YamlReader& r, const YAML::Node& node, const 
     material.pattern = Material::Pattern::stripes;
   }
   material.pattern_scale_m =
-      static_cast<float>(r.positive(node, field, "scale_m", material.pattern_scale_m));
+      static_cast<float>(r.bounded(node, field, "scale_m", material.pattern_scale_m));
   material.pattern_contrast =
-      static_cast<float>(r.non_negative(node, field, "contrast", material.pattern_contrast));
+      static_cast<float>(r.bounded(node, field, "contrast", material.pattern_contrast));
   return material;
 }
 
-Solid read_solid(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
-                 bool allow_wall) {
+// A box's or a cylinder's shape and height, without its place.
+void read_body(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
+               const std::string& shape, Solid& s) {
+  s.height_m = r.bounded(node, field, "height_m", 1.0);
+  if (shape == "cylinder") {
+    s.shape = Solid::Shape::cylinder;
+    s.radius_m = r.bounded(node, field, "radius_m", 0.3);
+  } else {
+    s.size_m = r.bounded_pair(node, field, "size", {1.0, 1.0});
+  }
+}
+
+Solid read_wall(const base::YamlReader& r, const YAML::Node& node, const std::string& field) {
+  if (!node["from"] || !node["to"]) {
+    r.fail(node, field, "a wall needs from: [x, y] and to: [x, y]");
+  }
+  const Eigen::Vector2d from = r.bounded_pair(node, field, "from", Eigen::Vector2d::Zero());
+  const Eigen::Vector2d to = r.bounded_pair(node, field, "to", Eigen::Vector2d::Zero());
+  if ((to - from).norm() < 1e-6) {
+    r.fail(node["to"], field + ".to", "a wall needs two distinct ends");
+  }
+  Solid s;
+  s.shape = Solid::Shape::box;
+  s.centre_m = 0.5 * (from + to);
+  s.size_m = {(to - from).norm(), r.bounded(node, field, "thickness_m", 0.2)};
+  s.yaw_rad = std::atan2(to.y() - from.y(), to.x() - from.x());
+  s.height_m = r.bounded(node, field, "height_m", 2.5);
+  return s;
+}
+
+// obstacles[k]: a box, a cylinder or a wall.
+Solid read_solid(const base::YamlReader& r, const YAML::Node& node, const std::string& field) {
   r.only_keys(node, field,
               {"shape", "position", "size", "radius_m", "height_m", "yaw_deg", "from", "to",
                "thickness_m", "material"});
-  Solid s;
-  const std::string shape = allow_wall
-                                ? r.word(node, field, "shape", {"box", "cylinder", "wall"}, "box")
-                                : r.word(node, field, "shape", {"box", "cylinder"}, "box");
+  const std::string shape = r.word(node, field, "shape", {"box", "cylinder", "wall"}, "box");
+  Solid s = shape == "wall" ? read_wall(r, node, field) : Solid{};
   s.material = read_material(r, node["material"], field + ".material", s.material);
   if (shape == "wall") {
-    if (!node["from"] || !node["to"]) {
-      r.fail(node, field, "a wall needs from: [x, y] and to: [x, y]");
-    }
-    const Eigen::Vector2d from = r.pair(node, field, "from", Eigen::Vector2d::Zero());
-    const Eigen::Vector2d to = r.pair(node, field, "to", Eigen::Vector2d::Zero());
-    if ((to - from).norm() < 1e-6) {
-      r.fail(node["to"], field + ".to", "a wall needs two distinct ends");
-    }
-    s.shape = Solid::Shape::box;
-    s.centre_m = 0.5 * (from + to);
-    s.size_m = {(to - from).norm(), r.positive(node, field, "thickness_m", 0.2)};
-    s.yaw_rad = std::atan2(to.y() - from.y(), to.x() - from.x());
-    s.height_m = r.positive(node, field, "height_m", 2.5);
     return s;
   }
   if (!node["position"]) {
     r.fail(node, field + ".position", "missing: where is it?");
   }
-  s.centre_m = r.pair(node, field, "position", Eigen::Vector2d::Zero());
-  s.height_m = r.positive(node, field, "height_m", 1.0);
-  s.yaw_rad = r.number(node, field, "yaw_deg", 0.0) * kDeg;
-  if (shape == "cylinder") {
-    s.shape = Solid::Shape::cylinder;
-    s.radius_m = r.positive(node, field, "radius_m", 0.3);
-  } else {
-    s.size_m = r.pair(node, field, "size", {1.0, 1.0});
-    if (!(s.size_m.x() > 0.0 && s.size_m.y() > 0.0)) {
-      r.fail(node["size"], field + ".size", "both extents must be positive");
-    }
-  }
+  s.centre_m = r.bounded_pair(node, field, "position", Eigen::Vector2d::Zero());
+  s.yaw_rad = r.bounded(node, field, "yaw_deg", 0.0) * kDeg;
+  read_body(r, node, field, shape, s);
   return s;
 }
 
@@ -106,27 +111,19 @@ sim_camera::CameraSpec read_camera(const base::YamlReader& r, const YAML::Node& 
   }
   r.only_keys(node, field, {"resolution", "hfov_deg", "height_m", "pitch_deg", "noise_sigma"});
   if (const YAML::Node res = node["resolution"]) {
+    const std::string f = field + ".resolution";
+    const base::Bound& bound = base::bound_of(r.bounds(), f);
     if (res.IsSequence() && res.size() == 2) {
-      camera.width_px = r.integer(res[0], field + ".resolution[0]", 8);
-      camera.height_px = r.integer(res[1], field + ".resolution[1]", 8);
+      camera.width_px = r.within_integer(res[0], f + "[0]", bound);
+      camera.height_px = r.within_integer(res[1], f + "[1]", bound);
     } else {
-      camera.width_px = camera.height_px = r.integer(res, field + ".resolution", 8);
+      camera.width_px = camera.height_px = r.bounded_integer(res, f);
     }
   }
-  const double hfov = r.number(node, field, "hfov_deg", camera.hfov_rad / kDeg);
-  if (!(hfov > 0.0 && hfov < 180.0)) {
-    r.fail(node["hfov_deg"], field + ".hfov_deg", "must be in (0, 180)");
-  }
-  camera.hfov_rad = hfov * kDeg;
-  camera.height_m = r.positive(node, field, "height_m", camera.height_m);
-  const double pitch = r.number(node, field, "pitch_deg", camera.pitch_rad / kDeg);
-  if (std::abs(pitch) >= 89.0) {
-    r.fail(node["pitch_deg"], field + ".pitch_deg", "must be within (-89, 89)");
-  }
-  camera.pitch_rad = pitch * kDeg;
-  camera.noise_sigma_levels =
-      r.in_range(node, field, "noise_sigma", 0.0, sim_camera::kMaxCameraNoiseLevels,
-                 camera.noise_sigma_levels);
+  camera.hfov_rad = r.bounded(node, field, "hfov_deg", camera.hfov_rad / kDeg) * kDeg;
+  camera.height_m = r.bounded(node, field, "height_m", camera.height_m);
+  camera.pitch_rad = r.bounded(node, field, "pitch_deg", camera.pitch_rad / kDeg) * kDeg;
+  camera.noise_sigma_levels = r.bounded(node, field, "noise_sigma", camera.noise_sigma_levels);
   return camera;
 }
 
@@ -182,13 +179,11 @@ std::vector<Eigen::Vector2d> read_points(const base::YamlReader& r, const YAML::
   if (!node.IsSequence() || node.size() == 0) {
     r.fail(node, field, "expected a list of points [[x, y], ...]");
   }
+  const base::Bound& bound = base::bound_of(r.bounds(), field);
   std::vector<Eigen::Vector2d> points;
   for (std::size_t k = 0; k < node.size(); ++k) {
     const std::string f = field + "[" + std::to_string(k) + "]";
-    if (!node[k].IsSequence() || node[k].size() != 2) {
-      r.fail(node[k], f, "expected a point [x, y]");
-    }
-    points.emplace_back(r.number(node[k][0], f + "[0]"), r.number(node[k][1], f + "[1]"));
+    points.push_back(r.bounded_pair(node[k], f, bound));
   }
   return points;
 }
@@ -197,10 +192,10 @@ sim_camera::PointLight read_point_light(const base::YamlReader& r, const YAML::N
                                         const std::string& field) {
   r.only_keys(node, field, {"position", "height_m", "intensity", "range_m"});
   sim_camera::PointLight p;
-  const Eigen::Vector2d xy = r.pair(node, field, "position", {0.0, 0.0});
-  p.position_m = {xy.x(), xy.y(), r.number(node, field, "height_m", 3.0)};
-  p.intensity = static_cast<float>(r.non_negative(node, field, "intensity", 1.0));
-  p.range_m = r.positive(node, field, "range_m", 8.0);
+  const Eigen::Vector2d xy = r.bounded_pair(node, field, "position", {0.0, 0.0});
+  p.position_m = {xy.x(), xy.y(), r.bounded(node, field, "height_m", 3.0)};
+  p.intensity = static_cast<float>(r.bounded(node, field, "intensity", 1.0));
+  p.range_m = r.bounded(node, field, "range_m", 8.0);
   return p;
 }
 
@@ -217,12 +212,9 @@ std::optional<sim_camera::SunLight> read_sun(const base::YamlReader& r, const YA
   }
   r.only_keys(sun, "lighting.sun", {"azimuth_deg", "elevation_deg", "intensity", "shadows"});
   sim_camera::SunLight s;
-  s.azimuth_rad = r.number(sun, "lighting.sun", "azimuth_deg", s.azimuth_rad / kDeg) * kDeg;
-  s.elevation_rad = r.number(sun, "lighting.sun", "elevation_deg", s.elevation_rad / kDeg) * kDeg;
-  if (!(s.elevation_rad > 0.0 && s.elevation_rad < std::numbers::pi / 2)) {
-    r.fail(sun["elevation_deg"], "lighting.sun.elevation_deg", "must be in (0, 90)");
-  }
-  s.intensity = static_cast<float>(r.non_negative(sun, "lighting.sun", "intensity", s.intensity));
+  s.azimuth_rad = r.bounded(sun, "lighting.sun", "azimuth_deg", s.azimuth_rad / kDeg) * kDeg;
+  s.elevation_rad = r.bounded(sun, "lighting.sun", "elevation_deg", s.elevation_rad / kDeg) * kDeg;
+  s.intensity = static_cast<float>(r.bounded(sun, "lighting.sun", "intensity", s.intensity));
   s.shadows = r.boolean(sun, "lighting.sun", "shadows", s.shadows);
   return s;
 }
@@ -231,7 +223,7 @@ sim_camera::Lighting read_lighting(const base::YamlReader& r, const YAML::Node& 
                                    sim_camera::Lighting lighting) {
   r.only_keys(node, "lighting", {"ambient", "sun", "points"});
   lighting.ambient =
-      static_cast<float>(r.non_negative(node, "lighting", "ambient", lighting.ambient));
+      static_cast<float>(r.bounded(node, "lighting", "ambient", lighting.ambient));
   if (const YAML::Node sun = node["sun"]) {
     lighting.sun = read_sun(r, sun);
   }
@@ -245,27 +237,24 @@ sim_camera::Lighting read_lighting(const base::YamlReader& r, const YAML::Node& 
   return lighting;
 }
 
-// A moving obstacle: a solid (no wall) that starts at the first of its waypoints.
+// A moving obstacle: a box or a cylinder that starts at the first of its waypoints.
 sim_camera::MovingObstacle read_moving_obstacle(const base::YamlReader& r, const YAML::Node& node,
                                                 const std::string& field) {
   r.only_keys(
       node, field,
       {"shape", "size", "radius_m", "height_m", "material", "waypoints", "speed_mps", "loop"});
-  YAML::Node body = YAML::Clone(node);
-  body.remove("waypoints");
-  body.remove("speed_mps");
-  body.remove("loop");
   if (!node["waypoints"]) {
     r.fail(node, field + ".waypoints", "missing: a moving obstacle needs waypoints");
   }
   sim_camera::MovingObstacle m;
   m.waypoints = read_points(r, node["waypoints"], field + ".waypoints");
-  body["position"] = node["waypoints"][0];
-  m.body = read_solid(r, body, field, false);
   if (m.waypoints.size() < 2) {
     r.fail(node["waypoints"], field + ".waypoints", "needs at least two waypoints");
   }
-  m.speed_mps = r.non_negative(node, field, "speed_mps", 1.0);
+  read_body(r, node, field, r.word(node, field, "shape", {"box", "cylinder"}, "box"), m.body);
+  m.body.centre_m = m.waypoints.front();
+  m.body.material = read_material(r, node["material"], field + ".material", m.body.material);
+  m.speed_mps = r.bounded(node, field, "speed_mps", 1.0);
   m.loop = r.boolean(node, field, "loop", false);
   return m;
 }
@@ -312,10 +301,10 @@ sim_camera::PointLight read_carried_light(const base::YamlReader& r, const YAML:
                                           const std::string& field) {
   r.only_keys(light, field, {"intensity", "range_m", "height_m", "ahead_m"});
   sim_camera::PointLight p;
-  p.position_m = {r.number(light, field, "ahead_m", 0.4), 0.0,
-                  r.positive(light, field, "height_m", 1.2)};
-  p.intensity = static_cast<float>(r.non_negative(light, field, "intensity", 1.5));
-  p.range_m = r.positive(light, field, "range_m", 6.0);
+  p.position_m = {r.bounded(light, field, "ahead_m", 0.4), 0.0,
+                  r.bounded(light, field, "height_m", 1.2)};
+  p.intensity = static_cast<float>(r.bounded(light, field, "intensity", 1.5));
+  p.range_m = r.bounded(light, field, "range_m", 6.0);
   return p;
 }
 
@@ -333,19 +322,19 @@ AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& agents, std::s
   if (!node["start"]) {
     r.fail(node, field + ".start", "missing: where does the agent start?");
   }
-  a.start_m = r.pair(node, field, "start", Eigen::Vector2d::Zero());
-  a.heading_rad = r.number(node, field, "heading_deg", 0.0) * kDeg;
-  a.preferred_speed_mps = r.non_negative(node, field, "preferred_speed_mps", 1.0);
-  a.start_speed_mps = r.non_negative(node, field, "speed_mps", a.preferred_speed_mps);
-  a.max_speed_mps = r.positive(node, field, "max_speed_mps", 1.5 * a.preferred_speed_mps);
-  a.radius_m = r.positive(node, field, "radius_m", a.radius_m);
-  a.height_m = r.positive(node, field, "height_m", a.height_m);
-  a.goal_radius_m = r.positive(node, field, "goal_radius_m", a.goal_radius_m);
+  a.start_m = r.bounded_pair(node, field, "start", Eigen::Vector2d::Zero());
+  a.heading_rad = r.bounded(node, field, "heading_deg", 0.0) * kDeg;
+  a.preferred_speed_mps = r.bounded(node, field, "preferred_speed_mps", 1.0);
+  a.start_speed_mps = r.bounded(node, field, "speed_mps", a.preferred_speed_mps);
+  a.max_speed_mps = r.bounded(node, field, "max_speed_mps", 1.5 * a.preferred_speed_mps);
+  a.radius_m = r.bounded(node, field, "radius_m", a.radius_m);
+  a.height_m = r.bounded(node, field, "height_m", a.height_m);
+  a.goal_radius_m = r.bounded(node, field, "goal_radius_m", a.goal_radius_m);
   if (node["goal"] && node["goals"]) {
     r.fail(node["goals"], field + ".goals", "give goal or goals, not both");
   }
   if (node["goal"]) {
-    a.goals = {r.pair(node, field, "goal", Eigen::Vector2d::Zero())};
+    a.goals = {r.bounded_pair(node, field, "goal", Eigen::Vector2d::Zero())};
   } else if (node["goals"]) {
     a.goals = read_points(r, node["goals"], field + ".goals");
   }
@@ -367,7 +356,7 @@ AgentSpec read_agent(const base::YamlReader& r, const YAML::Node& agents, std::s
 }  // namespace
 
 sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::string& source_name) {
-  const base::YamlReader r(source_name);
+  const base::YamlReader r(source_name, scenario_bounds());
   const YAML::Node root = base::load_yaml_map(
       yaml_text, source_name, "at least agents:",
       {"name", "description", "step_s", "duration_s", "arrival", "camera", "controller",
@@ -375,8 +364,8 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
   sim_camera::WorldSpec w;
   w.name = r.text(root, "", "name", source_name);
   w.description = r.text(root, "", "description", "");
-  w.step_s = r.positive(root, "", "step_s", w.step_s);
-  w.duration_s = r.positive(root, "", "duration_s", w.duration_s);
+  w.step_s = r.bounded(root, "", "step_s", w.step_s);
+  w.duration_s = r.bounded(root, "", "duration_s", w.duration_s);
   w.arrival = *sim_camera::parse_arrival(r.word(root, "", "arrival", {"stay", "leave"}, "stay"));
   AgentDefaults defaults;
   defaults.camera = read_camera(r, root["camera"], "camera", {});
@@ -388,14 +377,13 @@ sim_camera::WorldSpec parse_scenario(const std::string& yaml_text, const std::st
   }
   if (const YAML::Node ground = root["ground"]) {
     r.only_keys(ground, "ground", {"size_m", "material"});
-    w.ground_size_m = r.positive(ground, "ground", "size_m", w.ground_size_m);
+    w.ground_size_m = r.bounded(ground, "ground", "size_m", w.ground_size_m);
     w.ground = read_material(r, ground["material"], "ground.material", w.ground);
   }
   if (const YAML::Node obstacles = root["obstacles"]) {
     require_list(r, obstacles, "obstacles");
     for (std::size_t k = 0; k < obstacles.size(); ++k) {
-      w.obstacles.push_back(
-          read_solid(r, obstacles[k], "obstacles[" + std::to_string(k) + "]", true));
+      w.obstacles.push_back(read_solid(r, obstacles[k], "obstacles[" + std::to_string(k) + "]"));
     }
   }
   if (const YAML::Node moving = root["moving"]) {

@@ -17,6 +17,7 @@
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 
 namespace flowsteer::config {
@@ -143,11 +144,14 @@ class XmlReader {
     return number(child(parent, name));
   }
 
-  double positive(const XMLElement* parent, const char* name) const {
-    const double value = number(parent, name);
-    if (!(value > 0.0)) {
-      fail(parent->FirstChildElement(name),
-           std::string("<") + name + "> must be positive, not " + std::to_string(value));
+  // <name> in `parent`: a number within the row "parent/name" of steersuite_bounds().
+  double bounded(const XMLElement* parent, const char* name) const {
+    const std::string field = std::string(parent->Name()) + "/" + name;
+    const base::Bound& bound = base::bound_of(steersuite_bounds(), field);
+    const XMLElement* e = child(parent, name);
+    const double value = number(e);
+    if (!bound.contains(value)) {
+      throw base::ConfigError(source_, e->GetLineNum(), 1, field, bound.refusal(value));
     }
     return value;
   }
@@ -200,9 +204,9 @@ Tuple read_tuple(const XmlReader& r, const XMLElement* e) {
     r.fail(e, "give either <x>, <y> and <z> or <random>true</random>");
   }
   if (has_xyz) {
-    t.x = r.number(e, "x");
-    t.y = r.number(e, "y");
-    t.z = r.number(e, "z");
+    t.x = r.bounded(e, "x");
+    t.y = r.bounded(e, "y");
+    t.z = r.bounded(e, "z");
   }
   return t;
 }
@@ -223,13 +227,13 @@ struct RawBounds {
 
 RawBounds read_raw_bounds(const XmlReader& r, const XMLElement* e) {
   r.only_children(e, {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"});
-  const double xmin = r.number(e, "xmin");
-  const double xmax = r.number(e, "xmax");
-  const double zmin = r.number(e, "zmin");
-  const double zmax = r.number(e, "zmax");
+  const double xmin = r.bounded(e, "xmin");
+  const double xmax = r.bounded(e, "xmax");
+  const double zmin = r.bounded(e, "zmin");
+  const double zmax = r.bounded(e, "zmax");
   return {{{xmin, -zmax}, {xmax, -zmin}},
-          r.number(e, "ymin"),
-          r.number(e, "ymax"),
+          r.bounded(e, "ymin"),
+          r.bounded(e, "ymax"),
           !(xmin < xmax) || !(zmin < zmax)};
 }
 
@@ -286,8 +290,8 @@ Solid read_circle_obstacle(XmlReader& r, const XMLElement* e) {
   Solid s;
   s.shape = Solid::Shape::cylinder;
   s.centre_m = p.ground();
-  s.radius_m = r.positive(e, "radius");
-  s.height_m = solid_height(r, e, p.y, p.y + r.number(e, "height"));
+  s.radius_m = r.bounded(e, "radius");
+  s.height_m = solid_height(r, e, p.y, p.y + r.bounded(e, "height"));
   return s;
 }
 
@@ -302,7 +306,7 @@ Solid read_oriented_box_obstacle(XmlReader& r, const XMLElement* e) {
   Solid s;
   s.centre_m = p.ground();
   s.size_m = {size.x, size.z};
-  s.yaw_rad = r.number(e, "thetaY") * kDeg;
+  s.yaw_rad = r.bounded(e, "thetaY") * kDeg;
   s.height_m = solid_height(r, e, p.y, p.y + size.y);
   return s;
 }
@@ -319,7 +323,7 @@ struct ObstacleRegion {
 ObstacleRegion read_obstacle_region(XmlReader& r, const XMLElement* e) {
   r.only_children(e, {"numObstacles", "obstacleSize", "obstacleHeight", "regionBounds"});
   return {e, r.count(e, "numObstacles", kMaxObstacles, "each obstacle is drawn in every view"),
-          r.positive(e, "obstacleSize"), solid_height(r, e, 0.0, r.number(e, "obstacleHeight")),
+          r.bounded(e, "obstacleSize"), solid_height(r, e, 0.0, r.bounded(e, "obstacleHeight")),
           read_bounds(r, r.child(e, "regionBounds"))};
 }
 
@@ -364,7 +368,7 @@ void warn_ignored_goal_parts(XmlReader& r, const XMLElement* goal) {
 // they reach it, which is the same only when the run ends first.
 void check_time_duration(const XmlReader& r, const XMLElement* goal, double run_s) {
   if (const XMLElement* t = goal->FirstChildElement("timeDuration");
-      t != nullptr && r.number(t) < run_s) {
+      t != nullptr && r.bounded(goal, "timeDuration") < run_s) {
     r.fail(t, "a <timeDuration> shorter than the run (" + std::to_string(run_s) +
                   " s) is not supported: flowsteer agents keep a goal until they reach it");
   }
@@ -377,7 +381,7 @@ GoalSpec read_seek_goal(XmlReader& r, const XMLElement* g, double run_s,
   warn_ignored_goal_parts(r, g);
   check_time_duration(r, g, run_s);
   if (g->FirstChildElement("desiredSpeed") != nullptr) {
-    const double v = r.positive(g, "desiredSpeed");
+    const double v = r.bounded(g, "desiredSpeed");
     if (!speed_mps) {
       speed_mps = v;
     } else if (v != *speed_mps) {
@@ -415,11 +419,8 @@ void read_idle_goal(XmlReader& r, const XMLElement* g, AgentTemplate& a) {
   r.only_children(g, {"desiredSpeed", "timeDuration", "Behaviour", "state"});
   warn_ignored_goal_parts(r, g);
   const XMLElement* duration = g->FirstChildElement("timeDuration");
-  a.spec.idle_s =
-      duration != nullptr ? r.number(duration) : std::numeric_limits<double>::infinity();
-  if (!(a.spec.idle_s >= 0.0)) {
-    r.fail(duration, "an <idle>'s <timeDuration> must be a number of seconds >= 0");
-  }
+  a.spec.idle_s = duration != nullptr ? r.bounded(g, "timeDuration")
+                                      : std::numeric_limits<double>::infinity();
   if (g->NextSiblingElement() != nullptr) {
     r.fail(g,
            "an <idle> before another goal is not supported: flowsteer agents stop only after "
@@ -464,11 +465,7 @@ void read_colour(const XmlReader& r, const XMLElement* e, AgentTemplate& a) {
   }
   const char* names[] = {"r", "g", "b"};
   for (int c = 0; c < 3; ++c) {
-    const double value = r.number(e, names[c]);
-    if (value < 0.0 || value > 1.0) {
-      r.fail(e->FirstChildElement(names[c]), "colour components are from 0 to 1");
-    }
-    a.spec.material.albedo[c] = static_cast<float>(value);
+    a.spec.material.albedo[c] = static_cast<float>(r.bounded(e, names[c]));
   }
 }
 
@@ -476,14 +473,14 @@ void read_colour(const XmlReader& r, const XMLElement* e, AgentTemplate& a) {
 void read_initial_conditions(XmlReader& r, const XMLElement* e, AgentTemplate& a) {
   r.only_children(e, {"position", "direction", "radius", "speed", "color"});
   if (e->FirstChildElement("radius") != nullptr) {
-    a.spec.radius_m = r.positive(e, "radius");
+    a.spec.radius_m = r.bounded(e, "radius");
   } else {
     r.warn(e, "no <radius>: agents get SteerSuite's typical 0.5 m");
     a.spec.radius_m = kTypicalRadius_m;
   }
   a.spec.start_speed_mps = 0.0;
   if (e->FirstChildElement("speed") != nullptr) {
-    a.spec.start_speed_mps = r.number(e, "speed");
+    a.spec.start_speed_mps = r.bounded(e, "speed");
   }
   const Tuple direction = read_tuple(r, r.child(e, "direction"));
   a.random_heading = direction.random;

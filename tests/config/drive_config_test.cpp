@@ -103,7 +103,7 @@ TEST(DriveSection, ErrorsNameTheField) {
                 .find("different node ids"),
             std::string::npos);
   EXPECT_NE(error_of("drive:\n  type: odrive_can\n  odrive: {left: {node_id: 70}}\n")
-                .find("drive.odrive.left.node_id: must be 0..63"),
+                .find("drive.odrive.left.node_id: must be from 0 to 63, got 70"),
             std::string::npos);
   EXPECT_NE(error_of("drive: {type: sim, watchdog: {timeout_s: 0.2, ramp_s: 0.5}}\n")
                 .find("drive.watchdog.ramp_s"),

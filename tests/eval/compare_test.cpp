@@ -232,7 +232,7 @@ TEST(ScenarioFile, ControllerTypeAndMotionEnergySettings) {
       "(this controller's type is vision)");
   EXPECT_NE(error_of("controller: {type: motion_energy, flow_weight: 2}\n"
                      "agents:\n  - {start: [0, 0], goal: [4, 0]}\n")
-                .find("scenario.yaml:1:48: controller.flow_weight: must be in [0, 1]"),
+                .find("scenario.yaml:1:48: controller.flow_weight: must be from 0 to 1, got 2"),
             std::string::npos);
   EXPECT_NE(
       error_of("controller: {type: motion_energy}\n"

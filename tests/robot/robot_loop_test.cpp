@@ -62,7 +62,7 @@ TEST(RobotLaunch, BadFilesNameTheLineAndField) {
   EXPECT_EQ(error_of("camera: {type: replay, replay: {path: a.mp4}}\ngoal: {bearing_rad: 0.1}\n"),
             "bad.yaml:2:7: goal.distance_m: missing: how far the goal is");
   EXPECT_EQ(error_of("camera: {type: replay, replay: {path: a.mp4}}\ngoal: {distance_m: -1}\n"),
-            "bad.yaml:2:20: goal.distance_m: must be positive, got -1");
+            "bad.yaml:2:20: goal.distance_m: must be from 0.01 to 1000 m, got -1");
   EXPECT_EQ(error_of("camera: {type: v4l2, timeout_s: 0.01}\ndrive: {type: sim, loop_rate_hz: "
                      "50}\n"),
             "bad.yaml:2:34: drive.loop_rate_hz: one loop period must be shorter than "

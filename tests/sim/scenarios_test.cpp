@@ -202,7 +202,7 @@ TEST(Scenarios, UnknownNameListsTheKnownOnes) {
 
 TEST(ScenarioFile, ErrorsNameFileLineAndField) {
   EXPECT_EQ(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], radius_m: -1}\n"),
-            "scenario.yaml:2:45: agents[0].radius_m: must be positive, got -1");
+            "scenario.yaml:2:45: agents[0].radius_m: must be from 0.05 to 2 m, got -1");
   EXPECT_NE(error_of("agents: [").find("scenario.yaml:"), std::string::npos);
   EXPECT_NE(error_of("agents:\n  - {start: [0, 0]}\n").find("agents[0].goal: missing"),
             std::string::npos);
@@ -286,7 +286,7 @@ TEST(ScenarioFile, MaxSpeedRatioIsTheFlowsteerLawsOnlyAndAtLeastOne) {
   EXPECT_EQ(
       error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
                "controller: {max_speed_ratio: 0.8}}\n"),
-      "scenario.yaml:2:65: agents[0].controller.max_speed_ratio: must be at least 1, got 0.8");
+      "scenario.yaml:2:65: agents[0].controller.max_speed_ratio: must be from 1 to 10, got 0.8");
   EXPECT_NE(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], "
                      "controller: {law: cgf2019, max_speed_ratio: 2}}\n")
                 .find("max_speed_ratio: only for law: flowsteer"),
@@ -305,9 +305,9 @@ TEST(ScenarioFile, CameraNoiseIsZeroUnlessGivenAndWithinItsBounds) {
   EXPECT_EQ(w.agents[0].camera.noise_sigma_levels, 2.0);
   EXPECT_EQ(w.agents[1].camera.noise_sigma_levels, 0.5);
   EXPECT_EQ(error_of("camera: {noise_sigma: -1}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n"),
-            "scenario.yaml:1:23: camera.noise_sigma: must be from 0 to 50, got -1");
+            "scenario.yaml:1:23: camera.noise_sigma: must be from 0 to 50 grey levels, got -1");
   EXPECT_EQ(error_of("agents:\n  - {start: [0, 0], goal: [9, 0], camera: {noise_sigma: 50.5}}\n"),
-            "scenario.yaml:2:57: agents[0].camera.noise_sigma: must be from 0 to 50, got 50.5");
+            "scenario.yaml:2:57: agents[0].camera.noise_sigma: must be from 0 to 50 grey levels, got 50.5");
   EXPECT_NE(error_of("camera: {noise_sigma: .nan}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n")
                 .find("camera.noise_sigma: expected a finite number"),
             std::string::npos);

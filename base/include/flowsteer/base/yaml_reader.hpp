@@ -4,22 +4,24 @@
 #include <initializer_list>
 #include <set>
 #include <span>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
 #include <Eigen/Core>
 
+#include "flowsteer/base/bounds.hpp"
 #include "flowsteer/base/config_error.hpp"
 
 namespace flowsteer::base {
 
 // Reads typed fields out of YAML nodes and reports problems at the node's position, under a
-// dotted field path such as "objects[2].radius_m".
+// dotted field path such as "objects[2].radius_m". The bounded readers take each field's bound
+// from the reader's table (base::FieldBound), one row per field of the file's format.
 class YamlReader {
  public:
-  explicit YamlReader(std::string source) : source_(std::move(source)) {}
+  explicit YamlReader(std::string source, std::span<const FieldBound> bounds = {})
+      : source_(std::move(source)), bounds_(bounds) {}
 
   // A node that is not there (a missing key) or the null document of an empty file has no
   // position: the error then points at line 1.
@@ -73,6 +75,58 @@ class YamlReader {
     }
     return value;
   }
+
+  // A number within the table's bound for `field`.`key`; `fallback` when the key is absent.
+  // The row is looked up either way, so that a field its table forgot fails at once.
+  double bounded(const YAML::Node& map, const std::string& field, const char* key,
+                 double fallback) const {
+    const std::string path = join(field, key);
+    const Bound& bound = bound_of(bounds_, path);
+    const YAML::Node node = map[key];
+    return node ? within(node, path, bound) : fallback;
+  }
+  // `node` itself, the field `field`.
+  double bounded(const YAML::Node& node, const std::string& field) const {
+    return within(node, field, bound_of(bounds_, field));
+  }
+  // A whole number within the table's bound for `field`.
+  int bounded_integer(const YAML::Node& node, const std::string& field) const {
+    return within_integer(node, field, bound_of(bounds_, field));
+  }
+  int within_integer(const YAML::Node& node, const std::string& field, const Bound& bound) const {
+    int value = 0;
+    if (!node.IsScalar() || !YAML::convert<int>::decode(node, value)) {
+      fail(node, field, "expected a whole number, got '" + describe(node) + "'");
+    }
+    if (!bound.contains(value)) {
+      fail(node, field, bound.refusal(value));
+    }
+    return value;
+  }
+  // A pair [x, y] whose components are within the table's bound for `field`.`key`.
+  Eigen::Vector2d bounded_pair(const YAML::Node& map, const std::string& field, const char* key,
+                               const Eigen::Vector2d& fallback) const {
+    const std::string path = join(field, key);
+    const Bound& bound = bound_of(bounds_, path);
+    const YAML::Node node = map[key];
+    return node ? bounded_pair(node, path, bound) : fallback;
+  }
+  Eigen::Vector2d bounded_pair(const YAML::Node& node, const std::string& field,
+                               const Bound& bound) const {
+    if (!node.IsSequence() || node.size() != 2) {
+      fail(node, field, "expected a pair [x, y]");
+    }
+    return {within(node[0], field + "[0]", bound), within(node[1], field + "[1]", bound)};
+  }
+  // A number within `bound`, for a field whose row the caller found.
+  double within(const YAML::Node& node, const std::string& field, const Bound& bound) const {
+    const double value = number(node, field);
+    if (!bound.contains(value)) {
+      fail(node, field, bound.refusal(value));
+    }
+    return value;
+  }
+  std::span<const FieldBound> bounds() const { return bounds_; }
 
   double positive(const YAML::Node& map, const std::string& field, const char* key,
                   double fallback) const {
@@ -198,13 +252,10 @@ class YamlReader {
     }
     return node.IsSequence() ? "a sequence" : node.IsMap() ? "a mapping" : "nothing";
   }
-  static std::string format(double value) {
-    std::ostringstream s;
-    s << value;
-    return s.str();
-  }
+  static std::string format(double value) { return format_number(value); }
 
   std::string source_;
+  std::span<const FieldBound> bounds_;
 };
 
 // Parses YAML text, turning a syntax error into a ConfigError at its line and column.
