@@ -1,5 +1,6 @@
 #include "flowsteer/base/bounds.hpp"
 
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -7,13 +8,13 @@ namespace flowsteer::base {
 
 std::string format_number(double value) {
   std::ostringstream s;
-  s << value;
+  s << std::setprecision(10) << value;
   return s.str();
 }
 
 std::string Bound::describe() const {
   std::ostringstream s;
-  s << "from " << min << " to " << max;
+  s << std::setprecision(10) << "from " << min << " to " << max;
   if (!unit.empty()) {
     s << " " << unit;
   }

@@ -77,9 +77,24 @@ void remove_abandoned_staging(const std::filesystem::path& dir) {
   }
 }
 
+// `dir` and those of its parents that do not exist yet, deepest first: what creating it makes.
+std::vector<std::filesystem::path> missing_folders(const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> missing;
+  std::error_code error;
+  for (std::filesystem::path p = std::filesystem::absolute(dir, error);
+       !error && !p.empty() && !std::filesystem::exists(p, error); p = p.parent_path()) {
+    missing.push_back(p);
+    if (p == p.parent_path()) {
+      break;
+    }
+  }
+  return missing;
+}
+
 }  // namespace
 
-OutputDir::OutputDir(std::filesystem::path dir) : dir_(std::move(dir)) {
+OutputDir::OutputDir(std::filesystem::path dir)
+    : dir_(std::move(dir)), created_(missing_folders(dir_)) {
   std::error_code error;
   std::filesystem::create_directories(dir_, error);
   if (error) {
@@ -99,6 +114,12 @@ OutputDir::OutputDir(std::filesystem::path dir) : dir_(std::move(dir)) {
 OutputDir::~OutputDir() {
   std::error_code ignored;
   std::filesystem::remove_all(staging_, ignored);
+  if (!committed_) {
+    // Only empty folders go: anything another program put there meanwhile stays.
+    for (const std::filesystem::path& folder : created_) {
+      std::filesystem::remove(folder, ignored);
+    }
+  }
 }
 
 std::filesystem::path OutputDir::staging_path(const std::string& file_name) const {
@@ -120,6 +141,7 @@ void OutputDir::commit() {
                                dir_.string() + ": " + error.message());
     }
   }
+  committed_ = true;
 }
 
 void write_bytes(const std::filesystem::path& path, const void* data, std::size_t size) {

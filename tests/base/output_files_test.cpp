@@ -63,6 +63,17 @@ TEST_F(OutputFiles, WithoutCommitTheFolderKeepsWhatItHad) {
   }
 }
 
+// A run that fails before its commit (a bad_alloc in the renderer, say) leaves no folder that was
+// not there before, parents included; one that did exist stays, as the test above shows.
+TEST_F(OutputFiles, WithoutCommitTheFoldersItCreatedAreGone) {
+  {
+    OutputDir out(dir_ / "a" / "b");
+    write_text(out.staging_path("a.txt"), "new\n");
+    EXPECT_TRUE(fs::is_directory(dir_ / "a" / "b"));
+  }
+  EXPECT_FALSE(fs::exists(dir_));
+}
+
 TEST_F(OutputFiles, CommittedFolderReplacesTheOldOne) {
   fs::create_directories(dir_ / "runs");
   write_text(dir_ / "runs" / "stale.txt", "stale\n");

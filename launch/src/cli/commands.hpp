@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "flowsteer/base/bounds.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/sim_camera/world_spec.hpp"
@@ -58,9 +59,9 @@ servo::SegmentationMethod segmentation_method_option(const std::string& option,
 servo::DepthSource depth_source_option(const std::string& option, const std::string& name);
 servo::NavigationLaw navigation_law_option(const std::string& option, const std::string& name);
 servo::LawMechanism law_mechanism_option(const std::string& option, const std::string& name);
-// A camera noise σ in grey levels, the value of --camera-noise; CLI::ValidationError unless it is
-// a number from 0 to sim_camera::kMaxCameraNoiseLevels.
-double camera_noise_option(double sigma_levels);
+// Checks an option's value against the bound the same field has in files
+// (config/field_bounds.hpp): "--resolution: must be from 8 to 4096 px, got 100000", exit 2.
+CLI::Validator within(const base::Bound& bound);
 
 // The scenario a command runs: the scenario file or the built-in scenario `scenario` names (a
 // name of `flowsteer scenarios` first, else a file), or a SteerSuite test case; "room" when none

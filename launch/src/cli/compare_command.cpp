@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/eval/compare.hpp"
 
 namespace flowsteer::cli {
@@ -47,9 +48,9 @@ Subcommand add_compare(CLI::App& app) {
       ->required();
   compare->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   compare->add_option("--resolution", command->resolution, "every agent's camera: N x N pixels")
-      ->check(CLI::Range(8, 4096));
+      ->check(within(config::bounds::kImageSide_px));
   compare->add_option("--steps", command->steps, "stop each run after N control steps")
-      ->check(CLI::PositiveNumber);
+      ->check(within(config::bounds::kRunSteps));
   return {compare, [command] { return run_compare(*command); }};
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/config/demo_scene.hpp"
 #include "flowsteer/launch/demo.hpp"
 
@@ -96,11 +97,13 @@ Subcommand add_demo(CLI::App& app) {
                    "box obstacle x,y,width[,vx,vy] in metres and m/s, agent frame (x forward, "
                    "y left); replaces the scene's objects")
       ->take_all();
-  demo->add_option("--goal", command->goal, "goal x y in metres, agent frame")->expected(2);
+  demo->add_option("--goal", command->goal, "goal x y in metres, agent frame")
+      ->expected(2)
+      ->check(within(config::bounds::kPosition_m));
   demo->add_option("--speed", command->speed_mps, "agent speed in m/s")
-      ->check(CLI::NonNegativeNumber);
+      ->check(within(config::bounds::kSpeed_mps));
   demo->add_option("--resolution", command->resolution, "image width and height in pixels")
-      ->check(CLI::Range(8, 4096));
+      ->check(within(config::bounds::kImageSide_px));
   return {demo, [command] { return run_demo(*command); }};
 }
 

@@ -1,12 +1,10 @@
 #include <iostream>
 #include <optional>
-#include <sstream>
 #include <string>
 
 #include "commands.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/sim/simulation.hpp"
-#include "flowsteer/sim_camera/camera_noise.hpp"
 
 namespace flowsteer::cli {
 
@@ -112,15 +110,16 @@ sim_camera::WorldSpec load_world(const std::string& command, const ScenarioChoic
   return world;
 }
 
-double camera_noise_option(double sigma_levels) {
-  // Written so that NaN fails too.
-  if (!(sigma_levels >= 0.0 && sigma_levels <= sim_camera::kMaxCameraNoiseLevels)) {
-    std::ostringstream message;
-    message << "must be from 0 to " << sim_camera::kMaxCameraNoiseLevels << " grey levels, got "
-            << sigma_levels;
-    throw CLI::ValidationError("--camera-noise", message.str());
-  }
-  return sigma_levels;
+CLI::Validator within(const base::Bound& bound) {
+  return CLI::Validator(
+      [bound](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) {
+          return "expected a number, got " + text;
+        }
+        return bound.contains(value) ? std::string() : bound.refusal(value);
+      },
+      bound.describe());
 }
 
 void one_value_per_use(CLI::App& command) {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 
@@ -66,7 +67,7 @@ int run_sim(const SimCommand& command) {
   options.out_dir = command.out_dir;
   options.resolution = command.resolution;
   if (command.camera_noise_levels) {
-    options.camera_noise_levels = camera_noise_option(*command.camera_noise_levels);
+    options.camera_noise_levels = *command.camera_noise_levels;
   }
   options.steps = command.steps;
   if (!command.flow.empty()) {
@@ -102,12 +103,13 @@ Subcommand add_sim(CLI::App& app) {
   add_scenario_options(*sim, command->scenario);
   sim->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   sim->add_option("--resolution", command->resolution, "every agent's camera: N x N pixels")
-      ->check(CLI::Range(8, 4096));
+      ->check(within(config::bounds::kImageSide_px));
   sim->add_option("--camera-noise", command->camera_noise_levels,
                   "every agent's camera noise: σ of the Gaussian noise on each channel of the "
-                  "image, grey levels from 0 to 50 (scenario key camera: {noise_sigma})");
+                  "image, grey levels from 0 to 50 (scenario key camera: {noise_sigma})")
+      ->check(within(config::bounds::kCameraNoise_levels));
   sim->add_option("--steps", command->steps, "stop after N control steps")
-      ->check(CLI::PositiveNumber);
+      ->check(within(config::bounds::kRunSteps));
   sim->add_flag("--video", command->video, "an MP4 per agent: its view, the flow and the features");
   sim->add_option(
          "--threads", command->threads,

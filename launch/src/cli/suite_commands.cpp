@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/config/case_files.hpp"
 #include "flowsteer/eval/suite.hpp"
 
@@ -90,7 +91,7 @@ eval::SuiteOptions suite_options(const EvalSuiteCommand& command) {
   options.keep_runs = *keep;
   options.resolutions = command.resolutions;
   for (const double sigma : command.camera_noise_levels) {
-    options.camera_noise_levels.push_back(camera_noise_option(sigma));
+    options.camera_noise_levels.push_back(sigma);
   }
   options.steps = command.steps;
   options.obstacle_memory = command.obstacle_memory;
@@ -160,11 +161,15 @@ Subcommand add_eval_suite(CLI::App& eval) {
                     "an ablation: every agent's flowsteer law with this mechanism switched off "
                     "(default: the case's); repeat for several, none for the law as it is: " +
                         servo::law_mechanism_names());
-  suite->add_option("--resolution", command->resolutions,
-                    "every agent's camera, N x N pixels (default: the case's); repeat for several");
-  suite->add_option("--camera-noise", command->camera_noise_levels,
-                    "every agent's camera noise, σ in grey levels from 0 to 50 (default: the "
-                    "case's); repeat for several");
+  suite
+      ->add_option("--resolution", command->resolutions,
+                   "every agent's camera, N x N pixels (default: the case's); repeat for several")
+      ->check(within(config::bounds::kImageSide_px));
+  suite
+      ->add_option("--camera-noise", command->camera_noise_levels,
+                   "every agent's camera noise, σ in grey levels from 0 to 50 (default: the "
+                   "case's); repeat for several")
+      ->check(within(config::bounds::kCameraNoise_levels));
   suite->add_option("--jobs,-j", command->jobs, "runs at once, each in its own process")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
@@ -181,7 +186,7 @@ Subcommand add_eval_suite(CLI::App& eval) {
                    "where SteerSuite's agent and obstacle regions and random targets are placed")
       ->capture_default_str();
   suite->add_option("--steps", command->steps, "stop each run after N control steps")
-      ->check(CLI::PositiveNumber);
+      ->check(within(config::bounds::kRunSteps));
   suite->add_flag("--obstacle-memory", command->obstacle_memory, kObstacleMemoryHelp);
   suite->add_option("--arrival", command->arrival, kArrivalHelp);
   suite->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();

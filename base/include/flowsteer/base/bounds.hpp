@@ -34,7 +34,7 @@ std::string without_indices(std::string_view field);
 // table has no row for it, a reader asking for a field its table forgot.
 const Bound& bound_of(std::span<const FieldBound> table, std::string_view field);
 
-// A number as messages show it: 6 significant digits, as the readers' other messages.
+// A number as messages show it: up to 10 significant digits (3600000, 0.001, 1e+30).
 std::string format_number(double value);
 
 }  // namespace flowsteer::base

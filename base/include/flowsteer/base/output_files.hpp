@@ -10,7 +10,9 @@ namespace flowsteer::base {
 // An output folder that is written all at once: files go to a staging folder inside it
 // (.staging-PID) and move into place on commit(), each by one rename, so no file in the folder
 // is ever half-written. Without a commit (an error on the way) the staging folder is removed
-// and the folder keeps what it had; one left by a killed run is removed by the next run there.
+// and the folder keeps what it had; the folders this object created are removed too, so a run
+// that fails leaves nothing on disk it did not find. A staging folder left by a killed run is
+// removed by the next run there.
 class OutputDir {
  public:
   // Creates the folder; throws std::runtime_error naming it when that fails.
@@ -27,6 +29,8 @@ class OutputDir {
  private:
   std::filesystem::path dir_;
   std::filesystem::path staging_;
+  std::vector<std::filesystem::path> created_;  // the folders made for dir_, deepest first
+  bool committed_ = false;
 };
 
 // A string as a JSON string literal, quotes included.
