@@ -81,7 +81,7 @@ const std::initializer_list<FieldBound> kLightRows = {
 // A box's or a cylinder's shape, standing or moving.
 const std::initializer_list<FieldBound> kBodyRows = {
     {"size", kExtent_m},
-    {"radius_m", kExtent_m},
+    {"radius_m", kObjectSize_m},
     {"height_m", kObstacleHeight_m},
 };
 
@@ -105,7 +105,7 @@ std::vector<FieldBound> make_scenario_bounds() {
                            {"yaw_deg", kAngle_deg},
                            {"from", kPosition_m},
                            {"to", kPosition_m},
-                           {"thickness_m", kExtent_m}})
+                           {"thickness_m", kObjectSize_m}})
       .add("obstacles[].material", kMaterialRows)
       .add("moving[]", kBodyRows)
       .add("moving[]", {{"waypoints", kPosition_m}, {"speed_mps", kSpeed_mps}})
@@ -183,8 +183,8 @@ std::vector<FieldBound> make_demo_scene_bounds() {
       .add("controller", {{"follow_gap_m", kMargin_m}, {"preferred_speed_mps", kPreferredSpeed_mps}})
       .add("objects[]", {{"position", kPosition_m},
                          {"velocity", kVelocity_mps},
-                         {"size", kExtent_m},
-                         {"radius_m", kExtent_m},
+                         {"size", kObjectSize_m},
+                         {"radius_m", kObjectSize_m},
                          {"height_m", kObstacleHeight_m}});
   return std::move(t).rows();
 }
@@ -204,9 +204,9 @@ std::vector<FieldBound> make_steersuite_bounds() {
     t.add(tuple, {{"x", kPosition_m}, {"y", kPosition_m}, {"z", kPosition_m}});
   }
   t.add("size", {{"x", kExtent_m}, {"y", kHeightSpan_m}, {"z", kExtent_m}})
-      .add("circleObstacle", {{"radius", kExtent_m}, {"height", kHeightSpan_m}})
+      .add("circleObstacle", {{"radius", kObjectSize_m}, {"height", kHeightSpan_m}})
       .add("orientedBoxObstacle", {{"thetaY", kAngle_deg}})
-      .add("obstacleRegion", {{"obstacleSize", kExtent_m}, {"obstacleHeight", kHeightSpan_m}})
+      .add("obstacleRegion", {{"obstacleSize", kObjectSize_m}, {"obstacleHeight", kHeightSpan_m}})
       .add("initialConditions", {{"radius", kBodyRadius_m}, {"speed", kSpeed_mps}})
       .add("seekStaticTarget",
            {{"desiredSpeed", kPreferredSpeed_mps}, {"timeDuration", kTimeDuration_s}})

@@ -27,7 +27,8 @@ inline constexpr Bound kRunSteps{1, kMaxRunSteps, "steps"};
 // there), and how big they are.
 inline constexpr Bound kPosition_m{-1000.0, 1000.0, "m"};
 inline constexpr Bound kGroundSize_m{1.0, 4000.0, "m"};
-inline constexpr Bound kExtent_m{0.001, 2000.0, "m"};  // a box's side, a cylinder's radius
+inline constexpr Bound kExtent_m{0.001, 2000.0, "m"};      // a box's side
+inline constexpr Bound kObjectSize_m{0.001, 100.0, "m"};  // a radius, a thickness, a car
 inline constexpr Bound kObstacleHeight_m{0.01, 100.0, "m"};
 inline constexpr Bound kHeightSpan_m{0.0, 100.0, "m"};  // SteerSuite's heights, 0 for flat
 inline constexpr Bound kAngle_deg{-360.0, 360.0, "deg"};
@@ -81,13 +82,14 @@ inline constexpr Bound kRobotTurnRate_radps{0.01, 10.0, "rad/s"};
 inline constexpr Bound kWheelSpeed_radps{0.1, 500.0, "rad/s"};
 inline constexpr Bound kWheelSeparation_m{0.05, 5.0, "m"};
 inline constexpr Bound kWheelRadius_m{0.005, 1.0, "m"};
-// The watchdog stops the wheels within a second of the last command; it cannot be set longer.
-inline constexpr Bound kWatchdogTimeout_s{0.02, 1.0, "s"};
-inline constexpr Bound kWatchdogRamp_s{0.0, 1.0, "s"};
+// The watchdog stops the wheels at most 2 s after the last command, however the file sets it (the
+// SIL test's emulated CPU, loaded, stretches it to about 1.1 s: tests/vm/README.md).
+inline constexpr Bound kWatchdogTimeout_s{0.02, 2.0, "s"};
+inline constexpr Bound kWatchdogRamp_s{0.0, 2.0, "s"};
 inline constexpr Bound kLoopRate_hz{2.0, 1000.0, "Hz"};
 inline constexpr Bound kFrameRate_hz{0.0, 1000.0, "Hz"};  // 0: the device's own
 inline constexpr Bound kBufferCount{2, 32, "buffers"};
-inline constexpr Bound kCameraTimeout_s{0.01, 2.0, "s"};
+inline constexpr Bound kCameraTimeout_s{0.01, 5.0, "s"};
 inline constexpr Bound kDeviceTimeout_s{0.001, 2.0, "s"};  // a serial reply, a CAN heartbeat
 inline constexpr Bound kBoardTimeout_s{0.1, 25.5, "s"};    // RoboClaw's own serial timeout
 inline constexpr Bound kBootWait_s{0.0, 30.0, "s"};
