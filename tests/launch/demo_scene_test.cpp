@@ -36,7 +36,7 @@ TEST(DemoScene, ExampleFileLoads) {
 
 TEST(DemoScene, ErrorsNameFileLineColumnAndField) {
   EXPECT_EQ(error_of("objects:\n  - {position: [1, 2], radius_m: -1, shape: cylinder}\n"),
-            "scene.yaml:2:34: objects[0].radius_m: must be from 0.001 to 2000 m, got -1");
+            "scene.yaml:2:34: objects[0].radius_m: must be from 0.001 to 100 m, got -1");
   EXPECT_EQ(error_of("camera:\n  hfov: 90\n"),
             "scene.yaml:2:3: camera.hfov: unknown key (expected one of: resolution, hfov_deg, "
             "height_m, pitch_deg)");
