@@ -1,5 +1,5 @@
 // Robot launch files (`flowsteer run FILE`), with their camera, drive, perception, controller
-// and goal sections: a launch or a base::ConfigError. The camera_info and camera mount files a
+// and goal sections: a launch whose every number is within its bound, or a base::ConfigError. The camera_info and camera mount files a
 // launch file may name are in the scratch folder the paths resolve against, so the fuzzer
 // reaches the size check against the calibration. A drive section the reader accepts must also
 // build its base (nothing is opened): a setting the reader lets through but a driver refuses is
@@ -10,6 +10,7 @@
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/drive_config.hpp"
 #include "flowsteer/config/robot_launch.hpp"
+#include "bounds_check.hpp"
 #include "fuzz_support.hpp"
 
 namespace {
@@ -39,6 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const flowsteer::config::RobotLaunch launch = flowsteer::config::parse_robot_launch(
         flowsteer::fuzz::as_text(data, size), "fuzz_launch.yaml",
         flowsteer::fuzz::scratch_dir().string());
+    flowsteer::fuzz::check_bounds(launch);
     if (launch.drive) {
       flowsteer::config::make_base(*launch.drive);
     }

@@ -1,15 +1,17 @@
-// Scenario files (`flowsteer sim my_world.yaml`): parse_scenario must end in a world or a
-// base::ConfigError, whatever the text.
+// Scenario files (`flowsteer sim my_world.yaml`): parse_scenario must end in a world whose every
+// number is within its bound, or a base::ConfigError, whatever the text.
 #include <cstddef>
 #include <cstdint>
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "bounds_check.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    flowsteer::config::parse_scenario(flowsteer::fuzz::as_text(data, size), "fuzz.yaml");
+    flowsteer::fuzz::check_bounds(
+        flowsteer::config::parse_scenario(flowsteer::fuzz::as_text(data, size), "fuzz.yaml"));
   } catch (const flowsteer::base::ConfigError&) {
     // The reader's documented refusal; anything else escapes and is a finding.
   }

@@ -1,15 +1,17 @@
 // SteerSuite test cases (`flowsteer sim --steersuite case.xml`, `eval suite`): a world with its
-// warnings or a base::ConfigError.
+// warnings, every number within its bound, or a base::ConfigError.
 #include <cstddef>
 #include <cstdint>
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "bounds_check.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    flowsteer::config::parse_steersuite(flowsteer::fuzz::as_text(data, size), "fuzz.xml");
+    flowsteer::fuzz::check_bounds(
+        flowsteer::config::parse_steersuite(flowsteer::fuzz::as_text(data, size), "fuzz.xml").world);
   } catch (const flowsteer::base::ConfigError&) {
     // The reader's documented refusal; anything else escapes and is a finding.
   }

@@ -252,6 +252,11 @@ double solid_height(XmlReader& r, const XMLElement* at, double bottom_m, double 
            "an obstacle above the ground stands on it here (SteerSuite's collisions are 2D, "
            "so it blocks agents the same)");
   }
+  if (top_m > bounds::kObstacleHeight_m.max) {
+    r.fail(at, "an obstacle's top (its bottom plus its height) must be at most " +
+                   base::format_number(bounds::kObstacleHeight_m.max) + " m, got " +
+                   base::format_number(top_m));
+  }
   if (top_m < kMinVisibleHeight_m) {
     r.warn(at,
            "obstacles lower than 0.3 m are raised to 0.3 m so that cameras see them "
@@ -269,6 +274,10 @@ Solid read_box_obstacle(XmlReader& r, const XMLElement* e) {
   Solid s;
   s.centre_m = 0.5 * (b.ground.min + b.ground.max);
   s.size_m = b.ground.max - b.ground.min;
+  if (s.size_m.minCoeff() < bounds::kExtent_m.min) {
+    r.fail(e, "a box must be at least " + base::format_number(bounds::kExtent_m.min) +
+                  " m wide along x and z, got " + base::format_number(s.size_m.minCoeff()));
+  }
   s.height_m = solid_height(r, e, b.ymin_m, b.ymax_m);
   return s;
 }
@@ -731,7 +740,8 @@ void finish_agent(const XmlReader& r, Placed& p, const TestCase& tc,
     a.goals.push_back(goal_point(r, g, p, tc, obstacles, rng));
   }
   a.name = a.name.empty() ? "agent" + std::to_string(index) : a.name;
-  a.max_speed_mps = std::max(2.0 * a.preferred_speed_mps + 0.5, a.start_speed_mps);
+  a.max_speed_mps = std::min(std::max(2.0 * a.preferred_speed_mps + 0.5, a.start_speed_mps),
+                             bounds::kMaxSpeed_mps.max);
   a.controller.max_turn_rate = 1.5;
 }
 

@@ -26,8 +26,8 @@ inline constexpr Bound kRunSteps{1, kMaxRunSteps, "steps"};
 // Where things are: a world within a kilometre of its origin (float geometry keeps millimetres
 // there), and how big they are.
 inline constexpr Bound kPosition_m{-1000.0, 1000.0, "m"};
-inline constexpr Bound kGroundSize_m{1.0, 4000.0, "m"};
-inline constexpr Bound kExtent_m{0.001, 2000.0, "m"};      // a box's side
+inline constexpr Bound kGroundSize_m{1.0, 10000.0, "m"};
+inline constexpr Bound kExtent_m{0.001, 3000.0, "m"};      // a box's side, a wall's length
 inline constexpr Bound kObjectSize_m{0.001, 100.0, "m"};  // a radius, a thickness, a car
 inline constexpr Bound kObstacleHeight_m{0.01, 100.0, "m"};
 inline constexpr Bound kHeightSpan_m{0.0, 100.0, "m"};  // SteerSuite's heights, 0 for flat
