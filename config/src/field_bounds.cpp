@@ -195,14 +195,15 @@ std::vector<FieldBound> make_steersuite_bounds() {
        {"worldBounds", "regionBounds", "obstacle"}) {
     t.add(bounds_element, {{"xmin", kPosition_m},
                            {"xmax", kPosition_m},
-                           {"ymin", kPosition_m},
-                           {"ymax", kPosition_m},
+                           {"ymin", kElevation_m},
+                           {"ymax", kElevation_m},
                            {"zmin", kPosition_m},
                            {"zmax", kPosition_m}});
   }
-  for (const char* tuple : {"position", "direction", "targetLocation"}) {
-    t.add(tuple, {{"x", kPosition_m}, {"y", kPosition_m}, {"z", kPosition_m}});
+  for (const char* tuple : {"position", "targetLocation"}) {
+    t.add(tuple, {{"x", kPosition_m}, {"y", kElevation_m}, {"z", kPosition_m}});
   }
+  t.add("direction", {{"x", kPosition_m}, {"y", kPosition_m}, {"z", kPosition_m}});
   t.add("size", {{"x", kExtent_m}, {"y", kHeightSpan_m}, {"z", kExtent_m}})
       .add("circleObstacle", {{"radius", kObjectSize_m}, {"height", kHeightSpan_m}})
       .add("orientedBoxObstacle", {{"thetaY", kAngle_deg}})

@@ -252,11 +252,6 @@ double solid_height(XmlReader& r, const XMLElement* at, double bottom_m, double 
            "an obstacle above the ground stands on it here (SteerSuite's collisions are 2D, "
            "so it blocks agents the same)");
   }
-  if (top_m > bounds::kObstacleHeight_m.max) {
-    r.fail(at, "an obstacle's top (its bottom plus its height) must be at most " +
-                   base::format_number(bounds::kObstacleHeight_m.max) + " m, got " +
-                   base::format_number(top_m));
-  }
   if (top_m < kMinVisibleHeight_m) {
     r.warn(at,
            "obstacles lower than 0.3 m are raised to 0.3 m so that cameras see them "

@@ -29,8 +29,10 @@ inline constexpr Bound kPosition_m{-1000.0, 1000.0, "m"};
 inline constexpr Bound kGroundSize_m{1.0, 10000.0, "m"};
 inline constexpr Bound kExtent_m{0.001, 3000.0, "m"};      // a box's side, a wall's length
 inline constexpr Bound kObjectSize_m{0.001, 100.0, "m"};  // a radius, a thickness, a car
-inline constexpr Bound kObstacleHeight_m{0.01, 100.0, "m"};
-inline constexpr Bound kHeightSpan_m{0.0, 100.0, "m"};  // SteerSuite's heights, 0 for flat
+inline constexpr Bound kObstacleHeight_m{0.01, 200.0, "m"};
+// SteerSuite's up axis: an elevation and a height (0 for flat), so that a top is within 200 m.
+inline constexpr Bound kElevation_m{-100.0, 100.0, "m"};
+inline constexpr Bound kHeightSpan_m{0.0, 100.0, "m"};
 inline constexpr Bound kAngle_deg{-360.0, 360.0, "deg"};
 inline constexpr Bound kTimeDuration_s{0.0, 1e6, "s"};  // SteerSuite's <timeDuration>
 
