@@ -3,9 +3,9 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "bounds_check.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/demo_scene.hpp"
-#include "bounds_check.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

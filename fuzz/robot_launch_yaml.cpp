@@ -1,16 +1,16 @@
 // Robot launch files (`flowsteer run FILE`), with their camera, drive, perception, controller
-// and goal sections: a launch whose every number is within its bound, or a base::ConfigError. The camera_info and camera mount files a
-// launch file may name are in the scratch folder the paths resolve against, so the fuzzer
-// reaches the size check against the calibration. A drive section the reader accepts must also
-// build its base (nothing is opened): a setting the reader lets through but a driver refuses is
-// a finding, as the user would get an error that names no line.
+// and goal sections: a launch whose every number is within its bound, or a base::ConfigError. The
+// camera_info and camera mount files a launch file may name are in the scratch folder the paths
+// resolve against, so the fuzzer reaches the size check against the calibration. A drive section
+// the reader accepts must also build its base (nothing is opened): a setting the reader lets
+// through but a driver refuses is a finding, as the user would get an error that names no line.
 #include <cstddef>
 #include <cstdint>
 
+#include "bounds_check.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/drive_config.hpp"
 #include "flowsteer/config/robot_launch.hpp"
-#include "bounds_check.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

@@ -3,15 +3,16 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "bounds_check.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
-#include "bounds_check.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
     flowsteer::fuzz::check_bounds(
-        flowsteer::config::parse_steersuite(flowsteer::fuzz::as_text(data, size), "fuzz.xml").world);
+        flowsteer::config::parse_steersuite(flowsteer::fuzz::as_text(data, size), "fuzz.xml")
+            .world);
   } catch (const flowsteer::base::ConfigError&) {
     // The reader's documented refusal; anything else escapes and is a finding.
   }

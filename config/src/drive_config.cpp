@@ -26,7 +26,8 @@ drivers::OdriveAxisConfig read_axis(const base::YamlReader& r, const YAML::Node&
   }
   r.only_keys(node, field, {"node_id", "direction"});
   if (node["node_id"]) {
-    axis.node_id = static_cast<std::uint8_t>(r.bounded_integer(node["node_id"], field + ".node_id"));
+    axis.node_id =
+        static_cast<std::uint8_t>(r.bounded_integer(node["node_id"], field + ".node_id"));
   }
   axis.direction = r.number(node, field, "direction", axis.direction);
   if (axis.direction != 1.0 && axis.direction != -1.0) {
@@ -63,7 +64,8 @@ void read_geometry(const base::YamlReader& r, const YAML::Node& g,
   r.only_keys(g, "drive.geometry", {"wheel_separation_m", "wheel_radius_m"});
   geometry.wheel_separation_m =
       r.bounded(g, "drive.geometry", "wheel_separation_m", geometry.wheel_separation_m);
-  geometry.wheel_radius_m = r.bounded(g, "drive.geometry", "wheel_radius_m", geometry.wheel_radius_m);
+  geometry.wheel_radius_m =
+      r.bounded(g, "drive.geometry", "wheel_radius_m", geometry.wheel_radius_m);
 }
 
 void read_limits(const base::YamlReader& r, const YAML::Node& l, drivers::CommandLimits& lim) {

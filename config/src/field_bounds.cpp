@@ -59,10 +59,8 @@ const std::initializer_list<FieldBound> kMotionEnergyRows = {
 };
 
 const std::initializer_list<FieldBound> kCameraRows = {
-    {"resolution", kImageSide_px},
-    {"hfov_deg", kHfov_deg},
-    {"height_m", kCameraHeight_m},
-    {"pitch_deg", kCameraPitch_deg},
+    {"resolution", kImageSide_px},        {"hfov_deg", kHfov_deg},
+    {"height_m", kCameraHeight_m},        {"pitch_deg", kCameraPitch_deg},
     {"noise_sigma", kCameraNoise_levels},
 };
 
@@ -135,9 +133,8 @@ std::vector<FieldBound> make_robot_launch_bounds() {
                                                            {"height_px", kImageSide_px},
                                                            {"frame_rate_hz", kFrameRate_hz},
                                                            {"buffer_count", kBufferCount}};
-  const std::initializer_list<FieldBound> serial = {{"baud", kBaud},
-                                                    {"timeout_s", kDeviceTimeout_s},
-                                                    {"ticks_per_wheel_rev", kEncoderTicks}};
+  const std::initializer_list<FieldBound> serial = {
+      {"baud", kBaud}, {"timeout_s", kDeviceTimeout_s}, {"ticks_per_wheel_rev", kEncoderTicks}};
   Table t;
   t.add("camera", {{"timeout_s", kCameraTimeout_s}, {"horizontal_fov_rad", kHfov_rad}})
       .add("camera.v4l2", device_camera)
@@ -164,8 +161,8 @@ std::vector<FieldBound> make_robot_launch_bounds() {
       .add("goal", {{"bearing_rad", kBearing_rad}, {"distance_m", kGoalDistance_m}})
       .add("perception", {{"height_m", kCameraHeight_m}, {"pitch_deg", kCameraPitch_deg}})
       .add("controller", kControllerRows)
-      .add("controller", {{"preferred_speed_mps", kRobotPreferredSpeed_mps},
-                          {"robot_width_m", kBodyWidth_m}});
+      .add("controller",
+           {{"preferred_speed_mps", kRobotPreferredSpeed_mps}, {"robot_width_m", kBodyWidth_m}});
   return std::move(t).rows();
 }
 
@@ -180,7 +177,8 @@ std::vector<FieldBound> make_demo_scene_bounds() {
                      {"width_m", kBodyWidth_m}})
       .add("", {{"goal", kPosition_m}})
       .add("controller", kControllerRows)
-      .add("controller", {{"follow_gap_m", kMargin_m}, {"preferred_speed_mps", kPreferredSpeed_mps}})
+      .add("controller",
+           {{"follow_gap_m", kMargin_m}, {"preferred_speed_mps", kPreferredSpeed_mps}})
       .add("objects[]", {{"position", kPosition_m},
                          {"velocity", kVelocity_mps},
                          {"size", kObjectSize_m},
@@ -191,8 +189,7 @@ std::vector<FieldBound> make_demo_scene_bounds() {
 
 std::vector<FieldBound> make_steersuite_bounds() {
   Table t('/');
-  for (const char* bounds_element :
-       {"worldBounds", "regionBounds", "obstacle"}) {
+  for (const char* bounds_element : {"worldBounds", "regionBounds", "obstacle"}) {
     t.add(bounds_element, {{"xmin", kPosition_m},
                            {"xmax", kPosition_m},
                            {"ymin", kElevation_m},

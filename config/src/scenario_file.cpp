@@ -222,8 +222,7 @@ std::optional<sim_camera::SunLight> read_sun(const base::YamlReader& r, const YA
 sim_camera::Lighting read_lighting(const base::YamlReader& r, const YAML::Node& node,
                                    sim_camera::Lighting lighting) {
   r.only_keys(node, "lighting", {"ambient", "sun", "points"});
-  lighting.ambient =
-      static_cast<float>(r.bounded(node, "lighting", "ambient", lighting.ambient));
+  lighting.ambient = static_cast<float>(r.bounded(node, "lighting", "ambient", lighting.ambient));
   if (const YAML::Node sun = node["sun"]) {
     lighting.sun = read_sun(r, sun);
   }

@@ -423,8 +423,8 @@ void read_idle_goal(XmlReader& r, const XMLElement* g, AgentTemplate& a) {
   r.only_children(g, {"desiredSpeed", "timeDuration", "Behaviour", "state"});
   warn_ignored_goal_parts(r, g);
   const XMLElement* duration = g->FirstChildElement("timeDuration");
-  a.spec.idle_s = duration != nullptr ? r.bounded(g, "timeDuration")
-                                      : std::numeric_limits<double>::infinity();
+  a.spec.idle_s =
+      duration != nullptr ? r.bounded(g, "timeDuration") : std::numeric_limits<double>::infinity();
   if (g->NextSiblingElement() != nullptr) {
     r.fail(g,
            "an <idle> before another goal is not supported: flowsteer agents stop only after "

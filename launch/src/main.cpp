@@ -13,7 +13,8 @@ int main(int argc, char** argv) {
   CLI::App app{"flowsteer: visual-servo steering from optical flow"};
   app.require_subcommand(1);
   std::vector<cli::Subcommand> commands{cli::add_demo(app), cli::add_sim(app),
-                                        cli::add_compare(app), cli::add_scenarios(app)};
+                                        cli::add_compare(app), cli::add_scenarios(app),
+                                        cli::add_bounds(app)};
   for (auto* group : {cli::add_eval, cli::add_calibrate}) {
     for (cli::Subcommand& c : group(app)) {
       commands.push_back(std::move(c));

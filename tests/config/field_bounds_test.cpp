@@ -84,7 +84,8 @@ void expect_outcome(const std::string& field_written, const base::Bound& bound, 
 // the rest of the path. Descends into a sequence's first element (a pair, a list of points), so
 // that one number is set. `written` gets the path as the reader names it; null when the file
 // does not hold the field.
-std::optional<YAML::Node> find_field(YAML::Node node, const std::string& row, std::string& written) {
+std::optional<YAML::Node> find_field(YAML::Node node, const std::string& row,
+                                     std::string& written) {
   const std::size_t dot = row.find('.');
   const std::string head = row.substr(0, dot);
   const std::string rest = dot == std::string::npos ? "" : row.substr(dot + 1);
@@ -137,8 +138,8 @@ void walk_yaml_table(std::span<const base::FieldBound> table, const std::vector<
         continue;
       }
       found = true;
-      const bool whole = is_whole(field->as<double>()) && is_whole(row.bound.min) &&
-                         is_whole(row.bound.max);
+      const bool whole =
+          is_whole(field->as<double>()) && is_whole(row.bound.min) && is_whole(row.bound.max);
       for (const Probe& p : probes(row.bound, whole)) {
         YAML::Node root = YAML::Load(file);
         std::string path;
@@ -166,14 +167,15 @@ const std::string kMotionEnergy =
     "head_on_energy: 0.5, head_on_balance: 0.5, danger_distance_m: 1.5, danger_fraction: 0.5, "
     "corner_step: 0.5, corner_rise: 0.5, free_path_range_m: 10";
 const std::string kMaterial = "material: {albedo: [0.5, 0.5, 0.5], scale_m: 0.25, contrast: 0.3}";
-const std::string kCamera = "{resolution: 16, hfov_deg: 90, height_m: 1.6, pitch_deg: 0, "
-                            "noise_sigma: 0}";
+const std::string kCamera =
+    "{resolution: 16, hfov_deg: 90, height_m: 1.6, pitch_deg: 0, "
+    "noise_sigma: 0}";
 
 // Every field of a scenario, placed so that each may take either end of its bound: the large
 // bodies far from the agents, which stand where no body of the largest size reaches.
 std::string scenario_with_every_field() {
-  return "name: bounds\nstep_s: 0.05\nduration_s: 2\ncamera: " + kCamera +
-         "\ncontroller: {" + kController + ", " + kMotionEnergy +
+  return "name: bounds\nstep_s: 0.05\nduration_s: 2\ncamera: " + kCamera + "\ncontroller: {" +
+         kController + ", " + kMotionEnergy +
          "}\n"
          "lighting:\n"
          "  ambient: 0.3\n"
@@ -189,7 +191,8 @@ std::string scenario_with_every_field() {
          "  - {shape: cylinder, position: [900, 900], radius_m: 1, height_m: 1}\n"
          "  - {shape: wall, from: [-900, -900], to: [900, -900], thickness_m: 1, height_m: 2}\n"
          "moving:\n"
-         "  - {size: [1, 1], height_m: 1, waypoints: [[-1000, 1000], [-900, 1000]], speed_mps: 1, " +
+         "  - {size: [1, 1], height_m: 1, waypoints: [[-1000, 1000], [-900, 1000]], speed_mps: "
+         "1, " +
          kMaterial +
          "}\n"
          "  - {shape: cylinder, radius_m: 1, waypoints: [[-800, 800], [-700, 800]]}\n"

@@ -307,7 +307,8 @@ TEST(ScenarioFile, CameraNoiseIsZeroUnlessGivenAndWithinItsBounds) {
   EXPECT_EQ(error_of("camera: {noise_sigma: -1}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n"),
             "scenario.yaml:1:23: camera.noise_sigma: must be from 0 to 50 grey levels, got -1");
   EXPECT_EQ(error_of("agents:\n  - {start: [0, 0], goal: [9, 0], camera: {noise_sigma: 50.5}}\n"),
-            "scenario.yaml:2:57: agents[0].camera.noise_sigma: must be from 0 to 50 grey levels, got 50.5");
+            "scenario.yaml:2:57: agents[0].camera.noise_sigma: must be from 0 to 50 grey levels, "
+            "got 50.5");
   EXPECT_NE(error_of("camera: {noise_sigma: .nan}\nagents:\n  - {start: [0, 0], goal: [9, 0]}\n")
                 .find("camera.noise_sigma: expected a finite number"),
             std::string::npos);

@@ -39,6 +39,7 @@ Subcommand add_demo(CLI::App& app);
 Subcommand add_sim(CLI::App& app);
 Subcommand add_compare(CLI::App& app);
 Subcommand add_scenarios(CLI::App& app);
+Subcommand add_bounds(CLI::App& app);
 // `eval flow`, `eval robustness`, `eval suite` and `eval merge`.
 std::vector<Subcommand> add_eval(CLI::App& app);
 Subcommand add_eval_suite(CLI::App& eval);

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/config/demo_scene.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/launch/demo.hpp"
 
 namespace flowsteer::cli {

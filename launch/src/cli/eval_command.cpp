@@ -108,9 +108,10 @@ Subcommand add_eval_robustness(CLI::App& eval) {
       "Run a scenario at several camera resolutions, with each flow and segmentation given, and "
       "count the runs with no collision and every goal reached");
   add_scenario_options(*robustness, command->scenario);
-  robustness->add_option("--resolution", command->resolutions,
-                         "N x N pixels; repeat for several (default: the scenario's own and 8, "
-                         "16, 24, 32 pixels either side)")
+  robustness
+      ->add_option("--resolution", command->resolutions,
+                   "N x N pixels; repeat for several (default: the scenario's own and 8, "
+                   "16, 24, 32 pixels either side)")
       ->check(within(config::bounds::kImageSide_px));
   robustness->add_option("--flow", command->flows,
                          "every agent's flow (default: the scenario's); repeat for several: " +

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/config/case_files.hpp"
+#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/eval/suite.hpp"
 
 namespace flowsteer::cli {

@@ -27,7 +27,7 @@ inline constexpr Bound kRunSteps{1, kMaxRunSteps, "steps"};
 // there), and how big they are.
 inline constexpr Bound kPosition_m{-1000.0, 1000.0, "m"};
 inline constexpr Bound kGroundSize_m{1.0, 10000.0, "m"};
-inline constexpr Bound kExtent_m{0.001, 3000.0, "m"};      // a box's side, a wall's length
+inline constexpr Bound kExtent_m{0.001, 3000.0, "m"};     // a box's side, a wall's length
 inline constexpr Bound kObjectSize_m{0.001, 100.0, "m"};  // a radius, a thickness, a car
 inline constexpr Bound kObstacleHeight_m{0.01, 200.0, "m"};
 // SteerSuite's up axis: an elevation and a height (0 for flat), so that a top is within 200 m.
@@ -40,8 +40,8 @@ inline constexpr Bound kTimeDuration_s{0.0, 1e6, "s"};  // SteerSuite's <timeDur
 inline constexpr Bound kBodyRadius_m{0.05, 2.0, "m"};
 inline constexpr Bound kBodyHeight_m{0.05, 5.0, "m"};
 inline constexpr Bound kGoalRadius_m{0.01, 10.0, "m"};
-inline constexpr Bound kSpeed_mps{0.0, 10.0, "m/s"};            // a sprint
-inline constexpr Bound kPreferredSpeed_mps{0.01, 6.0, "m/s"};   // walking to running
+inline constexpr Bound kSpeed_mps{0.0, 10.0, "m/s"};           // a sprint
+inline constexpr Bound kPreferredSpeed_mps{0.01, 6.0, "m/s"};  // walking to running
 inline constexpr Bound kMaxSpeed_mps{0.01, 10.0, "m/s"};
 inline constexpr Bound kAccel_mps2{0.01, 20.0, "m/s^2"};
 inline constexpr Bound kTurnRate_radps{0.01, 10.0, "rad/s"};
@@ -52,8 +52,7 @@ inline constexpr Bound kBodyWidth_m{0.05, 5.0, "m"};
 // A camera and the light it sees by.
 inline constexpr Bound kImageSide_px{8, 4096, "px"};
 inline constexpr Bound kHfov_deg{1.0, 179.0, "deg"};
-inline constexpr Bound kHfov_rad{1.0 * std::numbers::pi / 180.0, 179.0 * std::numbers::pi / 180.0,
-                                 "rad"};
+inline constexpr Bound kHfov_rad{0.02, 3.12, "rad"};  // about 1 to 179 deg
 inline constexpr Bound kCameraHeight_m{0.01, 10.0, "m"};
 inline constexpr Bound kCameraPitch_deg{-89.0, 89.0, "deg"};
 inline constexpr Bound kCameraNoise_levels{0.0, 50.0, "grey levels"};
@@ -100,7 +99,7 @@ inline constexpr Bound kGearRatio{0.01, 1000.0, ""};
 inline constexpr Bound kEncoderTicks{1.0, 1e7, "ticks"};
 inline constexpr Bound kPidRate_hz{1.0, 1000.0, "Hz"};
 inline constexpr Bound kBaud{300, 4'000'000, "baud"};
-inline constexpr Bound kCanNodeId{0, 63, ""};       // 6 bits of the CAN id
+inline constexpr Bound kCanNodeId{0, 63, ""};           // 6 bits of the CAN id
 inline constexpr Bound kRoboClawAddress{128, 135, ""};  // 0x80 .. 0x87
 inline constexpr Bound kBearing_rad{-std::numbers::pi, std::numbers::pi, "rad"};
 inline constexpr Bound kBearing_deg{-180.0, 180.0, "deg"};
@@ -111,9 +110,9 @@ inline constexpr Bound kGoalDistance_m{0.01, 1000.0, "m"};
 namespace flowsteer::config {
 
 // One row per bounded field of each format, as its reader names the field.
-std::span<const base::FieldBound> scenario_bounds();     // scenario YAML
+std::span<const base::FieldBound> scenario_bounds();      // scenario YAML
 std::span<const base::FieldBound> robot_launch_bounds();  // robot launch YAML
-std::span<const base::FieldBound> demo_scene_bounds();   // demo scene YAML
+std::span<const base::FieldBound> demo_scene_bounds();    // demo scene YAML
 // SteerSuite XML: "parent/element", e.g. "initialConditions/radius", "position/x".
 std::span<const base::FieldBound> steersuite_bounds();
 
