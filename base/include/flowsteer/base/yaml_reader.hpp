@@ -85,10 +85,6 @@ class YamlReader {
     const YAML::Node node = map[key];
     return node ? within(node, path, bound) : fallback;
   }
-  // `node` itself, the field `field`.
-  double bounded(const YAML::Node& node, const std::string& field) const {
-    return within(node, field, bound_of(bounds_, field));
-  }
   // A whole number within the table's bound for `field`.
   int bounded_integer(const YAML::Node& node, const std::string& field) const {
     return within_integer(node, field, bound_of(bounds_, field));
@@ -146,26 +142,7 @@ class YamlReader {
     return value;
   }
 
-  double at_least(const YAML::Node& map, const std::string& field, const char* key,
-                  double min_value, double fallback) const {
-    const double value = number(map, field, key, fallback);
-    if (value < min_value) {
-      fail(map[key] ? map[key] : map, join(field, key),
-           "must be at least " + format(min_value) + ", got " + format(value));
-    }
-    return value;
-  }
 
-  double in_range(const YAML::Node& map, const std::string& field, const char* key,
-                  double min_value, double max_value, double fallback) const {
-    const double value = number(map, field, key, fallback);
-    if (value < min_value || value > max_value) {
-      fail(map[key] ? map[key] : map, join(field, key),
-           "must be from " + format(min_value) + " to " + format(max_value) + ", got " +
-               format(value));
-    }
-    return value;
-  }
 
   int integer(const YAML::Node& node, const std::string& field, int min_value) const {
     int value = 0;
@@ -179,17 +156,6 @@ class YamlReader {
     return value;
   }
 
-  Eigen::Vector2d pair(const YAML::Node& map, const std::string& field, const char* key,
-                       const Eigen::Vector2d& fallback) const {
-    const YAML::Node node = map[key];
-    if (!node) {
-      return fallback;
-    }
-    if (!node.IsSequence() || node.size() != 2) {
-      fail(node, join(field, key), "expected a pair [x, y]");
-    }
-    return {number(node[0], join(field, key) + "[0]"), number(node[1], join(field, key) + "[1]")};
-  }
 
   std::string word(const YAML::Node& map, const std::string& field, const char* key,
                    std::initializer_list<const char*> allowed, const char* fallback) const {
