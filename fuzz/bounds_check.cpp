@@ -7,13 +7,13 @@
 #include <string>
 #include <variant>
 
-#include "flowsteer/config/field_bounds.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 
 namespace flowsteer::fuzz {
 
 namespace {
 
-using namespace config::bounds;
+using namespace base::bounds;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 

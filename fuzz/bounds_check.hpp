@@ -1,8 +1,8 @@
 #pragma once
 
 // The property the reader harnesses check beside "no crash": what a reader accepts holds only
-// values its table of bounds allows (config/field_bounds.hpp): finite, in bounds, a run of at
-// least one step. A value outside aborts with its name and value, a finding for libFuzzer.
+// values within the bounds of their quantities (base/quantity_bounds.hpp): finite, in bounds, a run
+// of at least one step. A value outside aborts with its name and value, a finding for libFuzzer.
 
 #include "flowsteer/config/demo_scene.hpp"
 #include "flowsteer/config/robot_launch.hpp"

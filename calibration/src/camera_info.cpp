@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "flowsteer/base/atomic_file.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
 #include "number_text.hpp"
 
@@ -112,8 +113,10 @@ CameraInfo parse_camera_info(const std::string& yaml_text, const std::string& so
 
   CameraInfo info;
   camera_io::CameraModel& m = info.model;
-  m.width_px = reader.integer(required(reader, root, "image_width"), "image_width", 1);
-  m.height_px = reader.integer(required(reader, root, "image_height"), "image_height", 1);
+  m.width_px = reader.within_integer(required(reader, root, "image_width"), "image_width",
+                                     base::bounds::kImageSide_px);
+  m.height_px = reader.within_integer(required(reader, root, "image_height"), "image_height",
+                                      base::bounds::kImageSide_px);
   if (const YAML::Node name = root["camera_name"]; !name) {
     warnings.push_back(source + ": camera_name: missing, left empty");
   } else if (!name.IsScalar() && !name.IsNull()) {

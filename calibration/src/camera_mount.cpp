@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "flowsteer/base/atomic_file.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
 #include "number_text.hpp"
 
@@ -37,18 +38,11 @@ MountCalibration parse_camera_mount(const std::string& yaml_text, const std::str
     }
   }
   MountCalibration m;
-  m.mount.height_m = reader.positive(root, "", "height_m", 0.0);
-  m.mount.pitch_rad = reader.number(root, "", "pitch_rad", 0.0);
-  m.roll_rad = reader.number(root, "", "roll_rad", 0.0);
-  const double limit = 0.5 * std::numbers::pi;
-  if (!(std::abs(m.mount.pitch_rad) < limit)) {
-    reader.fail(root["pitch_rad"], "pitch_rad",
-                "must be within (-pi/2, pi/2), got " + number_text(m.mount.pitch_rad));
-  }
-  if (!(std::abs(m.roll_rad) < limit)) {
-    reader.fail(root["roll_rad"], "roll_rad",
-                "must be within (-pi/2, pi/2), got " + number_text(m.roll_rad));
-  }
+  m.mount.height_m = reader.within(root["height_m"], "height_m", base::bounds::kCameraHeight_m);
+  m.mount.pitch_rad = reader.within(root["pitch_rad"], "pitch_rad", base::bounds::kCameraPitch_rad);
+  m.roll_rad = root["roll_rad"]
+                   ? reader.within(root["roll_rad"], "roll_rad", base::bounds::kCameraPitch_rad)
+                   : 0.0;
   return m;
 }
 

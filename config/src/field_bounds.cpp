@@ -2,13 +2,16 @@
 
 #include <initializer_list>
 #include <string>
+#include <vector>
+
+#include "flowsteer/base/quantity_bounds.hpp"
 
 namespace flowsteer::config {
 
 namespace {
 
 using base::FieldBound;
-using namespace bounds;
+using namespace base::bounds;
 
 // A table under construction: rows added under a prefix ("agents[].camera"), joined by the
 // format's separator ('.' in YAML paths, '/' between XML elements).

@@ -118,19 +118,6 @@ CameraSection read_camera(const base::YamlReader& r, const YAML::Node& camera,
   return s;
 }
 
-void check_mount(const base::YamlReader& r, const YAML::Node& at, const std::string& file,
-                 const base::CameraMount& mount) {
-  const base::Bound& height = base::bound_of(r.bounds(), "perception.height_m");
-  const base::Bound& pitch_deg = base::bound_of(r.bounds(), "perception.pitch_deg");
-  if (!height.contains(mount.height_m)) {
-    r.fail(at, "perception.mount", file + ": height_m " + height.refusal(mount.height_m));
-  }
-  const double pitch = mount.pitch_rad * 180.0 / std::numbers::pi;
-  if (!pitch_deg.contains(pitch)) {
-    r.fail(at, "perception.mount", file + ": pitch_rad in degrees " + pitch_deg.refusal(pitch));
-  }
-}
-
 PerceptionSection read_robot_perception(const base::YamlReader& r, const YAML::Node& node,
                                         const std::string& base_dir) {
   PerceptionSection p;
@@ -162,10 +149,8 @@ PerceptionSection read_robot_perception(const base::YamlReader& r, const YAML::N
   }
   if (node["mount"]) {
     p.mount_file = resolve(r.text(node, "perception", "mount", "", true), base_dir);
-    // The reader's base::ConfigError names the mount file's own line and field; its values must
-    // also be what perception.height_m and pitch_deg may be.
+    // The reader's base::ConfigError names the mount file's own line and field.
     p.mount = calibration::read_camera_mount(p.mount_file).mount;
-    check_mount(r, node["mount"], p.mount_file, *p.mount);
   } else if (node["height_m"] || node["pitch_deg"]) {
     if (!node["height_m"]) {
       r.fail(node, "perception.height_m", "missing: the camera's height above the floor");

@@ -16,6 +16,7 @@
 #include <tinyxml2.h>
 
 #include "flowsteer/base/config_error.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/base/yaml_reader.hpp"
 #include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/config/scenario_file.hpp"
@@ -269,8 +270,8 @@ Solid read_box_obstacle(XmlReader& r, const XMLElement* e) {
   Solid s;
   s.centre_m = 0.5 * (b.ground.min + b.ground.max);
   s.size_m = b.ground.max - b.ground.min;
-  if (s.size_m.minCoeff() < bounds::kExtent_m.min) {
-    r.fail(e, "a box must be at least " + base::format_number(bounds::kExtent_m.min) +
+  if (s.size_m.minCoeff() < base::bounds::kExtent_m.min) {
+    r.fail(e, "a box must be at least " + base::format_number(base::bounds::kExtent_m.min) +
                   " m wide along x and z, got " + base::format_number(s.size_m.minCoeff()));
   }
   s.height_m = solid_height(r, e, b.ymin_m, b.ymax_m);
@@ -736,7 +737,7 @@ void finish_agent(const XmlReader& r, Placed& p, const TestCase& tc,
   }
   a.name = a.name.empty() ? "agent" + std::to_string(index) : a.name;
   a.max_speed_mps = std::min(std::max(2.0 * a.preferred_speed_mps + 0.5, a.start_speed_mps),
-                             bounds::kMaxSpeed_mps.max);
+                             base::bounds::kMaxSpeed_mps.max);
   a.controller.max_turn_rate = 1.5;
 }
 

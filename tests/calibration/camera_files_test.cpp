@@ -164,7 +164,9 @@ TEST(CameraInfoFile, BadFilesNameTheFileAndField) {
   expect_contains(error_for(replaced("430.21555000000001", "-430")),
                   "camera_matrix.data[0]: fx must be positive");
   expect_contains(error_for(replaced("image_width: 640", "image_width: wide")),
-                  "bad.yaml:1:14: image_width: expected an integer");
+                  "bad.yaml:1:14: image_width: expected a whole number");
+  expect_contains(error_for(replaced("image_width: 640", "image_width: 100000")),
+                  "bad.yaml:1:14: image_width: must be from 8 to 4096 px, got 100000");
   expect_contains(error_for(""), "bad.yaml:1:1: expected a camera_info mapping");
   fs::remove_all(dir);
 }
@@ -242,8 +244,11 @@ TEST(CameraMountFile, BadFilesNameTheField) {
   EXPECT_EQ(error_for("height_m: 0.5\npitch_rad: 0.2\n"), "no error");
   expect_contains(error_for("height_m: 0.5\n"), "mount.yaml:1:1: pitch_rad: missing");
   expect_contains(error_for("height_m: -0.5\npitch_rad: 0.2\n"),
-                  "mount.yaml:1:11: height_m: must be positive");
-  expect_contains(error_for("height_m: 0.5\npitch_rad: 2\n"), "pitch_rad: must be within");
+                  "mount.yaml:1:11: height_m: must be from 0.01 to 10 m, got -0.5");
+  expect_contains(error_for("height_m: 1e9\npitch_rad: 0.2\n"),
+                  "mount.yaml:1:11: height_m: must be from 0.01 to 10 m, got 1000000000");
+  expect_contains(error_for("height_m: 0.5\npitch_rad: 2\n"),
+                  "pitch_rad: must be from -1.553343034 to 1.553343034 rad, got 2");
   expect_contains(error_for("height_m: 0.5\npitch_rad: 0.2\nyaw_rad: 1\n"),
                   "3:1: yaw_rad: unknown key");
   expect_contains(error_for("height_m: [0.5\n"), "mount.yaml:");

@@ -1,7 +1,7 @@
 #!/bin/sh
 # Usage: option_bounds.sh FLOWSTEER
 # Every bounded option of every command, found in the command's help ("--resolution INT:from 8 to
-# 4096 px", written from the same bound as the file's field, config/field_bounds.hpp): each end
+# 4096 px", written from the same bound as the file's field, base/quantity_bounds.hpp): each end
 # is accepted and one step beyond each end is refused with exit 2 and "OPTION: must be from MIN
 # to MAX UNIT, got VALUE". An accepted value is shown by a run that then fails on another
 # argument given to stop it (a rule that does not exist, a file that does not): the run gets as

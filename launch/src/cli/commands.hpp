@@ -61,7 +61,7 @@ servo::DepthSource depth_source_option(const std::string& option, const std::str
 servo::NavigationLaw navigation_law_option(const std::string& option, const std::string& name);
 servo::LawMechanism law_mechanism_option(const std::string& option, const std::string& name);
 // Checks an option's value against the bound the same field has in files
-// (config/field_bounds.hpp): "--resolution: must be from 8 to 4096 px, got 100000", exit 2.
+// (base/quantity_bounds.hpp): "--resolution: must be from 8 to 4096 px, got 100000", exit 2.
 CLI::Validator within(const base::Bound& bound);
 
 // The scenario a command runs: the scenario file or the built-in scenario `scenario` names (a

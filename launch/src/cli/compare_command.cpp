@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "flowsteer/config/field_bounds.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/eval/compare.hpp"
 
 namespace flowsteer::cli {
@@ -48,9 +48,9 @@ Subcommand add_compare(CLI::App& app) {
       ->required();
   compare->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   compare->add_option("--resolution", command->resolution, "every agent's camera: N x N pixels")
-      ->check(within(config::bounds::kImageSide_px));
+      ->check(within(base::bounds::kImageSide_px));
   compare->add_option("--steps", command->steps, "stop each run after N control steps")
-      ->check(within(config::bounds::kRunSteps));
+      ->check(within(base::bounds::kRunSteps));
   return {compare, [command] { return run_compare(*command); }};
 }
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/config/demo_scene.hpp"
-#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/launch/demo.hpp"
 
 namespace flowsteer::cli {
@@ -99,11 +99,11 @@ Subcommand add_demo(CLI::App& app) {
       ->take_all();
   demo->add_option("--goal", command->goal, "goal x y in metres, agent frame")
       ->expected(2)
-      ->check(within(config::bounds::kPosition_m));
+      ->check(within(base::bounds::kPosition_m));
   demo->add_option("--speed", command->speed_mps, "agent speed in m/s")
-      ->check(within(config::bounds::kSpeed_mps));
+      ->check(within(base::bounds::kSpeed_mps));
   demo->add_option("--resolution", command->resolution, "image width and height in pixels")
-      ->check(within(config::bounds::kImageSide_px));
+      ->check(within(base::bounds::kImageSide_px));
   return {demo, [command] { return run_demo(*command); }};
 }
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "flowsteer/config/field_bounds.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/eval/flow_evaluation.hpp"
 #include "flowsteer/eval/robustness.hpp"
@@ -112,7 +112,7 @@ Subcommand add_eval_robustness(CLI::App& eval) {
       ->add_option("--resolution", command->resolutions,
                    "N x N pixels; repeat for several (default: the scenario's own and 8, "
                    "16, 24, 32 pixels either side)")
-      ->check(within(config::bounds::kImageSide_px));
+      ->check(within(base::bounds::kImageSide_px));
   robustness->add_option("--flow", command->flows,
                          "every agent's flow (default: the scenario's); repeat for several: " +
                              servo::flow_method_names());
@@ -121,7 +121,7 @@ Subcommand add_eval_robustness(CLI::App& eval) {
                          "several: " +
                              servo::segmentation_method_names());
   robustness->add_option("--steps", command->steps, "stop each run after N control steps")
-      ->check(within(config::bounds::kRunSteps));
+      ->check(within(base::bounds::kRunSteps));
   robustness->add_option("--jobs,-j", command->jobs, "runs at once, each in its own process")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();

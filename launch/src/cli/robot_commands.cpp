@@ -4,7 +4,7 @@
 #include <string>
 
 #include "commands.hpp"
-#include "flowsteer/config/field_bounds.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/robot/robot_commands.hpp"
 
@@ -66,9 +66,9 @@ Subcommand add_run(CLI::App& app) {
   run->add_option(
          "--goal-bearing", command->goal_bearing_deg,
          "goal bearing from the start heading, degrees, positive to the right (overrides goal:)")
-      ->check(within(config::bounds::kBearing_deg));
+      ->check(within(base::bounds::kBearing_deg));
   run->add_option("--goal-distance", command->goal_distance_m, "goal distance, metres")
-      ->check(within(config::bounds::kGoalDistance_m));
+      ->check(within(base::bounds::kGoalDistance_m));
   run->add_option("--log", command->log_file,
                   "also write the events and one line per frame (status, objects, command) here");
   return {run, [command] { return run_robot(*command); }};
@@ -85,18 +85,18 @@ Subcommand add_replay(CLI::App& app) {
   replay->add_option("--out", r.out_dir, "folder for the outputs")->capture_default_str();
   CLI::Option* hfov =
       replay->add_option("--hfov-deg", r.hfov_deg, "horizontal field of view (default 60)")
-          ->check(within(config::bounds::kHfov_deg));
+          ->check(within(base::bounds::kHfov_deg));
   replay->add_option("--camera-info", r.camera_info, "ROS camera_info YAML")->excludes(hfov);
   replay->add_option("--flow", command->flow, "numerical flow method")->capture_default_str();
   replay
       ->add_option("--goal-bearing", r.goal_bearing_deg,
                    "goal bearing, degrees, positive to the right")
-      ->check(within(config::bounds::kBearing_deg));
+      ->check(within(base::bounds::kBearing_deg));
   replay
       ->add_option("--speed", r.speed_mps,
                    "assumed camera speed, m/s (no odometry in a recording); 0 skips the "
                    "flat-ground test")
-      ->check(within(config::bounds::kSpeed_mps))
+      ->check(within(base::bounds::kSpeed_mps))
       ->capture_default_str();
   return {replay, [command] { return run_replay(*command); }};
 }

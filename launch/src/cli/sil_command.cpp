@@ -5,7 +5,7 @@
 #include <string>
 
 #include "commands.hpp"
-#include "flowsteer/config/field_bounds.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/sil/sil.hpp"
 
 namespace flowsteer::cli {
@@ -80,7 +80,7 @@ Subcommand add_sil(CLI::App& app) {
       ->capture_default_str();
   sil->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   sil->add_option("--steps", command->steps, "stop after N control steps")
-      ->check(within(config::bounds::kRunSteps));
+      ->check(within(base::bounds::kRunSteps));
   return {sil, [command] { return run_sil_command(*command); }};
 }
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
-#include "flowsteer/config/field_bounds.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 
@@ -103,13 +103,13 @@ Subcommand add_sim(CLI::App& app) {
   add_scenario_options(*sim, command->scenario);
   sim->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
   sim->add_option("--resolution", command->resolution, "every agent's camera: N x N pixels")
-      ->check(within(config::bounds::kImageSide_px));
+      ->check(within(base::bounds::kImageSide_px));
   sim->add_option("--camera-noise", command->camera_noise_levels,
                   "every agent's camera noise: σ of the Gaussian noise on each channel of the "
                   "image, grey levels from 0 to 50 (scenario key camera: {noise_sigma})")
-      ->check(within(config::bounds::kCameraNoise_levels));
+      ->check(within(base::bounds::kCameraNoise_levels));
   sim->add_option("--steps", command->steps, "stop after N control steps")
-      ->check(within(config::bounds::kRunSteps));
+      ->check(within(base::bounds::kRunSteps));
   sim->add_flag("--video", command->video, "an MP4 per agent: its view, the flow and the features");
   sim->add_option(
          "--threads", command->threads,

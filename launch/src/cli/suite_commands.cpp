@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/config/case_files.hpp"
-#include "flowsteer/config/field_bounds.hpp"
 #include "flowsteer/eval/suite.hpp"
 
 namespace flowsteer::cli {
@@ -164,12 +164,12 @@ Subcommand add_eval_suite(CLI::App& eval) {
   suite
       ->add_option("--resolution", command->resolutions,
                    "every agent's camera, N x N pixels (default: the case's); repeat for several")
-      ->check(within(config::bounds::kImageSide_px));
+      ->check(within(base::bounds::kImageSide_px));
   suite
       ->add_option("--camera-noise", command->camera_noise_levels,
                    "every agent's camera noise, σ in grey levels from 0 to 50 (default: the "
                    "case's); repeat for several")
-      ->check(within(config::bounds::kCameraNoise_levels));
+      ->check(within(base::bounds::kCameraNoise_levels));
   suite->add_option("--jobs,-j", command->jobs, "runs at once, each in its own process")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
@@ -186,7 +186,7 @@ Subcommand add_eval_suite(CLI::App& eval) {
                    "where SteerSuite's agent and obstacle regions and random targets are placed")
       ->capture_default_str();
   suite->add_option("--steps", command->steps, "stop each run after N control steps")
-      ->check(within(config::bounds::kRunSteps));
+      ->check(within(base::bounds::kRunSteps));
   suite->add_flag("--obstacle-memory", command->obstacle_memory, kObstacleMemoryHelp);
   suite->add_option("--arrival", command->arrival, kArrivalHelp);
   suite->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();

@@ -142,8 +142,6 @@ class YamlReader {
     return value;
   }
 
-
-
   int integer(const YAML::Node& node, const std::string& field, int min_value) const {
     int value = 0;
     if (!node.IsScalar() || !YAML::convert<int>::decode(node, value)) {
@@ -155,7 +153,6 @@ class YamlReader {
     }
     return value;
   }
-
 
   std::string word(const YAML::Node& map, const std::string& field, const char* key,
                    std::initializer_list<const char*> allowed, const char* fallback) const {
