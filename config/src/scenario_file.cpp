@@ -8,7 +8,6 @@
 #include "flowsteer/base/yaml_reader.hpp"
 #include "flowsteer/config/controller_reader.hpp"
 #include "flowsteer/config/field_bounds.hpp"
-#include "flowsteer/sim_camera/camera_noise.hpp"
 
 namespace flowsteer::config {
 

@@ -52,6 +52,7 @@ inline constexpr Bound kCameraHeight_m{0.01, 10.0, "m"};
 inline constexpr Bound kCameraPitch_deg{-89.0, 89.0, "deg"};
 inline constexpr Bound kCameraPitch_rad{-89.0 * std::numbers::pi / 180.0,
                                         89.0 * std::numbers::pi / 180.0, "rad"};  // a mount file's
+// Beyond 50 grey levels of σ the image is more noise than picture.
 inline constexpr Bound kCameraNoise_levels{0.0, 50.0, "grey levels"};
 inline constexpr Bound kLightIntensity{0.0, 10.0, ""};
 inline constexpr Bound kLightRange_m{0.01, 2000.0, "m"};

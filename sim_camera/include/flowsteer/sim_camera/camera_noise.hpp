@@ -8,10 +8,6 @@
 
 namespace flowsteer::sim_camera {
 
-// The most camera noise a scenario or an option may ask for (grey levels): beyond it the image
-// is more noise than picture.
-inline constexpr double kMaxCameraNoiseLevels = 50.0;
-
 // Adds zero-mean Gaussian noise of standard deviation `sigma_levels` grey levels to each channel
 // of each pixel of an 8-bit image, saturating at 0 and 255: the noise a camera's sensor adds.
 // The noise is a function of `seed` alone (a counter-based generator, no state shared between
