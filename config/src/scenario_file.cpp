@@ -53,9 +53,26 @@ Material read_material(const base::YamlReader& r, const YAML::Node& node, const 
   return material;
 }
 
+// A key of another shape than the body's (a box's radius_m, a wall's position) would be ignored:
+// a mistake to say, not to pass over.
+void refuse_other_shapes_keys(const base::YamlReader& r, const YAML::Node& node,
+                              const std::string& field, const std::string& shape) {
+  const std::initializer_list<const char*> box = {"radius_m", "from", "to", "thickness_m"};
+  const std::initializer_list<const char*> cylinder = {"size", "from", "to", "thickness_m"};
+  const std::initializer_list<const char*> wall = {"position", "size", "radius_m", "yaw_deg"};
+  for (const char* key : shape == "box" ? box : shape == "cylinder" ? cylinder : wall) {
+    if (node[key]) {
+      r.fail(node[key], base::YamlReader::join(field, key),
+             "not a setting of shape " + shape + " (a box has size, a cylinder radius_m, a wall " +
+                 "from, to and thickness_m)");
+    }
+  }
+}
+
 // A box's or a cylinder's shape and height, without its place.
 void read_body(const base::YamlReader& r, const YAML::Node& node, const std::string& field,
                const std::string& shape, Solid& s) {
+  refuse_other_shapes_keys(r, node, field, shape);
   s.height_m = r.bounded(node, field, "height_m", 1.0);
   if (shape == "cylinder") {
     s.shape = Solid::Shape::cylinder;
@@ -89,6 +106,9 @@ Solid read_solid(const base::YamlReader& r, const YAML::Node& node, const std::s
               {"shape", "position", "size", "radius_m", "height_m", "yaw_deg", "from", "to",
                "thickness_m", "material"});
   const std::string shape = r.word(node, field, "shape", {"box", "cylinder", "wall"}, "box");
+  if (shape == "wall") {
+    refuse_other_shapes_keys(r, node, field, shape);
+  }
   Solid s = shape == "wall" ? read_wall(r, node, field) : Solid{};
   s.material = read_material(r, node["material"], field + ".material", s.material);
   if (shape == "wall") {

@@ -200,6 +200,26 @@ TEST(Scenarios, UnknownNameListsTheKnownOnes) {
   }
 }
 
+// A setting of another shape (a box's radius_m, a cylinder's size, a wall's position) would be
+// ignored; it is refused where it stands.
+TEST(ScenarioFile, ASettingOfAnotherShapeIsRefused) {
+  const std::string agents = "agents:\n  - {start: [0, 0], goal: [3, 0]}\n";
+  EXPECT_NE(error_of("obstacles:\n  - {position: [5, 5], radius_m: 1}\n" + agents)
+                .find("scenario.yaml:2:34: obstacles[0].radius_m: not a setting of shape box"),
+            std::string::npos);
+  EXPECT_NE(error_of("obstacles:\n  - {shape: cylinder, position: [5, 5], size: [1, 1]}\n" + agents)
+                .find("obstacles[0].size: not a setting of shape cylinder"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of("obstacles:\n  - {shape: wall, from: [5, 5], to: [6, 5], yaw_deg: 9}\n" + agents)
+          .find("obstacles[0].yaw_deg: not a setting of shape wall"),
+      std::string::npos);
+  EXPECT_NE(error_of("moving:\n  - {shape: cylinder, size: [1, 1], waypoints: [[5, 5], [6, 6]]}\n" +
+                     agents)
+                .find("moving[0].size: not a setting of shape cylinder"),
+            std::string::npos);
+}
+
 TEST(ScenarioFile, ErrorsNameFileLineAndField) {
   EXPECT_EQ(error_of("agents:\n  - {start: [0, 0], goal: [4, 0], radius_m: -1}\n"),
             "scenario.yaml:2:45: agents[0].radius_m: must be from 0.05 to 2 m, got -1");
