@@ -1,6 +1,5 @@
 #include "flowsteer/config/robot_launch.hpp"
 
-#include <cmath>
 #include <filesystem>
 #include <numbers>
 

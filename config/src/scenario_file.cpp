@@ -83,6 +83,7 @@ void read_body(const base::YamlReader& r, const YAML::Node& node, const std::str
 }
 
 Solid read_wall(const base::YamlReader& r, const YAML::Node& node, const std::string& field) {
+  refuse_other_shapes_keys(r, node, field, "wall");
   if (!node["from"] || !node["to"]) {
     r.fail(node, field, "a wall needs from: [x, y] and to: [x, y]");
   }
@@ -106,20 +107,18 @@ Solid read_solid(const base::YamlReader& r, const YAML::Node& node, const std::s
               {"shape", "position", "size", "radius_m", "height_m", "yaw_deg", "from", "to",
                "thickness_m", "material"});
   const std::string shape = r.word(node, field, "shape", {"box", "cylinder", "wall"}, "box");
+  Solid s;
   if (shape == "wall") {
-    refuse_other_shapes_keys(r, node, field, shape);
+    s = read_wall(r, node, field);
+  } else {
+    if (!node["position"]) {
+      r.fail(node, field + ".position", "missing: where is it?");
+    }
+    s.centre_m = r.bounded_pair(node, field, "position", Eigen::Vector2d::Zero());
+    s.yaw_rad = r.bounded(node, field, "yaw_deg", 0.0) * kDeg;
+    read_body(r, node, field, shape, s);
   }
-  Solid s = shape == "wall" ? read_wall(r, node, field) : Solid{};
   s.material = read_material(r, node["material"], field + ".material", s.material);
-  if (shape == "wall") {
-    return s;
-  }
-  if (!node["position"]) {
-    r.fail(node, field + ".position", "missing: where is it?");
-  }
-  s.centre_m = r.bounded_pair(node, field, "position", Eigen::Vector2d::Zero());
-  s.yaw_rad = r.bounded(node, field, "yaw_deg", 0.0) * kDeg;
-  read_body(r, node, field, shape, s);
   return s;
 }
 
