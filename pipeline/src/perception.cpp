@@ -30,6 +30,14 @@ servo::FeatureOptions feature_options(const PerceptionOptions& options,
   return features;
 }
 
+// The fill's floor scan passes the band of flow an estimator spreads along a foot's edge.
+servo::UntexturedFillOptions fill_options(const PerceptionOptions& options,
+                                          const servo::FlowSource& flow) {
+  servo::UntexturedFillOptions fill = options.untextured_fill;
+  fill.flow_spread_px = 0.5 * flow.noise_correlation_px();
+  return fill;
+}
+
 }  // namespace
 
 StageTimes& StageTimes::operator+=(const StageTimes& other) {
@@ -49,7 +57,7 @@ Perception::Perception(const base::CameraIntrinsics& intrinsics, const Perceptio
       flow_source_(servo::make_flow_source(
           options.flow, options.optical_flow,
           {.no_flow_without_depth = options.depth == servo::DepthSource::ground})),
-      untextured_fill_(options.untextured_fill),
+      untextured_fill_(fill_options(options, *flow_source_)),
       dark_finder_(options.dark),
       extractor_(feature_options(options, *flow_source_)),
       motions_(std::make_unique<MotionHistory>(
@@ -134,7 +142,7 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     servo::mark_ground(field_, options_.mount, speed_mps, ground, ground_mask_);
     if (flow_source_->estimated()) {
       untextured_fill_.fill(field_, grey_, flow_source_->image_noise_grey(), options_.mount,
-                            speed_mps, ground_mask_);
+                            speed_mps, ground_mask_, flow_source_->edge_flow());
     }
     segmenter_->segment(field_, ground_mask_, segmentation_);
     if (flow_source_->estimated()) {

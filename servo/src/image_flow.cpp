@@ -165,6 +165,7 @@ FlowStatus ImageFlowEstimator::update(const FlowFrame& frame, const CameraRotati
   const auto min_gradient_squared = static_cast<float>(min_gradient * min_gradient);
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   auto flow = field.flow();
+  edge_flow_.resize(field.size());
   for (int row = 0; row < grey_.rows; ++row) {
     const auto* d = flow_px_.ptr<cv::Vec2f>(row);
     const auto* xx = tensor_xx_.ptr<float>(row);
@@ -179,11 +180,20 @@ FlowStatus ImageFlowEstimator::update(const FlowFrame& frame, const CameraRotati
       }
       const float half_trace = 0.5F * (xx[col] + yy[col]);
       const float half_difference = 0.5F * (xx[col] - yy[col]);
-      const float min_eigenvalue =
-          half_trace - std::sqrt(half_difference * half_difference + xy[col] * xy[col]);
-      flow[field.index(col, row)] = min_eigenvalue < min_gradient_squared || !seen_before
-                                        ? Eigen::Vector2f(kNaN, kNaN)
-                                        : Eigen::Vector2f(d[col][0] * to_x, d[col][1] * to_y);
+      const float radius = std::sqrt(half_difference * half_difference + xy[col] * xy[col]);
+      const std::size_t i = field.index(col, row);
+      const Eigen::Vector2f measured(d[col][0] * to_x, d[col][1] * to_y);
+      const bool textured = half_trace - radius >= min_gradient_squared && seen_before;
+      flow[i] = textured ? measured : Eigen::Vector2f(kNaN, kNaN);
+      edge_flow_[i] = Eigen::Vector2f(kNaN, kNaN);
+      if (!textured && seen_before && half_trace + radius >= min_gradient_squared) {
+        // The gradient's direction, the structure tensor's eigenvector of the larger eigenvalue.
+        const Eigen::Vector2f across = half_difference >= 0.0F
+                                           ? Eigen::Vector2f(half_difference + radius, xy[col])
+                                           : Eigen::Vector2f(xy[col], radius - half_difference);
+        const Eigen::Vector2f normal = across.normalized();
+        edge_flow_[i] = normal * normal.dot(measured);
+      }
     }
   }
   keep(timestamp_s);

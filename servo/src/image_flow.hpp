@@ -28,6 +28,7 @@ class ImageFlowEstimator : public FlowSource {
   void reset() final;
   bool estimated() const final { return true; }
   double image_noise_grey() const final { return noise_grey_; }
+  std::span<const Eigen::Vector2f> edge_flow() const final { return edge_flow_; }
 
  protected:
   // Throws std::invalid_argument when baseline_s is negative or max_kept_images below 1.
@@ -61,6 +62,7 @@ class ImageFlowEstimator : public FlowSource {
   cv::Mat warped_;
   cv::Mat noise_response_;
   double noise_grey_ = 0.0;
+  std::vector<Eigen::Vector2f> edge_flow_;
 };
 
 // Dense inverse search (Kroeger et al. 2016) at one of OpenCV's presets

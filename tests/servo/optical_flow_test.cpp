@@ -174,6 +174,42 @@ TEST(FlowSource, AStraightEdgeGivesNoFlowWhereTextureDoes) {
   EXPECT_GT(texture_valid, (width / 2 - 16) * (height - 16) * 9 / 10);
 }
 
+TEST(FlowSource, AStraightEdgeGivesTheFlowAcrossIt) {
+  const int width = 96;
+  const int height = 64;
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
+  const cv::Mat texture = textured_image(width, height, 5);
+  // Left half: texture; right half: dark above bright, an edge at row 32 + dy; all moving down.
+  const auto scene = [&](int dy) {
+    cv::Mat image = shifted(texture, width, height, 0, dy);
+    image(cv::Rect(width / 2, 0, width / 2, height / 2 + dy)).setTo(60);
+    image(cv::Rect(width / 2, height / 2 + dy, width / 2, height / 2 - dy)).setTo(180);
+    return image;
+  };
+  const std::unique_ptr<FlowSource> flow = make_flow_source(FlowMethod::dis_medium);
+  FlowField field(intrinsics);
+  ASSERT_EQ(update(*flow, scene(0), 0.0, field), FlowStatus::no_previous_frame);
+  ASSERT_EQ(update(*flow, scene(2), 0.2, field), FlowStatus::ok);
+  ASSERT_EQ(flow->edge_flow().size(), field.size());
+  const double across = 2.0 / (intrinsics.fy_px * 0.2);
+  int measured = 0;
+  int right = 0;
+  for (int row = height / 2; row <= height / 2 + 3; ++row) {
+    for (int col = width / 2 + 8; col < width - 8; ++col) {
+      const Eigen::Vector2f edge = flow->edge_flow()[field.index(col, row)];
+      EXPECT_FALSE(field.at(col, row).allFinite());
+      if (edge.allFinite()) {
+        ++measured;
+        right += std::abs(edge.x()) < 0.1 * across && std::abs(edge.y() - across) < 0.3 * across;
+      }
+    }
+  }
+  EXPECT_GT(measured, (width / 2 - 16) * 2);
+  EXPECT_GT(right, measured * 9 / 10);
+  // Textured pixels have their flow in the field, none across an edge.
+  EXPECT_FALSE(flow->edge_flow()[field.index(width / 4, height / 2)].allFinite());
+}
+
 // OpenCV's presets and defaults: DIS matches 8 px patches, at half resolution (medium) or a
 // quarter (fast, ultrafast); Farneback averages over 13 px, TV-L1's median filter is 5 px wide.
 TEST(FlowSource, NoiseCorrelationIsTheEstimatorsWindow) {

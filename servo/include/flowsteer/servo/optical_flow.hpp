@@ -119,6 +119,12 @@ class FlowSource {
   // The standard deviation of the last image's noise in grey levels, as measured on it; 0 for the
   // renderer's flow, which reads no image.
   virtual double image_noise_grey() const { return 0.0; }
+
+  // After an ok update, one entry per pixel: where the texture test left no flow but the image has
+  // an edge (its gradient passes the test across the edge, not along it), the flow's component
+  // across the edge, the one the aperture problem leaves measurable (normal flow, as a vector
+  // along the gradient); NaN elsewhere. Empty for sources that read no image.
+  virtual std::span<const Eigen::Vector2f> edge_flow() const { return {}; }
 };
 
 // The source of `method`: the renderer's flow (synthetic) with `renderer`, else OpenCV's
