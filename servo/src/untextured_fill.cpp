@@ -18,6 +18,11 @@ bool has_flow(const FlowField& field, int col, int row) {
   return field.at(col, row).allFinite();
 }
 
+// Pixels of displacement over the field's interval per unit of its flow.
+double to_px(const FlowField& field) {
+  return field.intrinsics().fx_px * std::max(field.interval_s(), 1e-3);
+}
+
 // A line on the ground: the points p with normal · p = offset.
 struct GroundLine {
   Eigen::Vector2d normal;
@@ -272,8 +277,7 @@ void UntexturedFill::vote(const FlowField& field, const FlatGround& ground, int 
     as_near = across * across.dot(as_near);
     as_floor = across * across.dot(as_floor);
   }
-  const double to_px = field.intrinsics().fx_px * std::max(field.interval_s(), 1e-3);
-  if ((as_near - as_floor).norm() * to_px < options_.agreement_px) {
+  if ((as_near - as_floor).norm() * to_px(field) < options_.agreement_px) {
     return;
   }
   ((measured - as_near).norm() < (measured - as_floor).norm() ? votes.near : votes.floor) += 1;
@@ -347,7 +351,6 @@ bool UntexturedFill::stands_at(const FlowField& field, const FlatGround& ground,
   if (bottom < top) {
     return false;
   }
-  const double to_px = field.intrinsics().fx_px * std::max(field.interval_s(), 1e-3);
   const double x = field.x(col);
   int alike = 0;
   for (int row = top; row <= bottom; ++row) {
@@ -370,8 +373,9 @@ bool UntexturedFill::stands_at(const FlowField& field, const FlatGround& ground,
         floor_depth_m &&
         (flow - ground.static_flow_at(x, y, *floor_depth_m, speed_mps, field.interval_s()))
                 .norm() <= error;
-    alike += !floor_like && error * to_px <= options_.agreement_px +
-                                                 options_.agreement_share * expected.norm() * to_px
+    alike += !floor_like && error * to_px(field) <=
+                                options_.agreement_px +
+                                    options_.agreement_share * expected.norm() * to_px(field)
                  ? 1
                  : 0;
   }
