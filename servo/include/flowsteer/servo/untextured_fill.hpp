@@ -65,8 +65,9 @@ struct UntexturedFillOptions {
 // Srinivasan, ICRA 2007, used the other way round). A column whose surface goes down past the
 // image's bottom, its foot hidden, stands on the line through the feet its neighbours show: a
 // vertical plane, whose distance ahead is the same all along a column. A box lower than the
-// camera, a surface none of whose feet is in view and a plain floor get nothing. Keeps its
-// buffers from frame to frame.
+// camera is a stretch without flow between two edges of the floor whose edges move as something
+// as near as its foot. A surface none of whose feet is in view and a plain floor get nothing.
+// Keeps its buffers from frame to frame.
 class UntexturedFill {
  public:
   explicit UntexturedFill(const UntexturedFillOptions& options = {}) : options_(options) {}
@@ -93,12 +94,6 @@ class UntexturedFill {
     bool foot_hidden = false;  // the surface goes down past the image's bottom
     Eigen::Vector2d foot_m = Eigen::Vector2d::Zero();  // body frame, where its foot is seen
   };
-
-  void find_feet(const FlowField& field, const cv::Mat& grey, const FlatGround& ground,
-                 std::span<const std::uint8_t> ground_mask, double speed_mps);
-  void place_hidden_feet(const FlowField& field, const FlatGround& ground, double speed_mps);
-  bool stands_at(const FlowField& field, const FlatGround& ground, int col, int top, int bottom,
-                 double ahead_m, double speed_mps) const;
   // Rows of one grey-level edge, top_row <= bottom_row.
   struct EdgeBand {
     int bottom_row;
@@ -111,8 +106,6 @@ class UntexturedFill {
     int bottom_row;
     double ahead_m;
   };
-  void find_floor_edges(const FlowField& field, const cv::Mat& grey,
-                        std::span<const std::uint8_t> ground_mask, int col);
   // Vectors at a box's edges nearer its foot's distance than the floor's there, and the other way.
   struct EdgeVotes {
     int near = 0;
@@ -122,17 +115,25 @@ class UntexturedFill {
     Span span;
     EdgeVotes votes;  // of its top edge
   };
+
+  void find_feet(const FlowField& field, const cv::Mat& grey, const FlatGround& ground,
+                 std::span<const std::uint8_t> ground_mask, double speed_mps);
+  void find_floor_edges(const FlowField& field, const cv::Mat& grey,
+                        std::span<const std::uint8_t> ground_mask, int col);
+  void place_hidden_feet(const FlowField& field, const FlatGround& ground, double speed_mps);
   void find_boxes(const FlowField& field, const FlatGround& ground, int col, double speed_mps);
   void confirm_boxes(const FlowField& field, const FlatGround& ground, double speed_mps);
+  bool stands_at(const FlowField& field, const FlatGround& ground, int col, int top, int bottom,
+                 double ahead_m, double speed_mps) const;
   void vote(const FlowField& field, const FlatGround& ground, int col, int row, double ahead_m,
             double speed_mps, EdgeVotes& votes) const;
-  std::span<const Eigen::Vector2f> edge_flow_;  // this frame's, for vote
   bool is_edge(const cv::Mat& grey, int col, int row) const;
   int lowest_edge(const cv::Mat& grey, int col, int top, int bottom) const;
 
   UntexturedFillOptions options_;
-  double edge_threshold_ = 0.0;  // grey levels per column, this frame's
-  int first_ground_row_ = 0;     // this field's first row below the horizon
+  double edge_threshold_ = 0.0;                 // grey levels per column, this frame's
+  int first_ground_row_ = 0;                    // this field's first row below the horizon
+  std::span<const Eigen::Vector2f> edge_flow_;  // this frame's (fill's argument)
   std::vector<Column> columns_;
   std::vector<Eigen::Vector2d> feet_;    // one line's, scratch
   std::vector<EdgeBand> edge_bands_;     // one column's, scratch
