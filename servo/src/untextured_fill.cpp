@@ -18,6 +18,12 @@ bool has_flow(const FlowField& field, int col, int row) {
   return field.at(col, row).allFinite();
 }
 
+// How far ahead of the camera the floor seen at (col, row) is: a foot's distance.
+double ahead_of_floor_m(const FlowField& field, const FlatGround& ground, int col, int row) {
+  const double y = field.y(row);
+  return ground.distance_ahead_m(y, *ground.depth_at(field.x(col), y));
+}
+
 // Pixels of displacement over the field's interval per unit of its flow.
 double to_px(const FlowField& field) {
   return field.intrinsics().fx_px * std::max(field.interval_s(), 1e-3);
@@ -153,16 +159,14 @@ void UntexturedFill::find_feet(const FlowField& field, const cv::Mat& grey,
     }
     find_boxes(field, ground, col, speed_mps);
     const int foot = edge_bands_.back().top_row;
-    const double x = field.x(col);
-    const double y_foot = field.y(foot);
-    const double ahead_m = ground.distance_ahead_m(y_foot, *ground.depth_at(x, y_foot));
+    const double ahead_m = ahead_of_floor_m(field, ground, col, foot);
     if (ahead_m > options_.max_distance_ahead_m ||
         !stands_at(field, ground, col, column.head + 1, foot, ahead_m, speed_mps)) {
       continue;
     }
     column.bottom = foot;
     column.ahead_m = ahead_m;
-    column.foot_m = *ground.point_at(x, y_foot);
+    column.foot_m = *ground.point_at(field.x(col), field.y(foot));
   }
 }
 
@@ -170,12 +174,10 @@ void UntexturedFill::find_feet(const FlowField& field, const cv::Mat& grey,
 // between them: candidates, with the votes of the upper edge, the box's top (confirm_boxes).
 void UntexturedFill::find_boxes(const FlowField& field, const FlatGround& ground, int col,
                                 double speed_mps) {
-  const double x = field.x(col);
   for (std::size_t k = 0; k + 1 < edge_bands_.size(); ++k) {
     const int foot = edge_bands_[k].top_row;
     const EdgeBand& top = edge_bands_[k + 1];
-    const double y_foot = field.y(foot);
-    const double ahead_m = ground.distance_ahead_m(y_foot, *ground.depth_at(x, y_foot));
+    const double ahead_m = ahead_of_floor_m(field, ground, col, foot);
     if (ahead_m > options_.max_distance_ahead_m ||
         !stands_at(field, ground, col, top.bottom_row + 1, foot, ahead_m, speed_mps)) {
       continue;
