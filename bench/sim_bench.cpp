@@ -12,7 +12,8 @@
 //     views rendered beforehand: what a robot runs per frame (RobotBrain: flow,
 //     segmentation, features, control). Perception's budget on one core (perception_ms: flow,
 //     with its texture test and noise measure; segment, with the ground test and the untextured
-//     fill; features): 4 ms at 128², 10 ms at 320×240.
+//     fill; features): 4 ms at 128², 10 ms at 320×240. OpenCV runs on one thread here: DIS
+//     otherwise spreads its work over every core.
 // Counters: each stage's mean milliseconds.
 //   build/bench/sim_bench --benchmark_filter=Numerical
 #include <map>
@@ -23,6 +24,7 @@
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <opencv2/core/utility.hpp>
 
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/robot/robot_brain.hpp"
@@ -155,7 +157,20 @@ Recording record_steps(const sim_camera::WorldSpec& spec) {
   return recording;
 }
 
+// OpenCV's thread count for as long as it lives, then the one before.
+class OpenCvThreads {
+ public:
+  explicit OpenCvThreads(int threads) : before_(cv::getNumThreads()) { cv::setNumThreads(threads); }
+  ~OpenCvThreads() { cv::setNumThreads(before_); }
+  OpenCvThreads(const OpenCvThreads&) = delete;
+  OpenCvThreads& operator=(const OpenCvThreads&) = delete;
+
+ private:
+  int before_;
+};
+
 void RobotStepNumerical(benchmark::State& state) {
+  const OpenCvThreads one_core(1);
   const servo::PerceptionConfig perception = numerical(state);
   const sim_camera::WorldSpec spec =
       room(static_cast<int>(state.range(1)), static_cast<int>(state.range(2)), perception);
