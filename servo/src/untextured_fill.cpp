@@ -5,6 +5,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 
@@ -65,6 +66,32 @@ std::optional<GroundLine> fit_line(std::span<const Eigen::Vector2d> points,
   return GroundLine{normal, normal.dot(centre)};
 }
 
+// The middle value of `values` (the upper one of an even count), which it reorders.
+double upper_median(std::vector<double>& values) {
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// How far ahead the ray through the bottom row's ground point bottom_m meets the nearer of
+// `lines`, where it meets one nearer than bottom_m (within `slack` of its distance); else 0.
+double ahead_on_lines(std::span<const std::optional<GroundLine>> lines,
+                      const Eigen::Vector2d& bottom_m, double slack) {
+  double ahead_m = 0.0;
+  for (const auto& line : lines) {
+    if (!line || std::abs(line->normal.dot(bottom_m)) < 1e-9) {
+      continue;
+    }
+    // The ray's point t · bottom_m is on the line; t < 1 is nearer than the bottom row sees.
+    const double t = line->offset / line->normal.dot(bottom_m);
+    if (t > 0.0 && t < 1.0 + slack) {
+      const double candidate_m = t * bottom_m.x();
+      ahead_m = ahead_m > 0.0 ? std::min(ahead_m, candidate_m) : candidate_m;
+    }
+  }
+  return ahead_m;
+}
+
 }  // namespace
 
 int UntexturedFill::fill(FlowField& derotated, const cv::Mat& grey, double image_noise_grey,
@@ -92,6 +119,7 @@ int UntexturedFill::fill(FlowField& derotated, const cv::Mat& grey, double image
   // standard deviations: noise alone makes almost none over a column's few hundred rows.
   edge_threshold_ = std::max(options_.min_edge_grey, 4.0 * image_noise_grey);
   const FlatGround ground(mount);
+  lag_m_ = speed_mps * std::cos(mount.pitch_rad) * derotated.interval_s();
   boxes_.clear();
   box_columns_.clear();
   find_feet(derotated, grey, ground, ground_mask, speed_mps);
@@ -143,6 +171,7 @@ void UntexturedFill::find_feet(const FlowField& field, const cv::Mat& grey,
     }
   }
   columns_.assign(static_cast<std::size_t>(field.width()), Column{});
+  top_edge_ahead_m_.assign(static_cast<std::size_t>(field.width()), 0.0);
   const int last_row = field.height() - 1;
   for (int col = 0; col < field.width(); ++col) {
     Column& column = columns_[static_cast<std::size_t>(col)];
@@ -321,20 +350,26 @@ void UntexturedFill::place_hidden_feet(const FlowField& field, const FlatGround&
       ++last;
     }
     const std::optional<GroundLine> lines[] = {line_from(first - 1, -1), line_from(last + 1, 1)};
+    // Farther than the bottom row's ground (with the slack), the foot would be in view.
+    auto farthest_m = [&](int col) {
+      const auto bottom_m = ground.point_at(field.x(col), field.y(last_row));
+      return bottom_m ? (1.0 + options_.hidden_foot_slack) * bottom_m->x() : 0.0;
+    };
+    for (int col = first; col <= last; ++col) {
+      top_edge_ahead_m_[static_cast<std::size_t>(col)] =
+          ahead_of_top_edge(field, ground, col, farthest_m(col), speed_mps);
+    }
     for (int col = first; col <= last; ++col) {
       Column& column = columns_[static_cast<std::size_t>(col)];
       const auto bottom_m = ground.point_at(field.x(col), field.y(last_row));
-      double ahead_m = 0.0;
-      for (const auto& line : lines) {
-        if (!line || !bottom_m || std::abs(line->normal.dot(*bottom_m)) < 1e-9) {
-          continue;
-        }
-        // The ray's point t · bottom_m is on the line; t < 1 is nearer than the bottom row sees.
-        const double t = line->offset / line->normal.dot(*bottom_m);
-        if (t > 0.0 && t < 1.0 + options_.hidden_foot_slack) {
-          const double candidate_m = t * bottom_m->x();
-          ahead_m = ahead_m > 0.0 ? std::min(ahead_m, candidate_m) : candidate_m;
-        }
+      if (!bottom_m) {
+        continue;
+      }
+      double ahead_m = ahead_on_lines(lines, *bottom_m, options_.hidden_foot_slack);
+      if (ahead_m == 0.0) {
+        // No line: where its top edge's motion puts it, nearer than the bottom row sees.
+        const double edge_m = median_top_edge_ahead(col, first, last);
+        ahead_m = edge_m < farthest_m(col) ? edge_m : 0.0;
       }
       if (ahead_m > 0.0 &&
           stands_at(field, ground, col, column.head + 1, last_row, ahead_m, speed_mps)) {
@@ -343,6 +378,60 @@ void UntexturedFill::place_hidden_feet(const FlowField& field, const FlatGround&
     }
     first = last + 1;
   }
+}
+
+// How far ahead column col's surface is by the motion of its top edge (rows within edge_votes_px
+// of its head): the flow measured across the edge against a static point's there, which falls as
+// 1 / (Z + v cos θ Δt) with the depth Z (FlatGround::static_flow_at). 0 where the column has no
+// top edge, or where its edge, were it as far as farthest_m, would move too little across itself
+// to tell (near the FOE, or along the edge).
+double UntexturedFill::ahead_of_top_edge(const FlowField& field, const FlatGround& ground, int col,
+                                         double farthest_m, double speed_mps) {
+  const int head = columns_[static_cast<std::size_t>(col)].head;
+  if (head < 0 || !(speed_mps > 0.0)) {
+    return 0.0;
+  }
+  const double x = field.x(col);
+  estimates_.clear();
+  for (int row = std::max(head - options_.edge_votes_px, 0);
+       row <= std::min(head + options_.edge_votes_px, first_ground_row_ - 1); ++row) {
+    const std::size_t i = field.index(col, row);
+    Eigen::Vector2d measured = field.flow()[i].cast<double>();
+    if (!measured.allFinite()) {
+      if (edge_flow_.empty() || !edge_flow_[i].allFinite()) {
+        continue;
+      }
+      measured = edge_flow_[i].cast<double>();
+    }
+    const double y = field.y(row);
+    const auto farthest_depth_m = ground.depth_at_distance_ahead(y, farthest_m);
+    if (!farthest_depth_m || measured.norm() * to_px(field) < options_.agreement_px) {
+      continue;
+    }
+    // Flow of a static point at depth 1 m, as seen across the edge, with no lag.
+    const double unit_across =
+        measured.normalized().dot(ground.static_flow_at(x, y, 1.0, speed_mps, 0.0));
+    if (unit_across / (*farthest_depth_m + lag_m_) * to_px(field) < options_.agreement_px) {
+      continue;
+    }
+    const double depth_m = unit_across / measured.norm() - lag_m_;
+    if (depth_m > 0.0) {
+      estimates_.push_back(ground.distance_ahead_m(y, depth_m));
+    }
+  }
+  return estimates_.empty() ? 0.0 : upper_median(estimates_);
+}
+
+// The median of the top edges' distances ahead (ahead_of_top_edge) of the columns within two of
+// col in first..last, when at least three of them have one; else 0.
+double UntexturedFill::median_top_edge_ahead(int col, int first, int last) {
+  estimates_.clear();
+  for (int c = std::max(col - 2, first); c <= std::min(col + 2, last); ++c) {
+    if (const double ahead_m = top_edge_ahead_m_[static_cast<std::size_t>(c)]; ahead_m > 0.0) {
+      estimates_.push_back(ahead_m);
+    }
+  }
+  return estimates_.size() < 3 ? 0.0 : upper_median(estimates_);
 }
 
 // Whether rows top..bottom of column col look like a surface ahead_m ahead: at least

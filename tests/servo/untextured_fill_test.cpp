@@ -72,13 +72,14 @@ View wall_view(AheadOf ahead_m, double height_m = 2.0) {
 
 // The share of the wall's pixels without flow whose filled flow is within 0.5 px + 20% of a
 // static point's flow there; no pixel but the wall's is filled.
-double share_filled_right(View& v, const UntexturedFillOptions& options = {}) {
+double share_filled_right(View& v, const UntexturedFillOptions& options = {},
+                          std::span<const Eigen::Vector2f> edge_flow = {}) {
   std::vector<bool> measured(v.field.size());
   for (std::size_t i = 0; i < v.field.size(); ++i) {
     measured[i] = v.field.flow()[i].allFinite();
   }
   UntexturedFill fill(options);
-  fill.fill(v.field, v.grey, 0.0, v.mount, kSpeedMps, v.ground_mask);
+  fill.fill(v.field, v.grey, 0.0, v.mount, kSpeedMps, v.ground_mask, edge_flow);
   const FlatGround ground(v.mount);
   const double to_px = v.field.intrinsics().fx_px * kIntervalS;
   int wall = 0;
@@ -141,6 +142,56 @@ TEST(UntexturedFill, WallsBesideTheRobotStandOnTheLineOfTheFeetInView) {
   View v = wall_view([](double x) { return 0.3 / std::max(std::abs(x), 0.05); });
   ASSERT_GT(columns_with_hidden_foot(v), 20);
   EXPECT_GT(share_filled_right(v), 0.9);
+}
+
+// What an estimator measures across the image's horizontal grey-level edges (FlowSource::
+// edge_flow): the vertical component of a static point's flow as far ahead as `ahead_m`.
+std::vector<Eigen::Vector2f> flow_across_edges(const View& v, double ahead_m) {
+  std::vector<Eigen::Vector2f> across(v.field.size(), Eigen::Vector2f(kNaN, kNaN));
+  const FlatGround ground(v.mount);
+  for (int row = 1; row + 1 < v.field.height(); ++row) {
+    const double y = v.field.y(row);
+    const auto depth_m = ground.depth_at_distance_ahead(y, ahead_m);
+    for (int col = 0; col < v.field.width(); ++col) {
+      if (!depth_m ||
+          v.grey.at<std::uint8_t>(row - 1, col) == v.grey.at<std::uint8_t>(row + 1, col)) {
+        continue;
+      }
+      const Eigen::Vector2d flow =
+          ground.static_flow_at(v.field.x(col), y, *depth_m, kSpeedMps, kIntervalS);
+      across[v.field.index(col, row)] = Eigen::Vector2f(0.0F, static_cast<float>(flow.y()));
+    }
+  }
+  return across;
+}
+
+TEST(UntexturedFill, AWallWhoseFootIsNowhereInViewStandsWhereItsTopEdgeMoves) {
+  // 0.35 m ahead, nearer than the bottom row's floor (0.45 m): no column shows its foot, and no
+  // neighbour gives a line. Its top, 0.6 m up, moves across the sky's edge as a point 0.35 m
+  // ahead does.
+  View v = wall_view([](double) { return 0.35; }, 0.6);
+  ASSERT_EQ(columns_with_hidden_foot(v), v.field.width());
+  View without_edge_flow = v;
+  EXPECT_EQ(share_filled_right(without_edge_flow), 0.0);
+  const std::vector<Eigen::Vector2f> across = flow_across_edges(v, 0.35);
+  EXPECT_GT(share_filled_right(v, {}, across), 0.9);
+}
+
+TEST(UntexturedFill, APlainFloorWhoseHorizonMovesGetsNothing) {
+  // No flow and no edge from the bottom row up to the horizon, as on a floor without texture;
+  // its far edge moves as a point 3 m ahead would, farther than the bottom row sees.
+  View v = wall_view([](double) { return 3.0; }, 0.6);
+  std::fill(v.field.flow().begin(), v.field.flow().end(), Eigen::Vector2f(kNaN, kNaN));
+  std::fill(v.ground_mask.begin(), v.ground_mask.end(), 0);
+  for (int row = 0; row < v.field.height(); ++row) {
+    for (int col = 0; col < v.field.width(); ++col) {
+      auto& grey = v.grey.at<std::uint8_t>(row, col);
+      grey = grey == 230 ? 230 : 170;
+    }
+  }
+  const std::vector<Eigen::Vector2f> across = flow_across_edges(v, 3.0);
+  UntexturedFill fill;
+  EXPECT_EQ(fill.fill(v.field, v.grey, 0.0, v.mount, kSpeedMps, v.ground_mask, across), 0);
 }
 
 TEST(UntexturedFill, AFootsBandOfFlowIsPartOfTheFloor) {

@@ -39,14 +39,15 @@ struct UntexturedFillOptions {
   // A surface whose foot is below the image (a wall beside the agent, or one closer than the
   // lowest row sees) stands on the line through the feet of the nearest columns of it that show
   // theirs: at least min_line_feet of them, spread over at least min_line_span_m, within
-  // max_line_rms_m (plus max_line_rms_share of their distance) of one line.
+  // max_line_rms_m (plus max_line_rms_share of their distance) of one line; without such a line,
+  // where its top edge's motion puts it (the flow across the edge within edge_votes_px of it).
   int min_line_feet = 4;
   int max_line_feet = 24;
   double min_line_span_m = 0.15;
   double max_line_rms_m = 0.03;
   double max_line_rms_share = 0.02;
-  // The line must meet the column's ray nearer than the bottom row's ground, within this share
-  // of its distance: farther, and the foot would be in view.
+  // The line or the top edge must put the foot nearer than the bottom row's ground, within this
+  // share of its distance: farther, and the foot would be in view.
   double hidden_foot_slack = 0.05;
   // A box's edges (its top, within edge_votes_px, and its sides) must have at least this many
   // vectors nearer its foot's distance than the floor's there, and more than the other way.
@@ -64,9 +65,10 @@ struct UntexturedFillOptions {
 // static point there (depth from derotated flow and known speed, McCarthy, Barnes and
 // Srinivasan, ICRA 2007, used the other way round). A column whose surface goes down past the
 // image's bottom, its foot hidden, stands on the line through the feet its neighbours show: a
-// vertical plane, whose distance ahead is the same all along a column. A box lower than the
-// camera is a stretch without flow between two edges of the floor whose edges move as something
-// as near as its foot. A surface none of whose feet is in view and a plain floor get nothing.
+// vertical plane, whose distance ahead is the same all along a column; without such a line, where
+// the motion of its top edge puts it, if that is nearer than the bottom row's floor. A box lower
+// than the camera is a stretch without flow between two edges of the floor whose edges move as
+// something as near as its foot. A plain floor gets nothing.
 // Keeps its buffers from frame to frame.
 class UntexturedFill {
  public:
@@ -121,6 +123,9 @@ class UntexturedFill {
   void find_floor_edges(const FlowField& field, const cv::Mat& grey,
                         std::span<const std::uint8_t> ground_mask, int col);
   void place_hidden_feet(const FlowField& field, const FlatGround& ground, double speed_mps);
+  double ahead_of_top_edge(const FlowField& field, const FlatGround& ground, int col,
+                           double farthest_m, double speed_mps);
+  double median_top_edge_ahead(int col, int first, int last);
   void find_boxes(const FlowField& field, const FlatGround& ground, int col, double speed_mps);
   void confirm_boxes(const FlowField& field, const FlatGround& ground, double speed_mps);
   bool stands_at(const FlowField& field, const FlatGround& ground, int col, int top, int bottom,
@@ -131,16 +136,19 @@ class UntexturedFill {
   int lowest_edge(const cv::Mat& grey, int col, int top, int bottom) const;
 
   UntexturedFillOptions options_;
-  double edge_threshold_ = 0.0;                 // grey levels per column, this frame's
-  int first_ground_row_ = 0;                    // this field's first row below the horizon
+  double edge_threshold_ = 0.0;  // grey levels per column, this frame's
+  int first_ground_row_ = 0;     // this field's first row below the horizon
+  double lag_m_ = 0.0;  // how far a static point closes in over the field's interval, v cos θ Δt
   std::span<const Eigen::Vector2f> edge_flow_;  // this frame's (fill's argument)
   std::vector<Column> columns_;
-  std::vector<Eigen::Vector2d> feet_;    // one line's, scratch
-  std::vector<EdgeBand> edge_bands_;     // one column's, scratch
-  std::vector<BoxColumn> box_columns_;   // candidates
-  std::vector<std::uint8_t> box_taken_;  // per candidate, whether a box holds it
-  std::vector<std::size_t> run_;         // one box's candidates, scratch
-  std::vector<Span> boxes_;              // confirmed
+  std::vector<double> top_edge_ahead_m_;  // per column, ahead_of_top_edge's (hidden feet only)
+  std::vector<double> estimates_;         // scratch
+  std::vector<Eigen::Vector2d> feet_;     // one line's, scratch
+  std::vector<EdgeBand> edge_bands_;      // one column's, scratch
+  std::vector<BoxColumn> box_columns_;    // candidates
+  std::vector<std::uint8_t> box_taken_;   // per candidate, whether a box holds it
+  std::vector<std::size_t> run_;          // one box's candidates, scratch
+  std::vector<Span> boxes_;               // confirmed
   std::vector<std::uint8_t> filled_;
 };
 
