@@ -171,7 +171,6 @@ void UntexturedFill::find_feet(const FlowField& field, const cv::Mat& grey,
     }
   }
   columns_.assign(static_cast<std::size_t>(field.width()), Column{});
-  top_edge_ahead_m_.assign(static_cast<std::size_t>(field.width()), 0.0);
   const int last_row = field.height() - 1;
   for (int col = 0; col < field.width(); ++col) {
     Column& column = columns_[static_cast<std::size_t>(col)];
@@ -297,21 +296,35 @@ void UntexturedFill::vote(const FlowField& field, const FlatGround& ground, int 
   Eigen::Vector2d as_near = ground.static_flow_at(x, y, *depth_m, speed_mps, field.interval_s());
   Eigen::Vector2d as_floor =
       ground.static_flow_at(x, y, *floor_depth_m, speed_mps, field.interval_s());
-  Eigen::Vector2d measured = field.flow()[i].cast<double>();
-  if (!measured.allFinite()) {
+  const auto seen = seen_flow(field, i);
+  if (!seen) {
+    return;
+  }
+  if (seen->across_edge) {
     // On an edge only the flow across it is measured: compare that component.
-    if (edge_flow_.empty() || !edge_flow_[i].allFinite() || edge_flow_[i].isZero()) {
-      return;
-    }
-    measured = edge_flow_[i].cast<double>();
-    const Eigen::Vector2d across = measured.normalized();
+    const Eigen::Vector2d across = seen->flow.normalized();
     as_near = across * across.dot(as_near);
     as_floor = across * across.dot(as_floor);
   }
   if ((as_near - as_floor).norm() * to_px(field) < options_.agreement_px) {
     return;
   }
+  const Eigen::Vector2d& measured = seen->flow;
   ((measured - as_near).norm() < (measured - as_floor).norm() ? votes.near : votes.floor) += 1;
+}
+
+// The flow at pixel i: measured, else only across an edge there (FlowSource::edge_flow); empty
+// where there is neither.
+std::optional<UntexturedFill::SeenFlow> UntexturedFill::seen_flow(const FlowField& field,
+                                                                  std::size_t i) const {
+  const Eigen::Vector2d measured = field.flow()[i].cast<double>();
+  if (measured.allFinite()) {
+    return SeenFlow{measured, false};
+  }
+  if (edge_flow_.empty() || !edge_flow_[i].allFinite() || edge_flow_[i].isZero()) {
+    return std::nullopt;
+  }
+  return SeenFlow{edge_flow_[i].cast<double>(), true};
 }
 
 // Each run of columns whose surface goes down past the image's bottom stands on the line through
@@ -323,6 +336,7 @@ void UntexturedFill::place_hidden_feet(const FlowField& field, const FlatGround&
   const int width = field.width();
   const int last_row = field.height() - 1;
   const int max_gap = options_.contact_search_px;
+  top_edge_ahead_m_.resize(static_cast<std::size_t>(width));
   auto is_hidden = [&](int col) { return columns_[static_cast<std::size_t>(col)].foot_hidden; };
   // The line through the feet found from `from` outwards in `step`, skipping gaps of max_gap.
   auto line_from = [&](int from, int step) -> std::optional<GroundLine> {
@@ -395,14 +409,11 @@ double UntexturedFill::ahead_of_top_edge(const FlowField& field, const FlatGroun
   estimates_.clear();
   for (int row = std::max(head - options_.edge_votes_px, 0);
        row <= std::min(head + options_.edge_votes_px, first_ground_row_ - 1); ++row) {
-    const std::size_t i = field.index(col, row);
-    Eigen::Vector2d measured = field.flow()[i].cast<double>();
-    if (!measured.allFinite()) {
-      if (edge_flow_.empty() || !edge_flow_[i].allFinite()) {
-        continue;
-      }
-      measured = edge_flow_[i].cast<double>();
+    const auto seen = seen_flow(field, field.index(col, row));
+    if (!seen) {
+      continue;
     }
+    const Eigen::Vector2d& measured = seen->flow;
     const double y = field.y(row);
     const auto farthest_depth_m = ground.depth_at_distance_ahead(y, farthest_m);
     if (!farthest_depth_m || measured.norm() * to_px(field) < options_.agreement_px) {

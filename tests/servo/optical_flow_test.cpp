@@ -140,6 +140,15 @@ TEST(FlowSource, TheRenderersFlowIsCopiedAndDerotated) {
   EXPECT_THROW(renderer->update({no_image, 1.0}, {}, field), std::invalid_argument);
 }
 
+// Left half: `texture` shifted by (dx, dy); right half: dark above bright, a horizon-like edge at
+// row height / 2 + dy.
+cv::Mat texture_beside_edge(const cv::Mat& texture, int width, int height, int dx, int dy) {
+  cv::Mat image = shifted(texture, width, height, dx, dy);
+  image(cv::Rect(width / 2, 0, width / 2, height / 2 + dy)).setTo(60);
+  image(cv::Rect(width / 2, height / 2 + dy, width / 2, height / 2 - dy)).setTo(180);
+  return image;
+}
+
 // Along a straight edge only the motion across it can be seen (the aperture problem): such pixels
 // get no flow, though their gradient is strong, while textured pixels beside them keep theirs.
 TEST(FlowSource, AStraightEdgeGivesNoFlowWhereTextureDoes) {
@@ -147,13 +156,8 @@ TEST(FlowSource, AStraightEdgeGivesNoFlowWhereTextureDoes) {
   const int height = 64;
   const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
   const cv::Mat texture = textured_image(width, height, 5);
-  // Left half: texture; right half: dark above a bright floor, a horizon-like edge at row 32.
-  const auto scene = [&](int dx) {
-    cv::Mat image = shifted(texture, width, height, dx, 0);
-    image(cv::Rect(width / 2, 0, width / 2, height / 2)).setTo(60);
-    image(cv::Rect(width / 2, height / 2, width / 2, height / 2)).setTo(180);
-    return image;
-  };
+  // The texture moves sideways; the edge stays at row 32.
+  const auto scene = [&](int dx) { return texture_beside_edge(texture, width, height, dx, 0); };
   const std::unique_ptr<FlowSource> flow = make_flow_source(FlowMethod::dis_medium);
   FlowField field(intrinsics);
   ASSERT_EQ(update(*flow, scene(0), 0.0, field), FlowStatus::no_previous_frame);
@@ -179,13 +183,8 @@ TEST(FlowSource, AStraightEdgeGivesTheFlowAcrossIt) {
   const int height = 64;
   const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg);
   const cv::Mat texture = textured_image(width, height, 5);
-  // Left half: texture; right half: dark above bright, an edge at row 32 + dy; all moving down.
-  const auto scene = [&](int dy) {
-    cv::Mat image = shifted(texture, width, height, 0, dy);
-    image(cv::Rect(width / 2, 0, width / 2, height / 2 + dy)).setTo(60);
-    image(cv::Rect(width / 2, height / 2 + dy, width / 2, height / 2 - dy)).setTo(180);
-    return image;
-  };
+  // The texture and the edge move down together.
+  const auto scene = [&](int dy) { return texture_beside_edge(texture, width, height, 0, dy); };
   const std::unique_ptr<FlowSource> flow = make_flow_source(FlowMethod::dis_medium);
   FlowField field(intrinsics);
   ASSERT_EQ(update(*flow, scene(0), 0.0, field), FlowStatus::no_previous_frame);

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -113,6 +114,11 @@ class UntexturedFill {
     int near = 0;
     int floor = 0;
   };
+  // A pixel's flow: measured, or only its component across an edge there.
+  struct SeenFlow {
+    Eigen::Vector2d flow;
+    bool across_edge;
+  };
   struct BoxColumn {
     Span span;
     EdgeVotes votes;  // of its top edge
@@ -132,6 +138,7 @@ class UntexturedFill {
                  double ahead_m, double speed_mps) const;
   void vote(const FlowField& field, const FlatGround& ground, int col, int row, double ahead_m,
             double speed_mps, EdgeVotes& votes) const;
+  std::optional<SeenFlow> seen_flow(const FlowField& field, std::size_t i) const;
   bool is_edge(const cv::Mat& grey, int col, int row) const;
   int lowest_edge(const cv::Mat& grey, int col, int top, int bottom) const;
 
