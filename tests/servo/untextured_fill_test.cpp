@@ -177,10 +177,12 @@ TEST(UntexturedFill, AWallWhoseFootIsNowhereInViewStandsWhereItsTopEdgeMoves) {
   EXPECT_GT(share_filled_right(v, {}, across), 0.9);
 }
 
-TEST(UntexturedFill, APlainFloorWhoseHorizonMovesGetsNothing) {
-  // No flow and no edge from the bottom row up to the horizon, as on a floor without texture;
-  // its far edge moves as a point 3 m ahead would, farther than the bottom row sees.
-  View v = wall_view([](double) { return 3.0; }, 0.6);
+TEST(UntexturedFill, AnEdgeFartherThanTheBottomRowsFloorPlacesNothing) {
+  // No flow and no edge from the bottom row up to a wall's top, as on a floor without texture
+  // that meets a wall of its colour; the edge moves as a point 1.2 m ahead would, well over what
+  // the estimators resolve, but farther than the bottom row sees (0.45 m): the wall's foot would
+  // be in view, and the floor between cannot be told from a surface.
+  View v = wall_view([](double) { return 1.2; }, 0.6);
   std::fill(v.field.flow().begin(), v.field.flow().end(), Eigen::Vector2f(kNaN, kNaN));
   std::fill(v.ground_mask.begin(), v.ground_mask.end(), 0);
   for (int row = 0; row < v.field.height(); ++row) {
@@ -189,7 +191,7 @@ TEST(UntexturedFill, APlainFloorWhoseHorizonMovesGetsNothing) {
       grey = grey == 230 ? 230 : 170;
     }
   }
-  const std::vector<Eigen::Vector2f> across = flow_across_edges(v, 3.0);
+  const std::vector<Eigen::Vector2f> across = flow_across_edges(v, 1.2);
   UntexturedFill fill;
   EXPECT_EQ(fill.fill(v.field, v.grey, 0.0, v.mount, kSpeedMps, v.ground_mask, across), 0);
 }
