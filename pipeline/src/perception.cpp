@@ -110,17 +110,28 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   const servo::FlowFrame flow_frame{flow_image, frame.timestamp_s,
                                     frame.sim ? &frame.sim->flow : nullptr,
                                     frame.sim ? &frame.sim->depth_m : nullptr};
-  // The estimators turn the older image by the mean turn rate over their baseline; the
-  // renderer's flow is derotated by this frame's.
-  const servo::CameraRotation rotation{
+  // The estimators turn the older image by the mean turn rate over their baseline and test the
+  // floor's motion over the distance driven in it; the renderer's flow is derotated by this
+  // frame's turn rate.
+  const auto mean_motion = [&](double from_s, double to_s) {
+    return motions_->mean(from_s, to_s, measured);
+  };
+  const servo::CameraMotion motion{
       servo::camera_angular_velocity(turn_rate_cy, options_.mount.pitch_rad),
       [&](double from_s, double to_s) {
         return servo::rotation_over(
-            servo::camera_angular_velocity(motions_->mean(from_s, to_s, measured).turn_rate_cy,
+            servo::camera_angular_velocity(mean_motion(from_s, to_s).turn_rate_cy,
                                            options_.mount.pitch_rad),
             to_s - from_s);
-      }};
-  status_ = flow_source_->update(flow_frame, rotation, field_);
+      },
+      [&](double from_s, double to_s) {
+        const MotionHistory::Motion mean = mean_motion(from_s, to_s);
+        // turn_rate_cy is positive to the right; the travel's turn, to the left.
+        return servo::BaseTravel{mean.speed_mps * (to_s - from_s),
+                                 -mean.turn_rate_cy * (to_s - from_s)};
+      },
+      options_.mount};
+  status_ = flow_source_->update(flow_frame, motion, field_);
   times.flow = stage.elapsed_ms();
   if (status_ != servo::FlowStatus::ok)
     return status_;

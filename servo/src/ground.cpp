@@ -66,6 +66,22 @@ std::optional<Eigen::Vector2d> FlatGround::point_at(double x, double y) const {
   return (camera_to_body_ * (*depth * Eigen::Vector3d(x, y, 1.0))).head<2>().eval();
 }
 
+std::optional<Eigen::Vector2d> FlatGround::seen_before_moving(
+    double x, double y, const Eigen::Vector2d& moved_m) const {
+  const auto depth = depth_at(x, y);
+  if (!depth) {
+    return std::nullopt;
+  }
+  // Relative to where the camera was, the point lies moved_m further along the body's axes.
+  const Eigen::Vector3d before =
+      *depth * Eigen::Vector3d(x, y, 1.0) +
+      camera_to_body_.transpose() * Eigen::Vector3d(moved_m.x(), moved_m.y(), 0.0);
+  if (before.z() <= 1e-9) {
+    return std::nullopt;
+  }
+  return Eigen::Vector2d(before.x() / before.z(), before.y() / before.z());
+}
+
 std::optional<Eigen::Vector3d> FlatGround::image_of(const Eigen::Vector2d& point_m,
                                                     double height_m) const {
   const Eigen::Vector3d camera =

@@ -47,8 +47,12 @@ double measure_noise_grey(const cv::Mat& grey, cv::Mat& response) {
 }  // namespace
 
 ImageFlowEstimator::ImageFlowEstimator(const OpticalFlowOptions& options) : options_(options) {
-  if (!(options.baseline_s >= 0.0) || options.max_kept_images < 1) {
-    throw std::invalid_argument("optical flow: baseline_s must be >= 0 and max_kept_images >= 1");
+  if (!(options.baseline_s >= 0.0) || options.max_kept_images < 1 ||
+      !(options.ground_match_ratio >= 0.0) || !(options.ground_match_px >= 0.0) ||
+      !(options.ground_match_noise_margin >= 0.0)) {
+    throw std::invalid_argument(
+        "optical flow: baseline_s and the ground_match options must be >= 0 and "
+        "max_kept_images >= 1");
   }
   kept_.resize(static_cast<std::size_t>(options.max_kept_images));
 }
@@ -60,7 +64,7 @@ void ImageFlowEstimator::reset() {
   flow_px_.release();
 }
 
-FlowStatus ImageFlowEstimator::update(const FlowFrame& frame, const CameraRotation& rotation,
+FlowStatus ImageFlowEstimator::update(const FlowFrame& frame, const CameraMotion& motion,
                                       FlowField& field) {
   const cv::Mat& image = frame.image;
   const double timestamp_s = frame.timestamp_s;
@@ -122,11 +126,11 @@ FlowStatus ImageFlowEstimator::update(const FlowFrame& frame, const CameraRotati
   // Pixel homography of the rotation: newer pixel → where its ray fell in the older image.
   Eigen::Matrix3d to_older = Eigen::Matrix3d::Identity();
   const cv::Mat* older = &reference->grey;
-  const bool turned = static_cast<bool>(rotation.between);
+  const bool turned = static_cast<bool>(motion.between);
   if (turned) {
     Eigen::Matrix3d camera_matrix;
     camera_matrix << k.fx_px, 0.0, k.cx_px, 0.0, k.fy_px, k.cy_px, 0.0, 0.0, 1.0;
-    to_older = camera_matrix * rotation.between(reference->timestamp_s, timestamp_s) *
+    to_older = camera_matrix * motion.between(reference->timestamp_s, timestamp_s) *
                camera_matrix.inverse();
     cv::Matx33d homography;
     for (int r = 0; r < 3; ++r) {
@@ -143,6 +147,14 @@ FlowStatus ImageFlowEstimator::update(const FlowFrame& frame, const CameraRotati
   // Backward flow (newer → older image) lands on the newer image's pixels, where this frame's
   // segmentation and depth are; its negation is the motion that brought each pixel there.
   calc(grey_, *older, flow_px_);
+  const bool check_ground =
+      options_.ground_match_ratio > 0.0 && motion.travelled && motion.ground_mount.has_value();
+  if (check_ground) {
+    ground_check_.prepare(grey_, *older, flow_px_, field.intrinsics(), *motion.ground_mount,
+                          motion.travelled(reference->timestamp_s, timestamp_s));
+  }
+  const double ground_noise_grey2 = options_.ground_match_noise_margin * noise_grey_ * noise_grey_;
+  const double ground_match_px2 = options_.ground_match_px * options_.ground_match_px;
 
   // Local texture: √λ_min of the structure tensor over a 5×5 window, the RMS gradient along the
   // image's least textured direction (a 3×3 Sobel is 8× the gradient). On a straight edge (the
@@ -185,6 +197,17 @@ FlowStatus ImageFlowEstimator::update(const FlowFrame& frame, const CameraRotati
       const Eigen::Vector2f measured(d[col][0] * to_x, d[col][1] * to_y);
       const bool textured = half_trace - radius >= min_gradient_squared && seen_before;
       flow[i] = textured ? measured : Eigen::Vector2f(kNaN, kNaN);
+      if (textured && check_ground) {
+        // A misalignment e changes the patch by eᵀ T e, at most |e|² trace(T) with T the
+        // structure tensor. Along an edge the patches cannot tell the two motions apart: the flow
+        // across edges stays the estimator's.
+        const double max_error_grey2 =
+            ground_noise_grey2 + ground_match_px2 * 2.0 * static_cast<double>(half_trace);
+        if (const auto ground = ground_check_.better_displacement_px(
+                col, row, options_.ground_match_ratio, max_error_grey2)) {
+          flow[i] = Eigen::Vector2f(ground->x() * to_x, ground->y() * to_y);
+        }
+      }
       edge_flow_[i] = Eigen::Vector2f(kNaN, kNaN);
       if (!textured && seen_before && half_trace + radius >= min_gradient_squared) {
         // The gradient's direction, the structure tensor's eigenvector of the larger eigenvalue.

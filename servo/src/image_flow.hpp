@@ -8,6 +8,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "flowsteer/servo/optical_flow.hpp"
+#include "ground_motion_check.hpp"
 
 namespace flowsteer::servo {
 
@@ -17,21 +18,24 @@ namespace flowsteer::servo {
 class ImageFlowEstimator : public FlowSource {
  public:
   // On ok the field's interval is the baseline the flow spans. The older image is turned to the
-  // newer one's orientation by rotation.between before the estimator runs (MIG's rotation
+  // newer one's orientation by motion.between before the estimator runs (MIG's rotation
   // compensation), so the estimator sees only the translational flow and the field comes out
   // derotated: a turning agent otherwise hands the estimator displacements of 20 px and more at
   // the edge of a wide view, which DIS falls short of by a quarter, and derotating afterwards
-  // leaves that shortfall in every vector as spurious motion. Pixels whose ray the older image
+  // leaves that shortfall in every vector as spurious motion. Given the base's travel and the
+  // camera's mount, a pixel whose patch the flat ground's motion matches better than the
+  // estimator's flow takes the ground's (GroundMotionCheck). Pixels whose ray the older image
   // did not see get NaN. On any status but ok the image (when it has texture) is kept as the
   // start of the next pair.
-  FlowStatus update(const FlowFrame& frame, const CameraRotation& rotation, FlowField& field) final;
+  FlowStatus update(const FlowFrame& frame, const CameraMotion& motion, FlowField& field) final;
   void reset() final;
   bool estimated() const final { return true; }
   double image_noise_grey() const final { return noise_grey_; }
   std::span<const Eigen::Vector2f> edge_flow() const final { return edge_flow_; }
 
  protected:
-  // Throws std::invalid_argument when baseline_s is negative or max_kept_images below 1.
+  // Throws std::invalid_argument when baseline_s or a ground_match option is negative or
+  // max_kept_images below 1.
   explicit ImageFlowEstimator(const OpticalFlowOptions& options);
 
   // Pixel displacements (CV_32FC2) from `from` to `to`, at the pixels of `from`. displacement_px
@@ -61,6 +65,7 @@ class ImageFlowEstimator : public FlowSource {
   cv::Mat tensor_yy_;
   cv::Mat warped_;
   cv::Mat noise_response_;
+  GroundMotionCheck ground_check_;
   double noise_grey_ = 0.0;
   std::vector<Eigen::Vector2f> edge_flow_;
 };

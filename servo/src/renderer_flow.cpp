@@ -6,7 +6,7 @@
 
 namespace flowsteer::servo {
 
-FlowStatus RendererFlow::update(const FlowFrame& frame, const CameraRotation& rotation,
+FlowStatus RendererFlow::update(const FlowFrame& frame, const CameraMotion& motion,
                                 FlowField& field) {
   if (frame.renderer_flow == nullptr || frame.renderer_depth_m == nullptr) {
     throw std::invalid_argument("the renderer's flow needs a simulator's frames");
@@ -33,7 +33,7 @@ FlowStatus RendererFlow::update(const FlowFrame& frame, const CameraRotation& ro
         depth[i] = d[col];
     }
   }
-  derotate(field, rotation.angular_velocity);
+  derotate(field, motion.angular_velocity);
   return FlowStatus::ok;
 }
 

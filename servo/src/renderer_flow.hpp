@@ -11,8 +11,7 @@ class RendererFlow final : public FlowSource {
   explicit RendererFlow(const RendererFlowOptions& options) : options_(options) {}
 
   // Throws std::invalid_argument when the frame carries no renderer's flow and depth.
-  FlowStatus update(const FlowFrame& frame, const CameraRotation& rotation,
-                    FlowField& field) override;
+  FlowStatus update(const FlowFrame& frame, const CameraMotion& motion, FlowField& field) override;
   // Each frame's flow stands alone: there is nothing to forget.
   void reset() override {}
   bool estimated() const override { return false; }

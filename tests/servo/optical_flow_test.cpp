@@ -124,7 +124,7 @@ TEST(FlowSource, TheRenderersFlowIsCopiedAndDerotated) {
     EXPECT_FALSE(renderer->estimated());
     EXPECT_EQ(renderer->noise_correlation_px(), 1.0);
     FlowField field(intrinsics, true);
-    ASSERT_EQ(renderer->update(frame, {omega, {}}, field), FlowStatus::ok);
+    ASSERT_EQ(renderer->update(frame, {omega, {}, {}, {}}, field), FlowStatus::ok);
     EXPECT_EQ(field.removed_rotation(), omega);
     const Eigen::Vector2d derotated =
         Eigen::Vector2d(0.25, -0.5) - rotational_flow(field.x(2), field.y(2), omega);

@@ -76,7 +76,7 @@ Eigen::Matrix3d rotation_over(const Eigen::Vector3d& camera_omega, double interv
 
 // Removes the rotational part of every vector (CGF Eq. 1 -> Eq. 2) of instantaneous flow.
 // Non-finite vectors stay non-finite so that later stages can count them. Displacement flow has
-// its rotation compensated before it is estimated (CameraRotation::between).
+// its rotation compensated before it is estimated (CameraMotion::between).
 void derotate(FlowField& field, const Eigen::Vector3d& camera_omega);
 
 }  // namespace flowsteer::servo

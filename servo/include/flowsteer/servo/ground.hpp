@@ -34,6 +34,11 @@ class FlatGround {
   double distance_ahead_m(double y, double depth_m) const;
   // Empty where the ray through row y does not reach forward (pointing straight up or back).
   std::optional<double> depth_at_distance_ahead(double y, double distance_ahead_m) const;
+  // Where the ground's point seen at (x, y) was seen before the camera moved by moved_m (metres,
+  // in the body frame of now: x forward, y left) without turning: normalised (x, y); empty at or
+  // above the horizon, or where the point was not in front of the camera.
+  std::optional<Eigen::Vector2d> seen_before_moving(double x, double y,
+                                                    const Eigen::Vector2d& moved_m) const;
   // The ground's point seen at (x, y), in the body frame below the camera (x forward, y left,
   // metres); empty at or above the horizon.
   std::optional<Eigen::Vector2d> point_at(double x, double y) const;

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "flowsteer/base/camera.hpp"
 #include "flowsteer/servo/flow_field.hpp"
 
 namespace flowsteer::servo {
@@ -59,6 +60,19 @@ struct OpticalFlowOptions {
   // ground). `flowsteer eval flow` measures the choice.
   double baseline_s = 0.2;
   int max_kept_images = 8;
+  // Over that baseline the near ground moves tens of pixels, and DIS falls short on it (at 128²,
+  // ground regions in the view's lowest eighth had a third of the ground's motion). Where the
+  // camera's travel and mount are given (CameraMotion), each textured pixel below the horizon whose
+  // 5×5 patch the flat ground's motion matches (mean squared grey difference against the older
+  // image warped each way) below ground_match_ratio of what the estimator's own flow matches, and
+  // as well as a motion within ground_match_px of the true one would (ground_match_px² times the
+  // patch's mean squared gradient, plus ground_match_noise_margin σ², σ the image noise
+  // measured), takes the ground's flow. An upright object near its foot moves as the floor
+  // there; the bound keeps that band to where the two differ by less than ground_match_px, about
+  // a centimetre at a robot's camera. A ratio of 0 never tests the ground.
+  double ground_match_ratio = 0.7;
+  double ground_match_px = 1.0;
+  double ground_match_noise_margin = 4.0;
 };
 
 // The renderer's flow as it comes, or as a camera would see it.
@@ -78,14 +92,26 @@ struct FlowFrame {
   const cv::Mat* renderer_depth_m = nullptr;
 };
 
-// The camera's rotation as the base measured it, which every source takes out of its flow.
-struct CameraRotation {
+// How far the base drove and turned between two times, as its odometry measured it.
+struct BaseTravel {
+  double path_m = 0.0;      // along its path, forward positive
+  double turned_rad = 0.0;  // left positive
+};
+
+// The camera's motion as the base measured it. Every source takes the rotation out of its flow;
+// an estimator told the travel and the camera's mount also tests its flow against the flat
+// ground's motion (OpticalFlowOptions::ground_match_ratio).
+struct CameraMotion {
   // At the frame's time, in the camera frame (camera_angular_velocity): instantaneous flow is
   // derotated by it.
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
   // Between two times (from_s older): R with a static point's direction p in the newer image at
   // R p in the older one (rotation_over). Empty: the camera did not turn.
   std::function<Eigen::Matrix3d(double from_s, double to_s)> between;
+  // Between two times (from_s older). Empty, or without ground_mount: no ground is tested.
+  std::function<BaseTravel(double from_s, double to_s)> travelled;
+  // The camera's height and pitch over a flat ground.
+  std::optional<base::CameraMount> ground_mount;
 };
 
 // Dense optical flow, one class per algorithm behind one interface, as OpenCV's
@@ -98,10 +124,10 @@ class FlowSource {
   virtual ~FlowSource() = default;
 
   // Takes the next frame, taken at frame.timestamp_s (monotonic). On ok, every vector of `field`
-  // is set: flow with `rotation` taken out, or NaN where the flow is not known. On any other
+  // is set: flow with the rotation taken out, or NaN where the flow is not known. On any other
   // status `field` is left untouched. Throws std::invalid_argument when the frame lacks what the
   // source reads, or an estimator's image is not 8-bit with 1 or 3 channels.
-  virtual FlowStatus update(const FlowFrame& frame, const CameraRotation& rotation,
+  virtual FlowStatus update(const FlowFrame& frame, const CameraMotion& motion,
                             FlowField& field) = 0;
 
   // Forgets the previous frames: an estimator's next update returns no_previous_frame.
