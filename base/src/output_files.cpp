@@ -43,9 +43,22 @@ std::string json_string(const std::string& s) {
   return out.str();
 }
 
-std::string json_number(double value) {
+namespace {
+
+std::string exact_number(double value) {
+  char text[32];
+  const auto [end, error] = std::to_chars(text, text + sizeof text, value);
+  return {text, end};
+}
+
+}  // namespace
+
+std::string json_number(double value, Digits digits) {
   if (!std::isfinite(value)) {
     return "null";
+  }
+  if (digits == Digits::exact) {
+    return exact_number(value);
   }
   std::ostringstream out;
   out << std::setprecision(6) << value;
@@ -161,9 +174,12 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
   write_bytes(path, text.data(), text.size());
 }
 
-std::string format_csv_number(double value) {
+std::string format_csv_number(double value, Digits digits) {
   if (!std::isfinite(value)) {
     return "";
+  }
+  if (digits == Digits::exact) {
+    return exact_number(value);
   }
   char text[32];
   std::snprintf(text, sizeof text, "%.7g", value);
@@ -190,7 +206,7 @@ void CsvTable::write(const std::filesystem::path& path) const {
       out << (k > 0 ? "," : "") << row.labels[k];
     }
     for (std::size_t k = 0; k < row.values.size(); ++k) {
-      out << (k > 0 || !row.labels.empty() ? "," : "") << format_csv_number(row.values[k]);
+      out << (k > 0 || !row.labels.empty() ? "," : "") << format_csv_number(row.values[k], digits_);
     }
     out << "\n";
   }

@@ -1,5 +1,6 @@
 #include "flowsteer/robot/robot_brain.hpp"
 
+#include <cmath>
 #include <iomanip>
 
 #include "flowsteer/base/clock.hpp"
@@ -54,6 +55,10 @@ base::Command RobotBrain::step(const LoopInput& input) {
       *frame_log_ << " latency_ms " << 1e3 * (base::monotonic_now_s() - input.frame.timestamp_s);
     }
     *frame_log_ << std::defaultfloat << "\n";
+  }
+  if (recorder_ != nullptr) {
+    recorder_->percept(0, static_cast<std::uint64_t>(std::llround(input.frame.timestamp_s * 1e9)),
+                       brain_, input.frame.image);
   }
   return output.command;
 }

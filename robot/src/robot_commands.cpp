@@ -1,18 +1,22 @@
 #include "flowsteer/robot/robot_commands.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <streambuf>
 
+#include "flowsteer/base/clock.hpp"
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/calibration/camera_info.hpp"
 #include "flowsteer/camera_io/replay_source.hpp"
 #include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/pipeline/overlay.hpp"
 #include "flowsteer/robot/robot_brain.hpp"
+#include "recorded_camera.hpp"
 
 namespace flowsteer::robot {
 
@@ -71,6 +75,27 @@ std::optional<config::GoalSection> goal_of(const RunCommand& command,
   return g;
 }
 
+// The robot loop, with its recording finished however the loop ends: a run that failed is the
+// one most worth looking at.
+RobotLoopResult run_and_record(camera_io::FrameSource& camera, drivers::MobileBase* robot_base,
+                               RobotBrain& brain, const RobotLoopOptions& options,
+                               const std::atomic<bool>& stop_requested, std::ostream& events,
+                               std::optional<pipeline::RunRecorder>& recorder) {
+  RobotLoopResult result;
+  try {
+    result = run_robot_loop(camera, robot_base, brain, options, stop_requested, events);
+  } catch (const std::exception& e) {
+    if (recorder) {
+      recorder->finish({{"ended", std::string("error: ") + e.what()}});
+    }
+    throw;
+  }
+  if (recorder) {
+    recorder->finish({{"ended", stop_reason_name(result.reason)}});
+  }
+  return result;
+}
+
 }  // namespace
 
 RobotLoopResult run_robot_command(const RunCommand& command,
@@ -121,8 +146,16 @@ RobotLoopResult run_robot_command(const RunCommand& command,
     events << ", goal " << goal->distance_m << " m at " << goal->bearing_rad / kDeg << " deg";
   }
   events << "\n";
+  std::optional<pipeline::RunRecorder> recorder;
+  if (command.recording) {
+    recorder.emplace(*command.recording, "monotonic", "odom");
+    recorder->add_agent("", k, launch.perception.mount.value_or(base::CameraMount{}));
+    recorder->write_mounts(static_cast<std::uint64_t>(std::llround(base::monotonic_now_s() * 1e9)));
+    options.recorder = &*recorder;
+    brain.record_into(&*recorder);
+  }
   const RobotLoopResult result =
-      run_robot_loop(*camera, robot_base.get(), brain, options, stop_requested, events);
+      run_and_record(*camera, robot_base.get(), brain, options, stop_requested, events, recorder);
   events << "flowsteer run: " << result.frames << " frames";
   if (result.repeated_frames > 0) {
     events << " (" << result.repeated_frames << " repeated)";
@@ -132,50 +165,66 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   return result;
 }
 
-ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log) {
-  if (command.hfov_deg && !command.camera_info.empty()) {
-    throw std::invalid_argument("give --hfov-deg or --camera-info, not both");
-  }
-  camera_io::ReplayOptions options;
-  options.path = command.video;
+namespace {
+
+// What a replay reads: frames with the base's motion at each, the lens, the camera's mount where
+// the recording says it, and the frame rate of the overlay video.
+struct ReplayInput {
+  base::CameraIntrinsics intrinsics;
+  std::optional<base::CameraMount> mount;
+  double frame_rate_hz = 30.0;
+  std::function<bool(camera_io::Frame&, drivers::BodyVelocity&)> read;
+};
+
+camera_io::LensOptions lens_of(const ReplayCommand& command, std::ostream& log) {
+  camera_io::LensOptions lens;
   if (command.hfov_deg) {
     if (!(*command.hfov_deg > 0.0 && *command.hfov_deg < 180.0)) {
       throw std::invalid_argument("--hfov-deg " + std::to_string(*command.hfov_deg) +
                                   ": must be in (0, 180)");
     }
-    options.lens.horizontal_fov_rad = *command.hfov_deg * kDeg;
+    lens.horizontal_fov_rad = *command.hfov_deg * kDeg;
   }
   if (!command.camera_info.empty()) {
     std::vector<std::string> warnings;
-    options.lens.model = calibration::read_camera_info(command.camera_info, warnings).model;
+    lens.model = calibration::read_camera_info(command.camera_info, warnings).model;
     for (const std::string& w : warnings) {
       log << "flowsteer replay: " << w << "\n";
     }
   }
-  if (command.flow == servo::FlowMethod::synthetic) {
-    throw std::invalid_argument("--flow synthetic needs a simulator; a recording needs one of " +
-                                config::numerical_flow_method_names());
-  }
-  if (!(command.speed_mps >= 0.0)) {
-    throw std::invalid_argument("--speed must be >= 0");
-  }
-  camera_io::ReplaySource source(options);
+  return lens;
+}
+
+bool is_mcap(const std::string& path) {
+  return std::filesystem::path(path).extension() == ".mcap";
+}
+
+// The pipeline over every frame, with the files it writes.
+ReplaySummary replay(const ReplayCommand& command, const ReplayInput& input, std::ostream& log) {
   config::PerceptionSection perception;
   perception.flow = command.flow;
+  perception.mount = input.mount;
   config::ControllerSection controller;
-  RobotBrain robot(source.intrinsics(), robot_brain_config(perception, controller), log);
+  RobotBrain robot(input.intrinsics, robot_brain_config(perception, controller), log);
   const pipeline::Brain& brain = robot.brain();
 
   base::OutputDir out(command.out_dir);
-  const cv::Size size(source.intrinsics().width_px, source.intrinsics().height_px);
-  const double fps = source.frame_rate_hz() > 0.0 ? source.frame_rate_hz() : 30.0;
-  std::unique_ptr<cv::VideoWriter> video =
-      pipeline::open_video(out.staging_path("overlay.mp4"), pipeline::overlay_size(size), fps);
+  std::optional<pipeline::RunRecorder> recorder;
+  if (command.recording) {
+    recorder.emplace(*command.recording, "recording", "odom");
+    recorder->add_agent("", input.intrinsics, input.mount.value_or(base::CameraMount{}));
+    recorder->write_mounts(0);
+  }
+  const cv::Size size(input.intrinsics.width_px, input.intrinsics.height_px);
+  std::unique_ptr<cv::VideoWriter> video = pipeline::open_video(
+      out.staging_path("overlay.mp4"), pipeline::overlay_size(size), input.frame_rate_hz);
 
+  // Exact, so that a replay can be compared with the run it replays.
   base::CsvTable features({"status", "kind", "frame", "t_s", "label", "centre_x", "centre_y",
-                           "width", "foe_x", "foe_y", "ttc_s", "pixels"});
-  base::CsvTable commands({"flow_status", "frame", "t_s", "objects", "goal_bearing_rad",
-                           "accel_mps2", "turn_rate", "cost"});
+                           "width", "foe_x", "foe_y", "ttc_s", "pixels"},
+                          base::Digits::exact);
+  base::CsvTable commands({"flow_status", "frame", "t_s", "speed_mps", "turn_rate_measured",
+                           "objects", "goal_bearing_rad", "accel_mps2", "turn_rate", "cost"});
   const std::optional<double> bearing =
       command.goal_bearing_deg ? std::optional<double>(*command.goal_bearing_deg * kDeg)
                                : std::nullopt;
@@ -183,9 +232,9 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
   ReplaySummary summary;
   double step_ms = 0.0;
   camera_io::Frame frame;
-  while (source.read(frame, 0.0) == camera_io::ReadStatus::ok) {
-    const base::Command c =
-        robot.step(LoopInput{frame, {command.speed_mps, 0.0}, bearing, std::nullopt});
+  drivers::BodyVelocity measured;
+  while (input.read(frame, measured)) {
+    const base::Command c = robot.step(LoopInput{frame, measured, bearing, std::nullopt});
     const auto seq = static_cast<double>(frame.sequence);
     ++summary.frames;
     if (brain.blind()) {
@@ -201,18 +250,83 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
       ++summary.object_rows;
     }
     commands.add({servo::to_string(brain.flow_status())},
-                 {seq, frame.timestamp_s, static_cast<double>(brain.objects().size()),
-                  bearing.value_or(nan), c.accel_mps2, c.turn_rate, brain.output().cost});
+                 {seq, frame.timestamp_s, measured.speed_mps, measured.turn_rate,
+                  static_cast<double>(brain.objects().size()), bearing.value_or(nan), c.accel_mps2,
+                  c.turn_rate, brain.output().cost});
+    if (recorder) {
+      recorder->percept(0, static_cast<std::uint64_t>(std::llround(frame.timestamp_s * 1e9)), brain,
+                        frame.image);
+    }
     video->write(pipeline::draw_overlay(frame.image, brain.flow(), brain.objects(),
-                                        source.intrinsics(), bearing));
+                                        input.intrinsics, bearing));
   }
   video->release();
   features.write(out.staging_path("features.csv"));
   commands.write(out.staging_path("commands.csv"));
+  if (recorder) {
+    recorder->finish({{"replay_of", command.video}});
+  }
   out.commit();
   const std::size_t seeing = summary.frames - summary.blind_frames;
   summary.mean_step_ms = seeing > 0 ? step_ms / static_cast<double>(seeing) : 0.0;
   return summary;
+}
+
+}  // namespace
+
+ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log) {
+  if (command.hfov_deg && !command.camera_info.empty()) {
+    throw std::invalid_argument("give --hfov-deg or --camera-info, not both");
+  }
+  if (command.flow == servo::FlowMethod::synthetic) {
+    throw std::invalid_argument("--flow synthetic needs a simulator; a recording needs one of " +
+                                config::numerical_flow_method_names());
+  }
+  if (command.speed_mps && !(*command.speed_mps >= 0.0)) {
+    throw std::invalid_argument("--speed must be >= 0");
+  }
+  const camera_io::LensOptions lens = lens_of(command, log);
+  if (is_mcap(command.video)) {
+    const bool lens_given = command.hfov_deg || !command.camera_info.empty();
+    RecordedCamera camera(command.video, {command.image_topic, command.odometry_topic},
+                          lens_given ? std::optional(lens) : std::nullopt);
+    if (camera.has_odometry() && command.speed_mps) {
+      throw std::invalid_argument("--speed: " + command.video + " has odometry (" +
+                                  camera.odometry_topic() + "), which gives the speed");
+    }
+    const double speed_mps = command.speed_mps.value_or(0.0);
+    log << "flowsteer replay: " << camera.image_topic() << ", "
+        << (camera.has_odometry() ? "odometry " + camera.odometry_topic()
+                                  : "no odometry: speed " + std::to_string(speed_mps) + " m/s")
+        << (camera.mount() ? ", camera mount from /tf_static" : "") << "\n";
+    return replay(command,
+                  {camera.intrinsics(), camera.mount(), 30.0,
+                   [&](camera_io::Frame& frame, drivers::BodyVelocity& measured) {
+                     const bool ok = camera.read(frame, measured);
+                     if (!camera.has_odometry()) {
+                       measured = {speed_mps, 0.0};
+                     }
+                     return ok;
+                   }},
+                  log);
+  }
+  if (!command.image_topic.empty() || !command.odometry_topic.empty()) {
+    throw std::invalid_argument("--image-topic and --odom-topic are for an MCAP recording, not " +
+                                command.video);
+  }
+  camera_io::ReplayOptions options;
+  options.path = command.video;
+  options.lens = lens;
+  camera_io::ReplaySource source(options);
+  const drivers::BodyVelocity assumed{command.speed_mps.value_or(0.0), 0.0};
+  return replay(command,
+                {source.intrinsics(), std::nullopt,
+                 source.frame_rate_hz() > 0.0 ? source.frame_rate_hz() : 30.0,
+                 [&](camera_io::Frame& frame, drivers::BodyVelocity& measured) {
+                   measured = assumed;
+                   return source.read(frame, 0.0) == camera_io::ReadStatus::ok;
+                 }},
+                log);
 }
 
 }  // namespace flowsteer::robot

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "flowsteer/base/clock.hpp"
+#include "flowsteer/base/command.hpp"
 #include "flowsteer/pipeline/brain.hpp"
 
 namespace flowsteer::robot {
@@ -61,27 +62,43 @@ drivers::BodyVelocity travelled(const drivers::WheelOdometry& from,
       {(to.left_rad - from.left_rad) / dt_s, (to.right_rad - from.right_rad) / dt_s}, geometry);
 }
 
+std::uint64_t recording_ns(double t_s) {
+  return static_cast<std::uint64_t>(std::llround(t_s * 1e9));
+}
+
+// What the drive was just sent, as the body's velocity from the wheel speeds on the wire (after
+// every limit, the watchdog and a stop), and where the odometry puts the base.
+void record_update(pipeline::RunRecorder& recorder, double t_s, const drivers::BaseState& state,
+                   const drivers::WheelGeometry& geometry, const Odometer& odometer) {
+  const std::uint64_t t_ns = recording_ns(t_s);
+  const drivers::BodyVelocity sent = drivers::from_wheels(state.sent.wheels, geometry);
+  recorder.command(0, t_ns, sent.speed_mps, sent.turn_rate);
+  recorder.odometry(0, t_ns, odometer.x_m(), odometer.y_m(), odometer.yaw_rad(),
+                    state.measured.speed_mps, state.measured.turn_rate);
+  recorder.write_transforms(t_ns);
+}
+
 }  // namespace
 
-GoalTracker::GoalTracker(const config::GoalSection& goal)
-    : goal_x_m_(goal.distance_m * std::cos(goal.bearing_rad)),
-      goal_y_m_(-goal.distance_m * std::sin(goal.bearing_rad)) {}
-
-void GoalTracker::advance(const drivers::BodyVelocity& measured, double dt_s) {
-  // The turn rate is about the camera's y axis (down): the yaw rate is its negative.
-  const double yaw_rate = -measured.turn_rate;
+void Odometer::advance(const drivers::BodyVelocity& measured, double dt_s) {
+  const double yaw_rate = base::yaw_rate_of(measured.turn_rate);
   const double mid_yaw = yaw_rad_ + 0.5 * yaw_rate * dt_s;
   x_m_ += measured.speed_mps * std::cos(mid_yaw) * dt_s;
   y_m_ += measured.speed_mps * std::sin(mid_yaw) * dt_s;
   yaw_rad_ += yaw_rate * dt_s;
 }
 
+GoalTracker::GoalTracker(const config::GoalSection& goal)
+    : goal_x_m_(goal.distance_m * std::cos(goal.bearing_rad)),
+      goal_y_m_(-goal.distance_m * std::sin(goal.bearing_rad)) {}
+
 double GoalTracker::bearing_rad() const {
-  return pipeline::goal_bearing_rad(goal_x_m_ - x_m_, goal_y_m_ - y_m_, yaw_rad_);
+  return pipeline::goal_bearing_rad(goal_x_m_ - odometer_.x_m(), goal_y_m_ - odometer_.y_m(),
+                                    odometer_.yaw_rad());
 }
 
 double GoalTracker::distance_m() const {
-  return std::hypot(goal_x_m_ - x_m_, goal_y_m_ - y_m_);
+  return std::hypot(goal_x_m_ - odometer_.x_m(), goal_y_m_ - odometer_.y_m());
 }
 
 const char* stop_reason_name(StopReason reason) {
@@ -116,6 +133,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::MobileBa
   double last_frame_s = base::monotonic_now_s();
   double last_update_s = last_frame_s;
   drivers::WheelOdometry last_odometry;  // since configure(): zero
+  Odometer odometer;
   camera_io::Frame frame;
   cv::Mat last_picture;  // the last frame the brain saw
   const auto stop = [&](StopReason reason, const std::string& why) {
@@ -124,6 +142,9 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::MobileBa
     if (robot_base != nullptr) {
       // The stopper deactivates; latching the stop first makes the zero immediate.
       robot_base->emergency_stop();
+      if (options.recorder != nullptr) {
+        options.recorder->command(0, recording_ns(base::monotonic_now_s()), 0.0, 0.0);
+      }
       log << ": base " << robot_base->drive().name() << " stopped";
     }
     log << "\n";
@@ -182,13 +203,21 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::MobileBa
       const drivers::BaseState state = robot_base->update(update_s);
       measured = state.measured;
       result.max_measured_speed_mps = std::max(result.max_measured_speed_mps, measured.speed_mps);
-      if (goal && update_s > last_update_s) {
-        goal->advance(travelled(last_odometry, state.drive.odometry, update_s - last_update_s,
-                                robot_base->stage().config().geometry),
-                      update_s - last_update_s);
+      const drivers::WheelGeometry& geometry = robot_base->stage().config().geometry;
+      if (update_s > last_update_s) {
+        const double dt_s = update_s - last_update_s;
+        const drivers::BodyVelocity moved =
+            travelled(last_odometry, state.drive.odometry, dt_s, geometry);
+        odometer.advance(moved, dt_s);
+        if (goal) {
+          goal->advance(moved, dt_s);
+        }
       }
       last_update_s = update_s;
       last_odometry = state.drive.odometry;
+      if (options.recorder != nullptr) {
+        record_update(*options.recorder, update_s, state, geometry, odometer);
+      }
     }
     if (options.max_frames > 0 && result.frames >= options.max_frames) {
       stop(StopReason::frame_limit, "frame limit reached");

@@ -28,7 +28,81 @@ cv::Scalar agent_color(std::size_t i) {
   return palette[i % std::size(palette)];
 }
 
+namespace fox = recording::foxglove;
+
+fox::Color scene_color(const cv::Scalar& bgr) {
+  return {bgr[2] / 255.0, bgr[1] / 255.0, bgr[0] / 255.0, 1.0};
+}
+
+// A solid standing on the ground: its centre half its height up, turned by its yaw.
+fox::Solid scene_solid(const sim_camera::Solid& s, const fox::Color& color) {
+  fox::Solid out;
+  out.pose.position = {s.centre_m.x(), s.centre_m.y(), 0.5 * s.height_m};
+  out.pose.orientation = recording::ros2::Quaternion::from_yaw(s.yaw_rad);
+  out.size = s.shape == sim_camera::Solid::Shape::box
+                 ? recording::ros2::Vector3{s.size_m.x(), s.size_m.y(), s.height_m}
+                 : recording::ros2::Vector3{2.0 * s.radius_m, 2.0 * s.radius_m, s.height_m};
+  out.color = color;
+  return out;
+}
+
+void add_solid(fox::SceneEntity& entity, const sim_camera::Solid& s, const fox::Color& color) {
+  auto& list = s.shape == sim_camera::Solid::Shape::box ? entity.cubes : entity.cylinders;
+  list.push_back(scene_solid(s, color));
+}
+
 }  // namespace
+
+std::vector<fox::SceneEntity> scene_entities(const sim_camera::World& world, bool with_static) {
+  const sim_camera::WorldSpec& spec = world.spec();
+  std::vector<fox::SceneEntity> entities;
+  if (with_static) {
+    fox::SceneEntity& obstacles = entities.emplace_back();
+    obstacles.id = "obstacles";
+    obstacles.frame_id = "world";
+    for (const sim_camera::Solid& o : spec.obstacles) {
+      add_solid(obstacles, o, {0.6, 0.6, 0.6, 1.0});
+    }
+    fox::SceneEntity& goals = entities.emplace_back();
+    goals.id = "goals";
+    goals.frame_id = "world";
+    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+      for (const Eigen::Vector2d& g : spec.agents[i].goals) {
+        fox::Color color = scene_color(agent_color(i));
+        color.a = 0.35;
+        const double d = 2.0 * spec.agents[i].goal_radius_m;
+        goals.cylinders.push_back({{{g.x(), g.y(), 0.01}, {}}, {d, d, 0.02}, color});
+      }
+    }
+  }
+  fox::SceneEntity& agents = entities.emplace_back();
+  agents.id = "agents";
+  agents.frame_id = "world";
+  for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+    if (!world.present(i)) {
+      continue;
+    }
+    const sim_camera::AgentSpec& a = spec.agents[i];
+    const sim_camera::AgentState& s = world.agents()[i];
+    sim_camera::Solid body;
+    body.shape = sim_camera::Solid::Shape::cylinder;
+    body.centre_m = s.position_m;
+    body.radius_m = a.radius_m;
+    body.height_m = a.height_m;
+    add_solid(agents, body, scene_color(agent_color(i)));
+    agents.texts.push_back({{{s.position_m.x(), s.position_m.y(), a.height_m + 0.2}, {}},
+                            a.name,
+                            14.0,
+                            scene_color(agent_color(i))});
+  }
+  fox::SceneEntity& moving = entities.emplace_back();
+  moving.id = "moving";
+  moving.frame_id = "world";
+  for (std::size_t k = 0; k < spec.moving.size(); ++k) {
+    add_solid(moving, world.moving_now(k), {0.43, 0.43, 0.43, 1.0});
+  }
+  return entities;
+}
 
 void write_image(const std::filesystem::path& path, const cv::Mat& image) {
   std::vector<std::uint8_t> encoded;

@@ -22,6 +22,7 @@
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/pipeline/overlay.hpp"
+#include "flowsteer/recording/foxglove_messages.hpp"
 #include "flowsteer/sim/outputs.hpp"
 #include "flowsteer/sim/simulated_agent.hpp"
 
@@ -153,7 +154,8 @@ class CostLog {
 using TrajectoryRow = std::array<double, 8>;
 
 void write_trajectories(const std::filesystem::path& path, const std::vector<TrajectoryRow>& rows) {
-  base::CsvTable csv({"t", "agent", "x", "y", "heading", "v", "a_c", "omega"});
+  // Exact: a recording's poses and other tools compare to these bit for bit.
+  base::CsvTable csv({"t", "agent", "x", "y", "heading", "v", "a_c", "omega"}, base::Digits::exact);
   for (const TrajectoryRow& row : rows) {
     csv.add({row.begin(), row.end()});
   }
@@ -197,9 +199,10 @@ class SimulationRun {
       out_.emplace(options.out_dir);
     }
     const auto steps = static_cast<std::size_t>(total_steps_);
+    const bool recorded_images = options.recording && options.recording->images_every > 0;
     for (std::size_t i = 0; i < spec_.agents.size(); ++i) {
-      const auto reads =
-          options.video ? sim_camera::RenderChannels::all : sim_camera::RenderChannels::geometry;
+      const auto reads = options.video || recorded_images ? sim_camera::RenderChannels::all
+                                                          : sim_camera::RenderChannels::geometry;
       AgentLoop loop;
       if (!driven(i)) {
         loop.agent = std::make_unique<SimulatedAgent>(world_, i, reads);
@@ -216,6 +219,9 @@ class SimulationRun {
       loops_.push_back(std::move(loop));
     }
     trajectories_.reserve(steps * loops_.size());
+    if (options.recording) {
+      start_recording(*options.recording);
+    }
     batch_agents_.reserve(loops_.size());
     batch_views_.reserve(loops_.size());
     batch_out_.reserve(loops_.size());
@@ -255,7 +261,10 @@ class SimulationRun {
                                commands_[i].turn_rate});
       paths_[i].push_back(s.position_m);
     }
+    const double t_s = world_.time_s();
+    record_world();
     world_.step(commands_);
+    record_commands(t_s);
     account_motion();
   }
 
@@ -285,6 +294,11 @@ class SimulationRun {
   void write(const SimResult& result) {
     if (options_.driver != nullptr) {
       options_.driver->finish(out_ ? &*out_ : nullptr);
+    }
+    if (recorder_) {
+      recorder_->finish({{"scenario", spec_.name},
+                         {"step_s", base::json_number(spec_.step_s)},
+                         {"arrival", std::string(to_string(spec_.arrival))}});
     }
     if (!out_) {
       return;
@@ -395,6 +409,10 @@ class SimulationRun {
     sum_ += loop.times;
     ++agent_steps_;
     costs_.add(world_.time_s(), i, output);
+    if (recorder_) {
+      recorder_->percept(i, time_ns(world_.time_s()), loop.agent->brain(),
+                         loop.agent->frame().image);
+    }
     if (options_.video && out_) {
       if (!loop.video) {
         loop.video = pipeline::open_video(out_->staging_path("agent_" + std::to_string(i) + ".mp4"),
@@ -402,6 +420,56 @@ class SimulationRun {
                                           1.0 / spec_.step_s);
       }
       loop.video->write(draw_overlay(*loop.agent));
+    }
+  }
+
+  static std::uint64_t time_ns(double t_s) {
+    return static_cast<std::uint64_t>(std::llround(t_s * 1e9));
+  }
+
+  // The recording's agents, each under its name as ROS writes names, and their cameras' mounts.
+  void start_recording(const pipeline::RecordingOptions& options) {
+    recorder_.emplace(options, "simulation", "world");
+    for (const sim_camera::AgentSpec& a : spec_.agents) {
+      const sim_camera::CameraSpec& c = a.camera;
+      recorder_->add_agent(
+          pipeline::RunRecorder::ros_name(a.name),
+          base::CameraIntrinsics::from_horizontal_fov(c.width_px, c.height_px, c.hfov_rad),
+          base::CameraMount{c.height_m, c.pitch_rad});
+    }
+    recorder_->write_mounts(0);
+    world_channel_ = recorder_->json_channel("/world", recording::foxglove::kSceneUpdate,
+                                             recording::foxglove::scene_update_schema());
+  }
+
+  // Every agent's pose before the step (as trajectories.csv has it), /tf, and the world.
+  void record_world() {
+    if (!recorder_) {
+      return;
+    }
+    const std::uint64_t t_ns = time_ns(world_.time_s());
+    for (std::size_t i = 0; i < loops_.size(); ++i) {
+      const sim_camera::AgentState& s = world_.agents()[i];
+      recorder_->odometry(i, t_ns, s.position_m.x(), s.position_m.y(), s.yaw_rad, s.speed_mps,
+                          s.turn_rate);
+    }
+    recorder_->write_transforms(t_ns);
+    const std::string scene =
+        recording::foxglove::scene_update_json(t_ns, scene_entities(world_, !scene_drawn_));
+    scene_drawn_ = true;
+    recorder_->writer().write(world_channel_, t_ns,
+                              {reinterpret_cast<const std::uint8_t*>(scene.data()), scene.size()});
+  }
+
+  // What each agent was told for the step that began at t_s: the speed and turn rate the world
+  // gave it from its command.
+  void record_commands(double t_s) {
+    if (!recorder_) {
+      return;
+    }
+    for (std::size_t i = 0; i < loops_.size(); ++i) {
+      const sim_camera::AgentState& s = world_.agents()[i];
+      recorder_->command(i, time_ns(t_s), s.speed_mps, s.turn_rate);
     }
   }
 
@@ -481,7 +549,10 @@ class SimulationRun {
   sim_camera::World world_;
   tbb::task_arena arena_;
   tbb::enumerable_thread_specific<std::unique_ptr<sim_camera::Renderer>> renderers_;
-  std::optional<base::OutputDir> out_;  // none: no files
+  std::optional<base::OutputDir> out_;             // none: no files
+  std::optional<pipeline::RunRecorder> recorder_;  // none: no recording
+  std::uint16_t world_channel_ = 0;
+  bool scene_drawn_ = false;  // the static obstacles and goals are in the recording
   int total_steps_;
   std::vector<AgentLoop> loops_;
   // This step's views rendered together: their agents, the views and where each goes.

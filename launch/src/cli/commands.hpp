@@ -6,12 +6,14 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "flowsteer/base/bounds.hpp"
+#include "flowsteer/pipeline/run_recorder.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 #include "flowsteer/sim_camera/world_spec.hpp"
@@ -83,5 +85,14 @@ void one_value_per_use(CLI::App& command);
 // Adds SCENARIO_FILE, --scenario, --steersuite, --seed, --law and --without to a command that runs
 // a scenario.
 void add_scenario_options(CLI::App& command, ScenarioChoice& choice);
+
+// --mcap FILE and --mcap-images N on sim, run, replay and sil: the run's MCAP recording.
+struct RecordingChoice {
+  std::string path;
+  int images_every = 1;
+};
+void add_recording_options(CLI::App& command, RecordingChoice& choice);
+// None without --mcap.
+std::optional<pipeline::RecordingOptions> recording_options(const RecordingChoice& choice);
 
 }  // namespace flowsteer::cli

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/sim/simulation.hpp"
 
@@ -149,6 +150,24 @@ void add_scenario_options(CLI::App& command, ScenarioChoice& choice) {
                      "(default: the scenario's): " +
                          servo::law_mechanism_names());
   command.add_option("--arrival", choice.arrival, kArrivalHelp);
+}
+
+void add_recording_options(CLI::App& command, RecordingChoice& choice) {
+  command.add_option("--mcap", choice.path,
+                     "also record the run into this MCAP file: ROS 2 messages and Foxglove "
+                     "schemas, for Foxglove, Lichtblick or ros2 bag (docs/RECORDINGS.md)");
+  command
+      .add_option("--mcap-images", choice.images_every,
+                  "with --mcap: every Nth camera frame goes in as an image, 0 none")
+      ->check(within(base::bounds::kImagesEvery_frames))
+      ->capture_default_str();
+}
+
+std::optional<pipeline::RecordingOptions> recording_options(const RecordingChoice& choice) {
+  if (choice.path.empty()) {
+    return std::nullopt;
+  }
+  return pipeline::RecordingOptions{choice.path, choice.images_every};
 }
 
 }  // namespace flowsteer::cli

@@ -28,10 +28,16 @@ void install_stop_handlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-int run_robot(const robot::RunCommand& command) {
+struct RunCommand {
+  robot::RunCommand run;
+  RecordingChoice recording;
+};
+
+int run_robot(const RunCommand& command) {
   install_stop_handlers();
-  const robot::RobotLoopResult result =
-      robot::run_robot_command(command, g_stop_requested, std::cerr);
+  robot::RunCommand run = command.run;
+  run.recording = recording_options(command.recording);
+  const robot::RobotLoopResult result = robot::run_robot_command(run, g_stop_requested, std::cerr);
   // After a camera timeout the base was stopped; the run still failed at what it was asked to do.
   return result.reason == robot::StopReason::camera_timeout ? 3 : 0;
 }
@@ -39,10 +45,12 @@ int run_robot(const robot::RunCommand& command) {
 struct ReplayCommand {
   robot::ReplayCommand replay;
   std::string flow = "dis_medium";
+  RecordingChoice recording;
 };
 
 int run_replay(const ReplayCommand& command) {
   robot::ReplayCommand replay = command.replay;
+  replay.recording = recording_options(command.recording);
   // run_replay_command refuses synthetic flow, saying why.
   replay.flow =
       flow_method_option("--flow", command.flow, "method", config::numerical_flow_method_names());
@@ -57,7 +65,8 @@ int run_replay(const ReplayCommand& command) {
 }  // namespace
 
 Subcommand add_run(CLI::App& app) {
-  auto command = std::make_shared<robot::RunCommand>();
+  auto both = std::make_shared<RunCommand>();
+  robot::RunCommand* command = &both->run;
   CLI::App* run = app.add_subcommand(
       "run",
       "The robot's loop from a launch file: camera -> flow -> features -> controller -> drive "
@@ -71,7 +80,8 @@ Subcommand add_run(CLI::App& app) {
       ->check(within(base::bounds::kGoalDistance_m));
   run->add_option("--log", command->log_file,
                   "also write the events and one line per frame (status, objects, command) here");
-  return {run, [command] { return run_robot(*command); }};
+  add_recording_options(*run, both->recording);
+  return {run, [both] { return run_robot(*both); }};
 }
 
 Subcommand add_replay(CLI::App& app) {
@@ -79,9 +89,13 @@ Subcommand add_replay(CLI::App& app) {
   robot::ReplayCommand& r = command->replay;
   CLI::App* replay = app.add_subcommand(
       "replay",
-      "The pipeline on a recorded video without a drive: features.csv, commands.csv and "
+      "The pipeline on a recording without a drive: features.csv, commands.csv and "
       "overlay.mp4 in a folder");
-  replay->add_option("VIDEO", r.video, "video file or image pattern")->required();
+  replay
+      ->add_option("RECORDING", r.video,
+                   "video file, image pattern, or MCAP file (.mcap: its images, odometry, "
+                   "CameraInfo and /tf_static camera mount)")
+      ->required();
   replay->add_option("--out", r.out_dir, "folder for the outputs")->capture_default_str();
   CLI::Option* hfov =
       replay->add_option("--hfov-deg", r.hfov_deg, "horizontal field of view (default 60)")
@@ -94,10 +108,14 @@ Subcommand add_replay(CLI::App& app) {
       ->check(within(base::bounds::kBearing_deg));
   replay
       ->add_option("--speed", r.speed_mps,
-                   "assumed camera speed, m/s (no odometry in a recording); 0 skips the "
-                   "flat-ground test")
-      ->check(within(base::bounds::kSpeed_mps))
-      ->capture_default_str();
+                   "assumed camera speed, m/s, for a recording without odometry (default 0, "
+                   "which skips the flat-ground test)")
+      ->check(within(base::bounds::kSpeed_mps));
+  replay->add_option("--image-topic", r.image_topic,
+                     "an MCAP file's image topic, where it has more than one");
+  replay->add_option("--odom-topic", r.odometry_topic,
+                     "an MCAP file's odometry topic, where it has more than one");
+  add_recording_options(*replay, command->recording);
   return {replay, [command] { return run_replay(*command); }};
 }
 

@@ -26,6 +26,7 @@ struct SimCommand {
   std::string segmentation;
   std::string depth;
   bool obstacle_memory = false;
+  RecordingChoice recording;
 };
 
 // Seconds and metres with two decimals, the unit after the number.
@@ -83,6 +84,7 @@ int run_sim(const SimCommand& command) {
     options.obstacle_memory = true;
   }
   options.video = command.video;
+  options.recording = recording_options(command.recording);
   options.threads = command.threads;
   if (command.threads != 1 && world.agents.size() > 1) {
     sim_camera::rasterize_on_calling_threads();
@@ -124,6 +126,7 @@ Subcommand add_sim(CLI::App& app) {
                       servo::depth_source_names() +
                       " (ground: only where objects stand on it, as a camera)");
   sim->add_flag("--obstacle-memory", command->obstacle_memory, kObstacleMemoryHelp);
+  add_recording_options(*sim, command->recording);
   return {sim, [command] { return run_sim(*command); }};
 }
 

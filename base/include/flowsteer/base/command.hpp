@@ -10,4 +10,13 @@ struct Command {
   double turn_rate = 0.0;
 };
 
+// The yaw rate ROS messages carry (REP 103: about z, which points up, positive left) of a turn
+// rate ω, and back: what a recording writes and reads (cmd_vel, odom).
+constexpr double yaw_rate_of(double turn_rate) {
+  return -turn_rate;
+}
+constexpr double turn_rate_of(double yaw_rate) {
+  return -yaw_rate;
+}
+
 }  // namespace flowsteer::base

@@ -33,20 +33,27 @@ class OutputDir {
   bool committed_ = false;
 };
 
+// How numbers are written: rounded to the few significant digits a person reads (6 in JSON, 7 in
+// CSV), or exactly (the shortest text that reads back as the same double), for what other tools
+// compare to bit for bit.
+enum class Digits { rounded, exact };
+
 // A string as a JSON string literal, quotes included.
 std::string json_string(const std::string& s);
 // A number as JSON holds it, 6 significant digits; JSON has no NaN or infinity: those become
 // null.
-std::string json_number(double value);
+std::string json_number(double value, Digits digits = Digits::rounded);
 
-// A number as CSV cells hold it: 7 significant digits, NaN and infinities as an empty cell.
-std::string format_csv_number(double value);
+// A number as CSV cells hold it: 7 significant digits, or exactly; NaN and infinities as an empty
+// cell.
+std::string format_csv_number(double value, Digits digits = Digits::rounded);
 
 // A table of numbers written as CSV (NaN as an empty cell); a row may start with text cells
 // (names without commas or quotes).
 class CsvTable {
  public:
-  explicit CsvTable(std::vector<std::string> header) : header_(std::move(header)) {}
+  explicit CsvTable(std::vector<std::string> header, Digits digits = Digits::rounded)
+      : header_(std::move(header)), digits_(digits) {}
   // Each row has one cell per header column; a row of another width is a programming error
   // (std::logic_error), caught before a column shifts under its header.
   void add(std::vector<double> row) { add({}, std::move(row)); }
@@ -56,6 +63,7 @@ class CsvTable {
 
  private:
   std::vector<std::string> header_;
+  Digits digits_;
   struct Row {
     std::vector<std::string> labels;
     std::vector<double> values;

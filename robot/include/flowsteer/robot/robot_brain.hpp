@@ -5,6 +5,7 @@
 
 #include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/pipeline/brain.hpp"
+#include "flowsteer/pipeline/run_recorder.hpp"
 #include "flowsteer/robot/robot_loop.hpp"
 
 namespace flowsteer::robot {
@@ -24,6 +25,9 @@ class RobotBrain final : public FrameHandler {
              std::ostream& log, std::ostream* frame_log = nullptr, bool live_camera = false);
 
   base::Command step(const LoopInput& input) override;
+  // Records each step's percept (the image, annotations, step message) as agent 0 of `recorder`
+  // from now on; null: no more.
+  void record_into(pipeline::RunRecorder* recorder) { recorder_ = recorder; }
 
   const pipeline::Brain& brain() const { return brain_; }
 
@@ -33,6 +37,7 @@ class RobotBrain final : public FrameHandler {
   std::ostream* frame_log_;
   bool live_camera_;
   std::optional<servo::FlowStatus> logged_status_;
+  pipeline::RunRecorder* recorder_ = nullptr;
 };
 
 }  // namespace flowsteer::robot

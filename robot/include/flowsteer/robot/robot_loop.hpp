@@ -9,28 +9,43 @@
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/config/robot_launch.hpp"
 #include "flowsteer/drivers/mobile_base.hpp"
+#include "flowsteer/pipeline/run_recorder.hpp"
 #include "flowsteer/servo/control.hpp"
 
 namespace flowsteer::robot {
 
-// Where the goal lies now, tracked from its bearing and distance at the start by integrating
-// the base's wheel odometry (a unicycle; wheel slip accumulates, as with any odometry).
+// The base's pose in the frame of its start (REP-103: x forward, y left, yaw positive left),
+// integrated from its wheel odometry as a unicycle; wheel slip accumulates, as with any odometry.
+class Odometer {
+ public:
+  // Moves the robot by its mean speed and turn rate (positive right) over dt_s.
+  void advance(const drivers::BodyVelocity& measured, double dt_s);
+  double x_m() const { return x_m_; }
+  double y_m() const { return y_m_; }
+  double yaw_rad() const { return yaw_rad_; }
+
+ private:
+  double x_m_ = 0.0;
+  double y_m_ = 0.0;
+  double yaw_rad_ = 0.0;
+};
+
+// Where the goal lies now, tracked from its bearing and distance at the start by the odometer.
 class GoalTracker {
  public:
   explicit GoalTracker(const config::GoalSection& goal);
-  // Moves the robot by its mean speed and turn rate (positive right) over dt_s.
-  void advance(const drivers::BodyVelocity& measured, double dt_s);
+  void advance(const drivers::BodyVelocity& measured, double dt_s) {
+    odometer_.advance(measured, dt_s);
+  }
   // Bearing from the robot's heading, positive to the right, in (-π, π].
   double bearing_rad() const;
   double distance_m() const;
 
  private:
-  // The goal in the start pose's frame (REP-103: x forward, y left) and the robot's pose.
+  // The goal in the start pose's frame.
   double goal_x_m_;
   double goal_y_m_;
-  double x_m_ = 0.0;
-  double y_m_ = 0.0;
-  double yaw_rad_ = 0.0;
+  Odometer odometer_;
 };
 
 // What the loop gives the perception and control stages for one frame.
@@ -59,6 +74,9 @@ struct RobotLoopOptions {
   std::optional<config::GoalSection> goal;
   std::size_t max_frames = 0;          // 0: no limit
   std::string camera_name = "camera";  // for the log
+  // Where the loop records /cmd_vel (the wheel speeds written to the drive, as the body's
+  // velocity) and /odom at every update of the base; none: nothing recorded.
+  pipeline::RunRecorder* recorder = nullptr;
 };
 
 struct RobotLoopResult {

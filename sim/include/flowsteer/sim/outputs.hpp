@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "flowsteer/recording/foxglove_messages.hpp"
 #include "flowsteer/sim/simulated_agent.hpp"
 #include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/world.hpp"
@@ -29,5 +30,11 @@ cv::Mat draw_overlay(const SimulatedAgent& agent);
 cv::Mat draw_topview(const sim_camera::World& world,
                      const std::vector<std::vector<Eigen::Vector2d>>& paths,
                      const std::vector<sim_camera::Collision>& collisions);
+
+// The world as Foxglove draws it in 3D (the recording's /world): the static obstacles and the
+// goals (once: `with_static`; a viewer keeps them), the agents present now with their names, in
+// the top view's colours, and the moving obstacles where they are now.
+std::vector<recording::foxglove::SceneEntity> scene_entities(const sim_camera::World& world,
+                                                             bool with_static);
 
 }  // namespace flowsteer::sim

@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "flowsteer/base/command.hpp"
+#include "flowsteer/pipeline/run_recorder.hpp"
 #include "flowsteer/sim/simulated_agent.hpp"
 #include "flowsteer/sim_camera/renderer.hpp"
 #include "flowsteer/sim_camera/world.hpp"
@@ -47,7 +48,10 @@ struct SimOptions {
   std::optional<servo::SegmentationMethod> segmentation;
   std::optional<servo::DepthSource> depth;
   std::optional<bool> obstacle_memory;  // every agent's PerceptionConfig::obstacle_memory
-  bool video = false;         // an MP4 per agent of its view with the features drawn on it
+  bool video = false;  // an MP4 per agent of its view with the features drawn on it
+  // An MCAP recording of the run (pipeline::RunRecorder; docs/RECORDINGS.md), written whether or
+  // not the other outputs are.
+  std::optional<pipeline::RecordingOptions> recording;
   bool progress_bar = false;  // a bar that redraws itself, for terminals
   bool write_outputs = true;  // false: only the returned result (tests, benchmarks)
   // Threads the agents are stepped on; 0: one per core. The result is the same for any number.
@@ -153,7 +157,8 @@ void switch_off(sim_camera::WorldSpec& world, servo::LawMechanism mechanism);
 
 // Runs the world to its end: each agent renders its view, the servo core turns it into a
 // command, the world moves. Writes trajectories.csv, costs.csv, topview.png and summary.json
-// (and agent_N.mp4 with --video) into out_dir, each file complete or not at all. Progress goes
+// (and agent_N.mp4 with --video) into out_dir, and the recording where asked, each file
+// complete or not at all. Progress goes
 // to `log`. Throws std::runtime_error when no renderer can be created or out_dir is not
 // writable.
 SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& options,

@@ -1,0 +1,118 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace flowsteer::recording::ros2 {
+
+// The ROS 2 messages a recording holds, as ROS 2's common_interfaces define them (field for
+// field, in order), with their CDR encoding and the ros2msg schema text MCAP stores for them.
+// Frames follow REP 103 (x forward, y left, z up; yaw positive to the left) and REP 105.
+
+struct Time {
+  std::int32_t sec = 0;
+  std::uint32_t nanosec = 0;
+  static Time from_ns(std::uint64_t t_ns);
+  std::uint64_t ns() const;
+};
+
+struct Header {
+  Time stamp;
+  std::string frame_id;
+};
+
+struct Vector3 {
+  double x = 0.0, y = 0.0, z = 0.0;
+};
+
+struct Quaternion {
+  double x = 0.0, y = 0.0, z = 0.0, w = 1.0;
+  static Quaternion from_yaw(double yaw_rad);
+  double yaw_rad() const;
+};
+
+struct Twist {
+  Vector3 linear;
+  Vector3 angular;
+};
+
+struct Pose {
+  Vector3 position;  // geometry_msgs/Point has the Vector3's fields
+  Quaternion orientation;
+};
+
+struct Odometry {
+  Header header;
+  std::string child_frame_id;
+  Pose pose;
+  std::array<double, 36> pose_covariance{};
+  Twist twist;
+  std::array<double, 36> twist_covariance{};
+};
+
+struct TransformStamped {
+  Header header;
+  std::string child_frame_id;
+  Vector3 translation;
+  Quaternion rotation;
+};
+
+struct TFMessage {
+  std::vector<TransformStamped> transforms;
+};
+
+struct CompressedImage {
+  Header header;
+  std::string format;  // "png", "jpeg", ...
+  std::vector<std::uint8_t> data;
+};
+
+struct Image {
+  Header header;
+  std::uint32_t height = 0;
+  std::uint32_t width = 0;
+  std::string encoding;  // "rgb8", "bgr8", "mono8", ...
+  std::uint8_t is_bigendian = 0;
+  std::uint32_t step = 0;  // bytes per row
+  std::vector<std::uint8_t> data;
+};
+
+struct CameraInfo {
+  Header header;
+  std::uint32_t height = 0;
+  std::uint32_t width = 0;
+  std::string distortion_model = "plumb_bob";
+  std::vector<double> d;
+  std::array<double, 9> k{};
+  std::array<double, 9> r{};
+  std::array<double, 12> p{};
+};
+
+// Every type: its ROS 2 name, its ros2msg schema text (the type's fields, then each type it
+// uses after a line of 80 '=' and "MSG: package/Type", as rosbag2 records them), and the
+// functions that encode it into `out` (cleared first) and decode it. Decoding throws
+// RecordingError naming the field where the bytes end or disagree.
+template <typename Message>
+struct MessageType;
+
+#define FLOWSTEER_ROS2_MESSAGE(Type)                                         \
+  template <>                                                                \
+  struct MessageType<Type> {                                                 \
+    static const char* name();                                               \
+    static const std::string& schema();                                      \
+    static void encode(const Type& message, std::vector<std::uint8_t>& out); \
+    static Type decode(std::span<const std::uint8_t> data);                  \
+  };
+FLOWSTEER_ROS2_MESSAGE(Twist)
+FLOWSTEER_ROS2_MESSAGE(Odometry)
+FLOWSTEER_ROS2_MESSAGE(TFMessage)
+FLOWSTEER_ROS2_MESSAGE(CompressedImage)
+FLOWSTEER_ROS2_MESSAGE(Image)
+FLOWSTEER_ROS2_MESSAGE(CameraInfo)
+#undef FLOWSTEER_ROS2_MESSAGE
+
+}  // namespace flowsteer::recording::ros2

@@ -1,0 +1,330 @@
+#include "flowsteer/recording/ros2_messages.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "flowsteer/recording/cdr.hpp"
+#include "flowsteer/recording/recording_error.hpp"
+
+namespace flowsteer::recording::ros2 {
+
+namespace {
+
+// The .msg definitions of common_interfaces that the messages use, by "package/Type", each with
+// the types it names. Comments and constants left out; fields, types and defaults as ROS 2 has
+// them.
+struct Definition {
+  const char* text;
+  std::vector<const char*> uses;
+};
+
+const std::map<std::string, Definition>& definitions() {
+  static const std::map<std::string, Definition> table = {
+      {"builtin_interfaces/Time", {"int32 sec\nuint32 nanosec\n", {}}},
+      {"std_msgs/Header",
+       {"builtin_interfaces/Time stamp\nstring frame_id\n", {"builtin_interfaces/Time"}}},
+      {"geometry_msgs/Vector3", {"float64 x\nfloat64 y\nfloat64 z\n", {}}},
+      {"geometry_msgs/Point", {"float64 x\nfloat64 y\nfloat64 z\n", {}}},
+      {"geometry_msgs/Quaternion", {"float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n", {}}},
+      {"geometry_msgs/Twist", {"Vector3 linear\nVector3 angular\n", {"geometry_msgs/Vector3"}}},
+      {"geometry_msgs/Pose",
+       {"Point position\nQuaternion orientation\n",
+        {"geometry_msgs/Point", "geometry_msgs/Quaternion"}}},
+      {"geometry_msgs/PoseWithCovariance",
+       {"Pose pose\nfloat64[36] covariance\n", {"geometry_msgs/Pose"}}},
+      {"geometry_msgs/TwistWithCovariance",
+       {"Twist twist\nfloat64[36] covariance\n", {"geometry_msgs/Twist"}}},
+      {"geometry_msgs/Transform",
+       {"Vector3 translation\nQuaternion rotation\n",
+        {"geometry_msgs/Vector3", "geometry_msgs/Quaternion"}}},
+      {"geometry_msgs/TransformStamped",
+       {"std_msgs/Header header\nstring child_frame_id\nTransform transform\n",
+        {"std_msgs/Header", "geometry_msgs/Transform"}}},
+      {"nav_msgs/Odometry",
+       {"std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n"
+        "geometry_msgs/TwistWithCovariance twist\n",
+        {"std_msgs/Header", "geometry_msgs/PoseWithCovariance",
+         "geometry_msgs/TwistWithCovariance"}}},
+      {"tf2_msgs/TFMessage",
+       {"geometry_msgs/TransformStamped[] transforms\n", {"geometry_msgs/TransformStamped"}}},
+      {"sensor_msgs/CompressedImage",
+       {"std_msgs/Header header\nstring format\nuint8[] data\n", {"std_msgs/Header"}}},
+      {"sensor_msgs/Image",
+       {"std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\n"
+        "uint8 is_bigendian\nuint32 step\nuint8[] data\n",
+        {"std_msgs/Header"}}},
+      {"sensor_msgs/RegionOfInterest",
+       {"uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify\n", {}}},
+      {"sensor_msgs/CameraInfo",
+       {"std_msgs/Header header\nuint32 height\nuint32 width\nstring distortion_model\n"
+        "float64[] d\nfloat64[9] k\nfloat64[9] r\nfloat64[12] p\nuint32 binning_x\n"
+        "uint32 binning_y\nRegionOfInterest roi\n",
+        {"std_msgs/Header", "sensor_msgs/RegionOfInterest"}}},
+  };
+  return table;
+}
+
+void add_dependencies(const std::string& type, std::vector<std::string>& seen) {
+  for (const char* used : definitions().at(type).uses) {
+    if (std::find(seen.begin(), seen.end(), used) == seen.end()) {
+      seen.emplace_back(used);
+      add_dependencies(used, seen);
+    }
+  }
+}
+
+// The type's text, then each type it uses, directly or not, once, in the order first met.
+std::string schema_text(const std::string& type) {
+  std::string text = definitions().at(type).text;
+  std::vector<std::string> dependencies;
+  add_dependencies(type, dependencies);
+  for (const std::string& d : dependencies) {
+    text += std::string(80, '=') + "\nMSG: " + d + "\n" + definitions().at(d).text;
+  }
+  return text;
+}
+
+void write_header(CdrWriter& w, const Header& h) {
+  w.i32(h.stamp.sec);
+  w.u32(h.stamp.nanosec);
+  w.string(h.frame_id);
+}
+
+Header read_header(CdrReader& r) {
+  Header h;
+  h.stamp.sec = r.i32("header.stamp.sec");
+  h.stamp.nanosec = r.u32("header.stamp.nanosec");
+  h.frame_id = r.string("header.frame_id");
+  return h;
+}
+
+void write_vector(CdrWriter& w, const Vector3& v) {
+  w.f64(v.x);
+  w.f64(v.y);
+  w.f64(v.z);
+}
+
+Vector3 read_vector(CdrReader& r, const char* field) {
+  return {r.f64(field), r.f64(field), r.f64(field)};
+}
+
+void write_quaternion(CdrWriter& w, const Quaternion& q) {
+  w.f64(q.x);
+  w.f64(q.y);
+  w.f64(q.z);
+  w.f64(q.w);
+}
+
+Quaternion read_quaternion(CdrReader& r, const char* field) {
+  return {r.f64(field), r.f64(field), r.f64(field), r.f64(field)};
+}
+
+void write_twist(CdrWriter& w, const Twist& t) {
+  write_vector(w, t.linear);
+  write_vector(w, t.angular);
+}
+
+Twist read_twist(CdrReader& r) {
+  Twist t;
+  t.linear = read_vector(r, "linear");
+  t.angular = read_vector(r, "angular");
+  return t;
+}
+
+}  // namespace
+
+Time Time::from_ns(std::uint64_t t_ns) {
+  return {static_cast<std::int32_t>(t_ns / 1'000'000'000),
+          static_cast<std::uint32_t>(t_ns % 1'000'000'000)};
+}
+
+std::uint64_t Time::ns() const {
+  return static_cast<std::uint64_t>(sec) * 1'000'000'000 + nanosec;
+}
+
+Quaternion Quaternion::from_yaw(double yaw_rad) {
+  return {0.0, 0.0, std::sin(0.5 * yaw_rad), std::cos(0.5 * yaw_rad)};
+}
+
+double Quaternion::yaw_rad() const {
+  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+}
+
+// Twist
+const char* MessageType<Twist>::name() {
+  return "geometry_msgs/msg/Twist";
+}
+const std::string& MessageType<Twist>::schema() {
+  static const std::string text = schema_text("geometry_msgs/Twist");
+  return text;
+}
+void MessageType<Twist>::encode(const Twist& m, std::vector<std::uint8_t>& out) {
+  CdrWriter w(out);
+  write_twist(w, m);
+}
+Twist MessageType<Twist>::decode(std::span<const std::uint8_t> data) {
+  CdrReader r(data);
+  return read_twist(r);
+}
+
+// Odometry
+const char* MessageType<Odometry>::name() {
+  return "nav_msgs/msg/Odometry";
+}
+const std::string& MessageType<Odometry>::schema() {
+  static const std::string text = schema_text("nav_msgs/Odometry");
+  return text;
+}
+void MessageType<Odometry>::encode(const Odometry& m, std::vector<std::uint8_t>& out) {
+  CdrWriter w(out);
+  write_header(w, m.header);
+  w.string(m.child_frame_id);
+  write_vector(w, m.pose.position);
+  write_quaternion(w, m.pose.orientation);
+  w.f64_array(m.pose_covariance);
+  write_twist(w, m.twist);
+  w.f64_array(m.twist_covariance);
+}
+Odometry MessageType<Odometry>::decode(std::span<const std::uint8_t> data) {
+  CdrReader r(data);
+  Odometry m;
+  m.header = read_header(r);
+  m.child_frame_id = r.string("child_frame_id");
+  m.pose.position = read_vector(r, "pose.pose.position");
+  m.pose.orientation = read_quaternion(r, "pose.pose.orientation");
+  r.f64_array(m.pose_covariance, "pose.covariance");
+  m.twist = read_twist(r);
+  r.f64_array(m.twist_covariance, "twist.covariance");
+  return m;
+}
+
+// TFMessage
+const char* MessageType<TFMessage>::name() {
+  return "tf2_msgs/msg/TFMessage";
+}
+const std::string& MessageType<TFMessage>::schema() {
+  static const std::string text = schema_text("tf2_msgs/TFMessage");
+  return text;
+}
+void MessageType<TFMessage>::encode(const TFMessage& m, std::vector<std::uint8_t>& out) {
+  CdrWriter w(out);
+  w.u32(static_cast<std::uint32_t>(m.transforms.size()));
+  for (const TransformStamped& t : m.transforms) {
+    write_header(w, t.header);
+    w.string(t.child_frame_id);
+    write_vector(w, t.translation);
+    write_quaternion(w, t.rotation);
+  }
+}
+TFMessage MessageType<TFMessage>::decode(std::span<const std::uint8_t> data) {
+  CdrReader r(data);
+  TFMessage m;
+  // A transform holds at least its stamp, two string lengths and seven float64.
+  m.transforms.resize(r.count("transforms", 4 + 4 + 4 + 4 + 7 * 8));
+  for (TransformStamped& t : m.transforms) {
+    t.header = read_header(r);
+    t.child_frame_id = r.string("transforms.child_frame_id");
+    t.translation = read_vector(r, "transforms.transform.translation");
+    t.rotation = read_quaternion(r, "transforms.transform.rotation");
+  }
+  return m;
+}
+
+// CompressedImage
+const char* MessageType<CompressedImage>::name() {
+  return "sensor_msgs/msg/CompressedImage";
+}
+const std::string& MessageType<CompressedImage>::schema() {
+  static const std::string text = schema_text("sensor_msgs/CompressedImage");
+  return text;
+}
+void MessageType<CompressedImage>::encode(const CompressedImage& m,
+                                          std::vector<std::uint8_t>& out) {
+  CdrWriter w(out);
+  write_header(w, m.header);
+  w.string(m.format);
+  w.bytes(m.data);
+}
+CompressedImage MessageType<CompressedImage>::decode(std::span<const std::uint8_t> data) {
+  CdrReader r(data);
+  CompressedImage m;
+  m.header = read_header(r);
+  m.format = r.string("format");
+  const std::span<const std::uint8_t> bytes = r.bytes("data");
+  m.data.assign(bytes.begin(), bytes.end());
+  return m;
+}
+
+// Image
+const char* MessageType<Image>::name() {
+  return "sensor_msgs/msg/Image";
+}
+const std::string& MessageType<Image>::schema() {
+  static const std::string text = schema_text("sensor_msgs/Image");
+  return text;
+}
+void MessageType<Image>::encode(const Image& m, std::vector<std::uint8_t>& out) {
+  CdrWriter w(out);
+  write_header(w, m.header);
+  w.u32(m.height);
+  w.u32(m.width);
+  w.string(m.encoding);
+  w.u8(m.is_bigendian);
+  w.u32(m.step);
+  w.bytes(m.data);
+}
+Image MessageType<Image>::decode(std::span<const std::uint8_t> data) {
+  CdrReader r(data);
+  Image m;
+  m.header = read_header(r);
+  m.height = r.u32("height");
+  m.width = r.u32("width");
+  m.encoding = r.string("encoding");
+  m.is_bigendian = r.u8("is_bigendian");
+  m.step = r.u32("step");
+  const std::span<const std::uint8_t> bytes = r.bytes("data");
+  m.data.assign(bytes.begin(), bytes.end());
+  return m;
+}
+
+// CameraInfo
+const char* MessageType<CameraInfo>::name() {
+  return "sensor_msgs/msg/CameraInfo";
+}
+const std::string& MessageType<CameraInfo>::schema() {
+  static const std::string text = schema_text("sensor_msgs/CameraInfo");
+  return text;
+}
+void MessageType<CameraInfo>::encode(const CameraInfo& m, std::vector<std::uint8_t>& out) {
+  CdrWriter w(out);
+  write_header(w, m.header);
+  w.u32(m.height);
+  w.u32(m.width);
+  w.string(m.distortion_model);
+  w.f64_sequence(m.d);
+  w.f64_array(m.k);
+  w.f64_array(m.r);
+  w.f64_array(m.p);
+  w.u32(0);  // binning_x, binning_y: none
+  w.u32(0);
+  for (int field = 0; field < 4; ++field) {  // roi: the whole image
+    w.u32(0);
+  }
+  w.u8(0);
+}
+CameraInfo MessageType<CameraInfo>::decode(std::span<const std::uint8_t> data) {
+  CdrReader r(data);
+  CameraInfo m;
+  m.header = read_header(r);
+  m.height = r.u32("height");
+  m.width = r.u32("width");
+  m.distortion_model = r.string("distortion_model");
+  m.d = r.f64_sequence("d");
+  r.f64_array(m.k, "k");
+  r.f64_array(m.r, "r");
+  r.f64_array(m.p, "p");
+  return m;  // binning and roi: not used
+}
+
+}  // namespace flowsteer::recording::ros2
