@@ -22,18 +22,28 @@ bool moving(const drivers::BodyVelocity& measured) {
   return std::abs(measured.speed_mps) > 0.01 || std::abs(measured.turn_rate) > 0.01;
 }
 
+std::uint64_t recording_ns(double t_s) {
+  return static_cast<std::uint64_t>(std::llround(t_s * 1e9));
+}
+
 // Leaves the base stopped and deactivated however the loop ends; when an error ends it (the
 // camera gone, a perception failure) the log says the base was stopped before the error shows.
 class BaseStopper {
  public:
-  BaseStopper(drivers::MobileBase* robot_base, std::ostream& log)
-      : base_(robot_base), log_(log), exceptions_(std::uncaught_exceptions()) {}
+  BaseStopper(drivers::MobileBase* robot_base, pipeline::RunRecorder* recorder, std::ostream& log)
+      : base_(robot_base),
+        recorder_(recorder),
+        log_(log),
+        exceptions_(std::uncaught_exceptions()) {}
   ~BaseStopper() {
     if (base_ == nullptr || base_->lifecycle() != drivers::Lifecycle::active) {
       return;
     }
     try {
       base_->emergency_stop();
+      if (recorder_ != nullptr) {
+        recorder_->command(0, recording_ns(base::monotonic_now_s()), 0.0, 0.0);
+      }
       base_->deactivate();
       if (std::uncaught_exceptions() > exceptions_) {
         log_ << "flowsteer run: the run failed: base " << base_->drive().name() << " stopped\n";
@@ -48,6 +58,7 @@ class BaseStopper {
 
  private:
   drivers::MobileBase* base_;
+  pipeline::RunRecorder* recorder_;
   std::ostream& log_;
   int exceptions_;
 };
@@ -60,10 +71,6 @@ drivers::BodyVelocity travelled(const drivers::WheelOdometry& from,
                                 const drivers::WheelGeometry& geometry) {
   return drivers::from_wheels(
       {(to.left_rad - from.left_rad) / dt_s, (to.right_rad - from.right_rad) / dt_s}, geometry);
-}
-
-std::uint64_t recording_ns(double t_s) {
-  return static_cast<std::uint64_t>(std::llround(t_s * 1e9));
 }
 
 // What the drive was just sent, as the body's velocity from the wheel speeds on the wire (after
@@ -124,7 +131,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::MobileBa
   if (options.goal) {
     goal.emplace(*options.goal);
   }
-  BaseStopper stopper(robot_base, log);
+  BaseStopper stopper(robot_base, options.recorder, log);
   if (robot_base != nullptr) {
     robot_base->configure();
     robot_base->activate(base::monotonic_now_s());

@@ -108,6 +108,11 @@ SilResult run_sil(const sim_camera::WorldSpec& world, const SilOptions& options,
     link.robot_argv.push_back(std::move(arg));
   }
   link.robot_argv.insert(link.robot_argv.end(), {"--log", link.robot_log.string()});
+  if (options.recording) {
+    link.robot_argv.insert(link.robot_argv.end(),
+                           {"--mcap", robot_recording_path(options.recording->path).string(),
+                            "--mcap-images", std::to_string(options.recording->images_every)});
+  }
   link.agent = agent;
   link.startup_timeout_s = options.startup_timeout_s;
   RobotInTheLoop driver(std::move(link), log);
@@ -119,10 +124,17 @@ SilResult run_sil(const sim_camera::WorldSpec& world, const SilOptions& options,
   sim.threads = 1;
   sim.driver = &driver;
   sim.driven_agent = agent;
+  sim.recording = options.recording;
   SilResult result;
   result.sim = sim::run_simulation(spec, sim, log);
   result.report = driver.report();
   return result;
+}
+
+std::filesystem::path robot_recording_path(const std::filesystem::path& recording) {
+  std::filesystem::path robot = recording;
+  robot.replace_extension(".robot" + recording.extension().string());
+  return robot;
 }
 
 }  // namespace flowsteer::sil

@@ -3,7 +3,8 @@
 // ways, and checks each end against candump's record of the bus: SIGINT and SIGTERM stop the
 // wheels and exit 0; the camera unplugged stops the wheels and exits 1 naming the camera; the
 // CAN interface taken down ends the run at once with status 1 naming the interface. Each test
-// prints the time from the fault to the first zero command on the bus (or to the report).
+// prints the time from the fault to the first zero command on the bus (or to the report). The
+// SIGINT and camera runs record themselves (--mcap): their /cmd_vel must be what the bus carried.
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -119,8 +121,92 @@ class RobotVm
   }
 };
 
+// The launch file's wheels (robot_vm_probe.cpp): left node 3 forward, right node 5 mirrored.
+constexpr double kWheelRadiusM = 0.05;
+constexpr double kWheelSeparationM = 0.40;
+
+// What ODrive's Set_Input_Vel frames carried, in turns/s, for one update: left and right axis.
+struct AxisVelocities {
+  float left;
+  float right;
+};
+
+// The k-th Set_Input_Vel to each node between the times, paired: the drive writes both axes at
+// each update.
+std::vector<AxisVelocities> bus_velocities(const CanCaptureRun& run, double from_s, double to_s) {
+  std::vector<float> left;
+  std::vector<float> right;
+  for (const CanFrame& f : run.frames) {
+    if (f.time_s >= from_s && f.time_s <= to_s) {
+      if (flowsteer::vm_test::is_set_input_vel(f, kNodes[0]))
+        left.push_back(f.f32(0));
+      if (flowsteer::vm_test::is_set_input_vel(f, kNodes[1]))
+        right.push_back(f.f32(0));
+    }
+  }
+  std::vector<AxisVelocities> out;
+  for (std::size_t k = 0; k < std::min(left.size(), right.size()); ++k) {
+    out.push_back({left[k], right[k]});
+  }
+  return out;
+}
+
+// A recorded cmd_vel (speed, ROS yaw rate) as the axes' turns/s, rounded to the float the CAN
+// frame holds.
+AxisVelocities axis_velocities(double speed_mps, double yaw_rate) {
+  const double left_radps = (speed_mps - 0.5 * kWheelSeparationM * yaw_rate) / kWheelRadiusM;
+  const double right_radps = (speed_mps + 0.5 * kWheelSeparationM * yaw_rate) / kWheelRadiusM;
+  return {static_cast<float>(left_radps / (2.0 * M_PI)),
+          static_cast<float>(-right_radps / (2.0 * M_PI))};
+}
+
+// The run's recorded /cmd_vel is a stretch of the bus's velocity frames, update for update, and
+// ends in the stop's zero.
+void expect_recording_is_the_bus(const CanCaptureRun& run, const std::string& name,
+                                 const EndedRun& ended) {
+  ASSERT_EQ(run.probe.count(name + "-recording-error"), 0u)
+      << run.probe.at(name + "-recording-error");
+  const int count = std::atoi(run.probe.at(name + "-cmd_vel-count").c_str());
+  std::vector<AxisVelocities> recorded;
+  int moving = 0;
+  for (int k = 0; k < count; ++k) {
+    double speed = NAN;
+    double yaw_rate = NAN;
+    std::istringstream(run.probe.at(name + "-cmd_vel-" + std::to_string(k))) >> speed >> yaw_rate;
+    recorded.push_back(axis_velocities(speed, yaw_rate));
+    moving += speed != 0.0 ? 1 : 0;
+  }
+  // The probe lets each run drive for 2 s; the emulated CPU starts the loop slowly.
+  ASSERT_GE(moving, 3) << "the recording holds too few commands that moved the base";
+  EXPECT_EQ(recorded.back().left, 0.0f) << "the recording does not end with the stop";
+  const std::vector<AxisVelocities> bus = bus_velocities(run, ended.start_s, ended.exited_s);
+  // 1e-6 relative: the float the frame holds, from the same double the recording holds.
+  const auto same = [](const AxisVelocities& a, const AxisVelocities& b) {
+    return std::abs(a.left - b.left) <= 1e-6f * std::max(1.0f, std::abs(b.left)) &&
+           std::abs(a.right - b.right) <= 1e-6f * std::max(1.0f, std::abs(b.right));
+  };
+  bool found = false;
+  for (std::size_t offset = 0; !found && offset + recorded.size() <= bus.size(); ++offset) {
+    found = std::equal(recorded.begin(), recorded.end(), bus.begin() + offset, same);
+  }
+  EXPECT_TRUE(found) << name << ": the " << recorded.size()
+                     << " recorded /cmd_vel are not a stretch of the " << bus.size()
+                     << " velocity updates on the bus";
+  std::printf("%s: %zu recorded /cmd_vel (%d moving) found on the bus, %zu updates there\n",
+              name.c_str(), recorded.size(), moving, bus.size());
+}
+
 TEST_F(RobotVm, SigintStopsTheWheelsAndExitsZero) {
   check_signal_stop("sigint");
+}
+
+TEST_F(RobotVm, ARecordedRunsCmdVelIsWhatTheBusCarried) {
+  expect_recording_is_the_bus(run_, "sigint", ended("sigint", 0));
+  // A run that ended by an error finishes its recording too, and says how it ended.
+  const EndedRun gone = ended("camera-gone", 1);
+  EXPECT_NE(run_.probe["camera-gone-recording-ended"].find("error: "), std::string::npos)
+      << run_.probe["camera-gone-recording-ended"];
+  expect_recording_is_the_bus(run_, "camera-gone", gone);
 }
 
 TEST_F(RobotVm, SigtermStopsTheWheelsAndExitsZero) {

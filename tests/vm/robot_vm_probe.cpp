@@ -4,7 +4,8 @@
 // and the CAN interface taken down. For each it prints, as "PROBE key value" lines, the
 // CLOCK_REALTIME of the fault (candump's clock), how and when flowsteer exited and what it said,
 // and for the CAN interface when flowsteer reported the dead bus; tests/robot/robot_vm_test.cpp
-// checks those against candump's record of the bus.
+// checks those against candump's record of the bus. Two runs record themselves (--mcap): the
+// probe prints what their /cmd_vel holds, for the test to compare with the bus.
 
 #include <net/if.h>
 #include <signal.h>
@@ -22,9 +23,12 @@
 #include <functional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/drivers/simulated_odrive.hpp"
+#include "flowsteer/recording/mcap_reader.hpp"
+#include "flowsteer/recording/ros2_messages.hpp"
 #include "probe_support.hpp"
 #include "vivid_control.hpp"
 
@@ -144,15 +148,41 @@ Exit wait_for_exit(pid_t pid, double limit_s) {
   return result;
 }
 
+// A run's recording as the probe reads it: "PROBE <name>-cmd_vel-<k> SPEED YAW_RATE" for each
+// /cmd_vel message, its count, and how the metadata says the run ended; or why it cannot be read.
+void print_recording(const std::string& name, const std::string& path) {
+  namespace ros2 = flowsteer::recording::ros2;
+  try {
+    flowsteer::recording::McapReader reader(path);
+    int count = 0;
+    while (const auto m = reader.next()) {
+      if (m->channel->topic == "/cmd_vel") {
+        const ros2::Twist t = ros2::MessageType<ros2::Twist>::decode(m->data);
+        std::printf("PROBE %s-cmd_vel-%d %.17g %.17g\n", name.c_str(), count++, t.linear.x,
+                    t.angular.z);
+      }
+    }
+    std::printf("PROBE %s-cmd_vel-count %d\n", name.c_str(), count);
+    std::printf("PROBE %s-recording-ended %s\n", name.c_str(),
+                reader.metadata().at("flowsteer").at("ended").c_str());
+  } catch (const std::exception& e) {
+    std::printf("PROBE %s-recording-error %s\n", name.c_str(), e.what());
+  }
+}
+
 // One run ended by `fault`, called with flowsteer's pid and log: prints "PROBE <name>-start T",
 // "PROBE <name>-fault T", "PROBE <name>-exit STATUS T" and each line flowsteer wrote as "PROBE
-// <name>-log-<k> LINE".
-void run_case(const std::string& name,
-              const std::function<void(pid_t, const std::string&)>& fault) {
+// <name>-log-<k> LINE"; with `recorded`, the run records itself and print_recording follows.
+void run_case(const std::string& name, const std::function<void(pid_t, const std::string&)>& fault,
+              bool recorded = false) {
   const std::string log_path = "/tmp/" + name + ".log";
+  const std::string recording = "/tmp/" + name + ".mcap";
   std::printf("PROBE %s-start %.6f\n", name.c_str(), realtime_s());
-  const pid_t pid =
-      flowsteer::vm_test::start_logged(log_path, {"/bin/flowsteer", "run", kLaunchPath});
+  std::vector<const char*> argv = {"/bin/flowsteer", "run", kLaunchPath};
+  if (recorded) {
+    argv.insert(argv.end(), {"--mcap", recording.c_str(), "--mcap-images", "0"});
+  }
+  const pid_t pid = flowsteer::vm_test::start_logged(log_path, argv);
   if (!wait_until_driving(log_path, 2.0)) {
     std::printf("PROBE %s-fault never: flowsteer did not start driving\n", name.c_str());
   } else {
@@ -166,18 +196,25 @@ void run_case(const std::string& name,
   for (int k = 0; std::getline(in, line); ++k) {
     std::printf("PROBE %s-log-%d %s\n", name.c_str(), k, line.c_str());
   }
+  if (recorded) {
+    print_recording(name, recording);
+  }
 }
 
 int run() {
   std::ofstream(kLaunchPath) << kLaunch;
   flowsteer::drivers::SimulatedOdrive axes(kCanInterface, 3, 5);
-  run_case("sigint", [](pid_t pid, const std::string&) { ::kill(pid, SIGINT); });
+  run_case(
+      "sigint", [](pid_t pid, const std::string&) { ::kill(pid, SIGINT); }, true);
   run_case("sigterm", [](pid_t pid, const std::string&) { ::kill(pid, SIGTERM); });
   // A button: any value presses it. vivid answers every call on the node with ENODEV until
   // its last file handle is closed, as a USB camera pulled out does.
-  run_case("camera-gone", [](pid_t, const std::string&) {
-    flowsteer::vm_test::set_vivid_control(kCamera, "Disconnect", 1);
-  });
+  run_case(
+      "camera-gone",
+      [](pid_t, const std::string&) {
+        flowsteer::vm_test::set_vivid_control(kCamera, "Disconnect", 1);
+      },
+      true);
   run_case("can-down", [](pid_t, const std::string& log_path) {
     const std::string error = take_link_down(kCanInterface);
     if (!error.empty()) {

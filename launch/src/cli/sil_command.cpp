@@ -19,6 +19,7 @@ struct SilCommand {
   std::string output_device = "/dev/video1";
   std::string out_dir = "flowsteer_sil_out";
   std::optional<int> steps;
+  RecordingChoice recording;
 };
 
 void print_report(const sil::SilResult& result, const std::string& robot, std::ostream& out) {
@@ -54,6 +55,7 @@ int run_sil_command(const SilCommand& command) {
   options.output_device = command.output_device;
   options.out_dir = command.out_dir;
   options.steps = command.steps;
+  options.recording = recording_options(command.recording);
   std::cerr << "flowsteer sil: " << world.name << ", robot " << command.robot << " ("
             << command.launch_file << ") -> " << command.out_dir << "\n";
   const sil::SilResult result = sil::run_sil(world, options, std::cerr);
@@ -79,6 +81,7 @@ Subcommand add_sil(CLI::App& app) {
                   "vivid's output node, looped to the launch file's camera")
       ->capture_default_str();
   sil->add_option("--out", command->out_dir, "folder for the outputs")->capture_default_str();
+  add_recording_options(*sil, command->recording);
   sil->add_option("--steps", command->steps, "stop after N control steps")
       ->check(within(base::bounds::kRunSteps));
   return {sil, [command] { return run_sil_command(*command); }};

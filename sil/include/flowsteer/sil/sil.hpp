@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include "flowsteer/pipeline/run_recorder.hpp"
 #include "flowsteer/sim/simulation.hpp"
 #include "flowsteer/sim_camera/world_spec.hpp"
 
@@ -19,7 +20,13 @@ struct SilOptions {
   std::filesystem::path out_dir = "flowsteer_sil_out";
   std::optional<int> steps;         // stop after this many steps
   double startup_timeout_s = 30.0;  // for the robot process to activate its drive
+  // The simulation's MCAP recording (every agent, the world), and the robot process's own
+  // beside it: FILE with ".robot" before its extension (`flowsteer run --mcap`).
+  std::optional<pipeline::RecordingOptions> recording;
 };
+
+// Where `sil --mcap FILE` puts the robot process's own recording: run.mcap → run.robot.mcap.
+std::filesystem::path robot_recording_path(const std::filesystem::path& recording);
 
 // Delays in the loop, in milliseconds.
 struct LatencyStats {
