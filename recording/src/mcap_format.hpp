@@ -11,6 +11,8 @@
 #include <string_view>
 #include <vector>
 
+#include <zlib.h>
+
 #include "flowsteer/recording/recording_error.hpp"
 
 namespace flowsteer::recording::mcap {
@@ -37,6 +39,11 @@ enum class Op : std::uint8_t {
 
 // A record's opcode (1 byte) and content length (8 bytes).
 inline constexpr std::size_t kRecordPrefix = 9;
+
+// MCAP's CRC-32 (zlib's: the IEEE polynomial), continued from `running` over `bytes`.
+inline std::uint32_t crc(std::uint32_t running, std::span<const std::uint8_t> bytes) {
+  return static_cast<std::uint32_t>(crc32(running, bytes.data(), static_cast<uInt>(bytes.size())));
+}
 
 // Appends fields to a byte buffer.
 class FieldWriter {

@@ -5,7 +5,6 @@
 #include <cstring>
 
 #include <lz4frame.h>
-#include <zlib.h>
 #include <zstd.h>
 
 #include "flowsteer/recording/recording_error.hpp"
@@ -14,10 +13,6 @@
 namespace flowsteer::recording {
 
 namespace {
-
-std::uint32_t crc(std::uint32_t running, std::span<const std::uint8_t> bytes) {
-  return static_cast<std::uint32_t>(crc32(running, bytes.data(), static_cast<uInt>(bytes.size())));
-}
 
 void decompress_zstd(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out,
                      const mcap::FieldReader& record) {
@@ -88,7 +83,7 @@ void McapReader::open() {
   in_.seekg(0);
   std::array<std::uint8_t, mcap::kMagic.size()> magic{};
   read_bytes(magic, "the magic");
-  data_crc_ = crc(0, magic);
+  data_crc_ = mcap::crc(0, magic);
   if (magic != mcap::kMagic) {
     throw RecordingError(name_ + ": not an MCAP file (its first 8 bytes are not MCAP's magic)");
   }
@@ -143,12 +138,13 @@ bool McapReader::read_record() {
     }
     summary_start_ = offset_;
   } else if (!summary_start_) {
-    data_crc_ = crc(crc(data_crc_, prefix), record_);
+    data_crc_ = mcap::crc(mcap::crc(data_crc_, prefix), record_);
   } else if (op == mcap::Op::footer) {
-    summary_crc_ = crc(summary_crc_, prefix);
-    summary_crc_ = crc(summary_crc_, std::span(record_).first(std::min<std::size_t>(16, length)));
+    summary_crc_ = mcap::crc(summary_crc_, prefix);
+    summary_crc_ =
+        mcap::crc(summary_crc_, std::span(record_).first(std::min<std::size_t>(16, length)));
   } else {
-    summary_crc_ = crc(crc(summary_crc_, prefix), record_);
+    summary_crc_ = mcap::crc(mcap::crc(summary_crc_, prefix), record_);
   }
   return op != mcap::Op::footer;
 }
@@ -240,7 +236,7 @@ void McapReader::start_chunk(std::span<const std::uint8_t> content, const std::s
   } else {
     r.fail("compression '" + compression + "' (this reader knows zstd, lz4 and none)");
   }
-  if (uncompressed_crc != 0 && crc(0, chunk_) != uncompressed_crc) {
+  if (uncompressed_crc != 0 && mcap::crc(0, chunk_) != uncompressed_crc) {
     r.fail("the chunk's CRC does not match its records");
   }
   chunk_offset_ = record_offset_;

@@ -7,7 +7,6 @@
 #include <system_error>
 
 #include <lz4frame.h>
-#include <zlib.h>
 #include <zstd.h>
 
 #include "mcap_format.hpp"
@@ -16,12 +15,8 @@ namespace flowsteer::recording {
 
 namespace {
 
-constexpr int kZstdLevel =
-    3;  // zstd's default: about 3x on a run's messages, fast enough to stream
-
-std::uint32_t crc(std::uint32_t running, std::span<const std::uint8_t> bytes) {
-  return static_cast<std::uint32_t>(crc32(running, bytes.data(), static_cast<uInt>(bytes.size())));
-}
+// zstd's default: about 3x on a run's messages, fast enough to stream.
+constexpr int kZstdLevel = 3;
 
 const char* compression_name(ChunkCompression c) {
   switch (c) {
@@ -73,9 +68,9 @@ void McapWriter::emit(std::span<const std::uint8_t> bytes) {
                              std::strerror(errno));
   }
   offset_ += bytes.size();
-  data_crc_ = crc(data_crc_, bytes);
+  data_crc_ = mcap::crc(data_crc_, bytes);
   if (in_summary_) {
-    summary_crc_ = crc(summary_crc_, bytes);
+    summary_crc_ = mcap::crc(summary_crc_, bytes);
   }
 }
 
@@ -195,7 +190,7 @@ void McapWriter::flush_chunk() {
   w.integer(chunk_start_ns_);
   w.integer(chunk_end_ns_);
   w.integer(static_cast<std::uint64_t>(chunk_.size()));
-  w.integer(crc(0, chunk_));
+  w.integer(mcap::crc(0, chunk_));
   w.string(compression_name(options_.compression));
   w.integer(static_cast<std::uint64_t>(records.size()));
   w.bytes(records);
@@ -324,7 +319,7 @@ void McapWriter::finish() {
   w.integer(std::uint64_t{8 + 8 + 4});
   w.integer(summary_start);
   w.integer(summary_offset_start);
-  w.integer(crc(summary_crc_, record_));
+  w.integer(mcap::crc(summary_crc_, record_));
   emit_buffer();
   emit(mcap::kMagic);
   if (std::fclose(std::exchange(file_, nullptr)) != 0) {

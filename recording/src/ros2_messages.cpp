@@ -134,6 +134,17 @@ Twist read_twist(CdrReader& r) {
 
 }  // namespace
 
+const std::string& ros2msg_schema(const std::string& package_type) {
+  static const std::map<std::string, std::string> schemas = [] {
+    std::map<std::string, std::string> all;
+    for (const auto& [type, definition] : definitions()) {
+      all[type] = schema_text(type);
+    }
+    return all;
+  }();
+  return schemas.at(package_type);
+}
+
 Time Time::from_ns(std::uint64_t t_ns) {
   return {static_cast<std::int32_t>(t_ns / 1'000'000'000),
           static_cast<std::uint32_t>(t_ns % 1'000'000'000)};
@@ -151,14 +162,6 @@ double Quaternion::yaw_rad() const {
   return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
 }
 
-// Twist
-const char* MessageType<Twist>::name() {
-  return "geometry_msgs/msg/Twist";
-}
-const std::string& MessageType<Twist>::schema() {
-  static const std::string text = schema_text("geometry_msgs/Twist");
-  return text;
-}
 void MessageType<Twist>::encode(const Twist& m, std::vector<std::uint8_t>& out) {
   CdrWriter w(out);
   write_twist(w, m);
@@ -168,14 +171,6 @@ Twist MessageType<Twist>::decode(std::span<const std::uint8_t> data) {
   return read_twist(r);
 }
 
-// Odometry
-const char* MessageType<Odometry>::name() {
-  return "nav_msgs/msg/Odometry";
-}
-const std::string& MessageType<Odometry>::schema() {
-  static const std::string text = schema_text("nav_msgs/Odometry");
-  return text;
-}
 void MessageType<Odometry>::encode(const Odometry& m, std::vector<std::uint8_t>& out) {
   CdrWriter w(out);
   write_header(w, m.header);
@@ -199,14 +194,6 @@ Odometry MessageType<Odometry>::decode(std::span<const std::uint8_t> data) {
   return m;
 }
 
-// TFMessage
-const char* MessageType<TFMessage>::name() {
-  return "tf2_msgs/msg/TFMessage";
-}
-const std::string& MessageType<TFMessage>::schema() {
-  static const std::string text = schema_text("tf2_msgs/TFMessage");
-  return text;
-}
 void MessageType<TFMessage>::encode(const TFMessage& m, std::vector<std::uint8_t>& out) {
   CdrWriter w(out);
   w.u32(static_cast<std::uint32_t>(m.transforms.size()));
@@ -231,14 +218,6 @@ TFMessage MessageType<TFMessage>::decode(std::span<const std::uint8_t> data) {
   return m;
 }
 
-// CompressedImage
-const char* MessageType<CompressedImage>::name() {
-  return "sensor_msgs/msg/CompressedImage";
-}
-const std::string& MessageType<CompressedImage>::schema() {
-  static const std::string text = schema_text("sensor_msgs/CompressedImage");
-  return text;
-}
 void MessageType<CompressedImage>::encode(const CompressedImage& m,
                                           std::vector<std::uint8_t>& out) {
   CdrWriter w(out);
@@ -256,14 +235,6 @@ CompressedImage MessageType<CompressedImage>::decode(std::span<const std::uint8_
   return m;
 }
 
-// Image
-const char* MessageType<Image>::name() {
-  return "sensor_msgs/msg/Image";
-}
-const std::string& MessageType<Image>::schema() {
-  static const std::string text = schema_text("sensor_msgs/Image");
-  return text;
-}
 void MessageType<Image>::encode(const Image& m, std::vector<std::uint8_t>& out) {
   CdrWriter w(out);
   write_header(w, m.header);
@@ -288,14 +259,6 @@ Image MessageType<Image>::decode(std::span<const std::uint8_t> data) {
   return m;
 }
 
-// CameraInfo
-const char* MessageType<CameraInfo>::name() {
-  return "sensor_msgs/msg/CameraInfo";
-}
-const std::string& MessageType<CameraInfo>::schema() {
-  static const std::string text = schema_text("sensor_msgs/CameraInfo");
-  return text;
-}
 void MessageType<CameraInfo>::encode(const CameraInfo& m, std::vector<std::uint8_t>& out) {
   CdrWriter w(out);
   write_header(w, m.header);

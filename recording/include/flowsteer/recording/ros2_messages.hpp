@@ -10,7 +10,7 @@
 namespace flowsteer::recording::ros2 {
 
 // The ROS 2 messages a recording holds, as ROS 2's common_interfaces define them (field for
-// field, in order), with their CDR encoding and the ros2msg schema text MCAP stores for them.
+// field, in order), with their CDR encoding and their schema.
 // Frames follow REP 103 (x forward, y left, z up; yaw positive to the left) and REP 105.
 
 struct Time {
@@ -92,27 +92,30 @@ struct CameraInfo {
   std::array<double, 12> p{};
 };
 
-// Every type: its ROS 2 name, its ros2msg schema text (the type's fields, then each type it
-// uses after a line of 80 '=' and "MSG: package/Type", as rosbag2 records them), and the
-// functions that encode it into `out` (cleared first) and decode it. Decoding throws
-// RecordingError naming the field where the bytes end or disagree.
+// The ros2msg schema text MCAP stores for "package/Type": the type's fields, then each type it
+// uses after a line of 80 '=' and "MSG: package/Type", as rosbag2 records them.
+const std::string& ros2msg_schema(const std::string& package_type);
+
+// Every type: its ROS 2 name, its schema, and the functions that encode it into `out` (cleared
+// first) and decode it. Decoding throws RecordingError naming the field where the bytes end or
+// disagree.
 template <typename Message>
 struct MessageType;
 
-#define FLOWSTEER_ROS2_MESSAGE(Type)                                         \
-  template <>                                                                \
-  struct MessageType<Type> {                                                 \
-    static const char* name();                                               \
-    static const std::string& schema();                                      \
-    static void encode(const Type& message, std::vector<std::uint8_t>& out); \
-    static Type decode(std::span<const std::uint8_t> data);                  \
+#define FLOWSTEER_ROS2_MESSAGE(Type, package)                                        \
+  template <>                                                                        \
+  struct MessageType<Type> {                                                         \
+    static constexpr const char* name() { return package "/msg/" #Type; }            \
+    static const std::string& schema() { return ros2msg_schema(package "/" #Type); } \
+    static void encode(const Type& message, std::vector<std::uint8_t>& out);         \
+    static Type decode(std::span<const std::uint8_t> data);                          \
   };
-FLOWSTEER_ROS2_MESSAGE(Twist)
-FLOWSTEER_ROS2_MESSAGE(Odometry)
-FLOWSTEER_ROS2_MESSAGE(TFMessage)
-FLOWSTEER_ROS2_MESSAGE(CompressedImage)
-FLOWSTEER_ROS2_MESSAGE(Image)
-FLOWSTEER_ROS2_MESSAGE(CameraInfo)
+FLOWSTEER_ROS2_MESSAGE(Twist, "geometry_msgs")
+FLOWSTEER_ROS2_MESSAGE(Odometry, "nav_msgs")
+FLOWSTEER_ROS2_MESSAGE(TFMessage, "tf2_msgs")
+FLOWSTEER_ROS2_MESSAGE(CompressedImage, "sensor_msgs")
+FLOWSTEER_ROS2_MESSAGE(Image, "sensor_msgs")
+FLOWSTEER_ROS2_MESSAGE(CameraInfo, "sensor_msgs")
 #undef FLOWSTEER_ROS2_MESSAGE
 
 }  // namespace flowsteer::recording::ros2
