@@ -164,6 +164,26 @@ cv::Mat decode_image(const recording::McapMessage& m, const std::string& file,
   return bgr;
 }
 
+// What the first pass learns of an image channel: its first image's frame and size, and its
+// message count and first and last log times (the frame rate).
+struct ImageChannel {
+  std::string frame_id;
+  cv::Size size;
+  std::uint64_t count = 0;
+  std::uint64_t first_ns = 0;
+  std::uint64_t last_ns = 0;
+
+  void add(const recording::McapMessage& m, const std::string& file) {
+    if (count++ == 0) {
+      ros2::Header header;
+      size = decode_image(m, file, header).size();
+      frame_id = header.frame_id;
+      first_ns = m.log_time_ns;
+    }
+    last_ns = m.log_time_ns;
+  }
+};
+
 }  // namespace
 
 RecordedCamera::RecordedCamera(const std::filesystem::path& path, const RecordedTopics& topics,
@@ -178,8 +198,7 @@ void RecordedCamera::index(const RecordedTopics& topics,
   recording::McapReader reader(path_);
   std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, drivers::BodyVelocity>>> odometry;
   std::map<std::string, ros2::CameraInfo> camera_infos;  // the first of each frame
-  // Each image channel's first image: its frame and size.
-  std::map<std::uint16_t, std::pair<std::string, cv::Size>> first_images;
+  std::map<std::uint16_t, ImageChannel> image_channels;
   std::vector<ros2::TransformStamped> mounts;
   while (const auto m = reader.next()) {
     const std::string schema = schema_of(*m->channel);
@@ -194,17 +213,19 @@ void RecordedCamera::index(const RecordedTopics& topics,
     } else if (m->channel->topic == "/tf_static" && schema == TFMessage::name()) {
       const ros2::TFMessage tf = decode<TFMessage>(*m, file);
       mounts.insert(mounts.end(), tf.transforms.begin(), tf.transforms.end());
-    } else if (is_image(*m->channel) && !first_images.contains(m->channel->id)) {
-      ros2::Header header;
-      const cv::Mat bgr = decode_image(*m, file, header);
-      first_images[m->channel->id] = {header.frame_id, bgr.size()};
+    } else if (is_image(*m->channel)) {
+      image_channels[m->channel->id].add(*m, file);
     }
   }
   const recording::McapChannel* image =
       choose(reader.channels(), topics.image, is_image, "image", "--image-topic", false, file);
   image_topic_ = image->topic;
-  const auto [image_frame, image_size] = first_images.at(image->id);
-  image_frame_ = image_frame;
+  const ImageChannel& images = image_channels.at(image->id);
+  image_frame_ = images.frame_id;
+  if (images.count > 1 && images.last_ns > images.first_ns) {
+    frame_rate_hz_ = static_cast<double>(images.count - 1) /
+                     (static_cast<double>(images.last_ns - images.first_ns) * 1e-9);
+  }
   const recording::McapChannel* odom = choose(
       reader.channels(), topics.odometry,
       [](const recording::McapChannel& c) { return schema_of(c) == Odometry::name(); }, "odometry",
@@ -231,7 +252,7 @@ void RecordedCamera::index(const RecordedTopics& topics,
     }
     options.model = camera_model(info->second, file + ": CameraInfo of " + image_frame_);
   }
-  lens_.emplace(options, image_size.width, image_size.height, file + ": " + image_topic_);
+  lens_.emplace(options, images.size.width, images.size.height, file + ": " + image_topic_);
 }
 
 bool RecordedCamera::read(camera_io::Frame& frame, drivers::BodyVelocity& measured) {

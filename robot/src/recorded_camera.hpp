@@ -40,6 +40,8 @@ class RecordedCamera {
   bool has_odometry() const { return !odometry_.empty(); }
   const std::string& image_topic() const { return image_topic_; }
   const std::string& odometry_topic() const { return odometry_topic_; }
+  // The images' mean rate over the recording (30 when it holds a single image).
+  double frame_rate_hz() const { return frame_rate_hz_; }
 
   // The next image and the base's motion at its stamp; false after the last.
   bool read(camera_io::Frame& frame, drivers::BodyVelocity& measured);
@@ -51,6 +53,7 @@ class RecordedCamera {
   std::string image_topic_;
   std::string odometry_topic_;
   std::string image_frame_;
+  double frame_rate_hz_ = 30.0;
   std::optional<camera_io::Lens> lens_;
   std::optional<base::CameraMount> mount_;
   std::vector<std::pair<std::uint64_t, drivers::BodyVelocity>> odometry_;  // by stamp

@@ -300,7 +300,7 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
                                   : "no odometry: speed " + std::to_string(speed_mps) + " m/s")
         << (camera.mount() ? ", camera mount from /tf_static" : "") << "\n";
     return replay(command,
-                  {camera.intrinsics(), camera.mount(), 30.0,
+                  {camera.intrinsics(), camera.mount(), camera.frame_rate_hz(),
                    [&](camera_io::Frame& frame, drivers::BodyVelocity& measured) {
                      const bool ok = camera.read(frame, measured);
                      if (!camera.has_odometry()) {
