@@ -4,18 +4,11 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "flowsteer/base/command.hpp"
+
 namespace flowsteer::drivers {
 
 namespace {
-
-// ω_z = −ω_cy: the camera's y axis points down, the body's z axis up (docs/CONVENTIONS.md). This
-// pair is the project's one conversion point; everything else speaks ω_cy or wheel speeds.
-double yaw_rate_from_turn_rate(double turn_rate) {
-  return -turn_rate;
-}
-double turn_rate_from_yaw_rate(double yaw_rate_radps) {
-  return -yaw_rate_radps;
-}
 
 void require_positive(double value, const char* what) {
   if (!(value > 0.0) || !std::isfinite(value)) {
@@ -27,7 +20,7 @@ void require_positive(double value, const char* what) {
 }  // namespace
 
 WheelSpeeds to_wheels(const BodyVelocity& body, const WheelGeometry& geometry) {
-  const double yaw_rate_radps = yaw_rate_from_turn_rate(body.turn_rate);
+  const double yaw_rate_radps = base::yaw_rate_of(body.turn_rate);
   const double half_track_m = 0.5 * geometry.wheel_separation_m;
   // A positive yaw rate (counter-clockwise seen from above) makes the right wheel roll faster.
   return {(body.speed_mps - yaw_rate_radps * half_track_m) / geometry.wheel_radius_m,
@@ -38,7 +31,7 @@ BodyVelocity from_wheels(const WheelSpeeds& wheels, const WheelGeometry& geometr
   const double left_mps = wheels.left_radps * geometry.wheel_radius_m;
   const double right_mps = wheels.right_radps * geometry.wheel_radius_m;
   const double yaw_rate_radps = (right_mps - left_mps) / geometry.wheel_separation_m;
-  return {0.5 * (left_mps + right_mps), turn_rate_from_yaw_rate(yaw_rate_radps)};
+  return {0.5 * (left_mps + right_mps), base::turn_rate_of(yaw_rate_radps)};
 }
 
 CommandStage::CommandStage(const CommandStageConfig& config) : config_(config) {

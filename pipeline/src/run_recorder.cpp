@@ -136,12 +136,27 @@ RunRecorder::RunRecorder(const RecordingOptions& options, std::string clock,
   tf_static_ = ros2_channel<ros2::TFMessage>("/tf_static");
 }
 
-std::string RunRecorder::ros_name(const std::string& name) {
-  std::string out = name;
-  std::replace_if(
-      out.begin(), out.end(), [](unsigned char c) { return !std::isalnum(c) && c != '_'; }, '_');
-  if (out.empty() || std::isdigit(static_cast<unsigned char>(out.front()))) {
-    out.insert(out.begin(), 'a');
+std::vector<std::string> RunRecorder::ros_names(const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    std::string name;
+    for (const unsigned char c : names[i]) {
+      const char kept = std::isalnum(c) ? static_cast<char>(c) : '_';
+      if (kept != '_' || (!name.empty() && name.back() != '_')) {
+        name += kept;
+      }
+    }
+    while (!name.empty() && name.back() == '_') {
+      name.pop_back();
+    }
+    if (name.empty() || std::isdigit(static_cast<unsigned char>(name.front()))) {
+      name.insert(name.begin(), 'a');
+    }
+    if (std::find(out.begin(), out.end(), name) != out.end()) {
+      name += '_';
+      name += std::to_string(i);
+    }
+    out.push_back(std::move(name));
   }
   return out;
 }
@@ -174,6 +189,10 @@ std::uint16_t RunRecorder::json_channel(const std::string& topic, const char* sc
   return writer_.add_channel(topic, "json", schema->second);
 }
 
+void RunRecorder::write_json(std::uint16_t channel, std::uint64_t t_ns, const std::string& json) {
+  writer_.write(channel, t_ns, {reinterpret_cast<const std::uint8_t*>(json.data()), json.size()});
+}
+
 template <typename Message>
 void RunRecorder::write(std::uint16_t channel, std::uint64_t t_ns, const Message& message) {
   ros2::MessageType<Message>::encode(message, bytes_);
@@ -181,7 +200,7 @@ void RunRecorder::write(std::uint16_t channel, std::uint64_t t_ns, const Message
 }
 
 std::size_t RunRecorder::add_agent(const std::string& ns, const base::CameraIntrinsics& intrinsics,
-                                   const base::CameraMount& mount) {
+                                   const std::optional<base::CameraMount>& mount) {
   const std::string prefix = ns.empty() ? "" : "/" + ns;
   Agent agent{ns, intrinsics, mount, 0, 0, 0, 0, 0, 0, std::nullopt, 0};
   agent.cmd_vel = ros2_channel<ros2::Twist>(prefix + "/cmd_vel");
@@ -199,10 +218,13 @@ std::size_t RunRecorder::add_agent(const std::string& ns, const base::CameraIntr
 void RunRecorder::write_mounts(std::uint64_t t_ns) {
   ros2::TFMessage tf;
   for (const Agent& agent : agents_) {
-    const Eigen::Quaterniond q(agent.mount.camera_to_body());
+    if (!agent.mount) {
+      continue;
+    }
+    const Eigen::Quaterniond q(agent.mount->camera_to_body());
     tf.transforms.push_back({{ros2::Time::from_ns(t_ns), frame(agent, "base_link")},
                              frame(agent, "camera_optical"),
-                             {0.0, 0.0, agent.mount.height_m},
+                             {0.0, 0.0, agent.mount->height_m},
                              {q.x(), q.y(), q.z(), q.w()}});
   }
   write(tf_static_, t_ns, tf);

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <span>
 #include <string>
@@ -85,12 +86,37 @@ class FieldWriter {
   std::vector<std::uint8_t>& out_;
 };
 
+// Where a record is, for the messages of errors: made into text only when one is thrown.
+struct RecordPlace {
+  std::string_view file;
+  std::uint8_t opcode = 0;
+  std::uint64_t offset = 0;        // in the file, or in its chunk's records
+  std::uint64_t chunk_offset = 0;  // the chunk's record in the file, for a record in a chunk
+  bool in_chunk = false;
+
+  std::string text() const {
+    char head[96];
+    if (in_chunk) {
+      std::snprintf(head, sizeof head, ": the chunk at byte %llu, record 0x%02x at its byte %llu",
+                    static_cast<unsigned long long>(chunk_offset), opcode,
+                    static_cast<unsigned long long>(offset));
+    } else {
+      std::snprintf(head, sizeof head, ": record 0x%02x at byte %llu", opcode,
+                    static_cast<unsigned long long>(offset));
+    }
+    return std::string(file) + head;
+  }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw RecordingError(text() + ": " + what);
+  }
+};
+
 // Takes fields from a record's content; every field is bounds-checked and a short record throws
-// RecordingError naming the record, the field and where the record starts in the file.
+// RecordingError naming the record, the field and where the record is.
 class FieldReader {
  public:
-  FieldReader(std::span<const std::uint8_t> content, std::string where)
-      : content_(content), where_(std::move(where)) {}
+  FieldReader(std::span<const std::uint8_t> content, const RecordPlace& place)
+      : content_(content), place_(place) {}
   template <typename Int>
   Int integer(const char* field) {
     Int v;
@@ -113,14 +139,12 @@ class FieldReader {
   }
   std::span<const std::uint8_t> rest() { return take(content_.size() - offset_, "the rest"); }
   bool done() const { return offset_ == content_.size(); }
-  [[noreturn]] void fail(const std::string& what) const {
-    throw RecordingError(where_ + ": " + what);
-  }
+  [[noreturn]] void fail(const std::string& what) const { place_.fail(what); }
 
  private:
   std::span<const std::uint8_t> content_;
   std::size_t offset_ = 0;
-  std::string where_;
+  RecordPlace place_;
 };
 
 }  // namespace flowsteer::recording::mcap

@@ -90,15 +90,13 @@ void McapReader::open() {
   if (!read_record() || opcode_ != static_cast<std::uint8_t>(mcap::Op::header)) {
     throw RecordingError(name_ + ": the first record is not a Header");
   }
-  mcap::FieldReader header(record_, where(record_offset_, opcode_));
+  mcap::FieldReader header(record_, place());
   profile_ = header.string("profile");
   header.string("library");
 }
 
-std::string McapReader::where(std::uint64_t offset, std::uint8_t opcode) const {
-  char op[8];
-  std::snprintf(op, sizeof op, "0x%02x", opcode);
-  return name_ + ": record " + op + " at byte " + std::to_string(offset);
+mcap::RecordPlace McapReader::place() const {
+  return {name_, opcode_, record_offset_, 0, false};
 }
 
 void McapReader::read_bytes(std::span<std::uint8_t> into, const char* what) {
@@ -116,6 +114,8 @@ void McapReader::read_bytes(std::span<std::uint8_t> into, const char* what) {
 
 // Counts each record into the CRC of its section: the data section's up to DataEnd (whose own
 // CRC is checked here), the summary's from there through the footer's fields before its CRC.
+// Records this reader does not use (indexes, attachments, the summary) are read past in pieces:
+// only what it holds counts against max_chunk_bytes.
 bool McapReader::read_record() {
   record_offset_ = offset_;
   std::array<std::uint8_t, mcap::kRecordPrefix> prefix{};
@@ -124,44 +124,83 @@ bool McapReader::read_record() {
   std::uint64_t length;
   std::memcpy(&length, prefix.data() + 1, 8);
   if (length > size_ - offset_) {
-    throw RecordingError(where(record_offset_, opcode_) + ": its length " + std::to_string(length) +
-                         " runs past the file's end at " + std::to_string(size_));
+    place().fail("its length " + std::to_string(length) + " runs past the file's end at " +
+                 std::to_string(size_));
+  }
+  std::uint32_t& section_crc = summary_start_ ? summary_crc_ : data_crc_;
+  const auto op = static_cast<mcap::Op>(opcode_);
+  if (op != mcap::Op::data_end) {
+    section_crc = mcap::crc(section_crc, prefix);
+  }
+  if (!used(op)) {
+    skip(length, section_crc);
+    record_.clear();
+    return true;
+  }
+  // A chunk's compressed records may be a little larger than what they hold.
+  if (length > max_chunk_bytes_ + (std::uint64_t{1} << 16)) {
+    place().fail("a record of " + std::to_string(length) + " bytes, more than the " +
+                 std::to_string(max_chunk_bytes_) + " this reader holds");
   }
   record_.resize(length);
   read_bytes(record_, "a record");
-  const auto op = static_cast<mcap::Op>(opcode_);
   if (op == mcap::Op::data_end) {
-    mcap::FieldReader r(record_, where(record_offset_, opcode_));
+    mcap::FieldReader r(record_, place());
     const auto data_crc = r.integer<std::uint32_t>("data_section_crc");
     if (data_crc != 0 && data_crc != data_crc_) {
       r.fail("the data section's CRC does not match");
     }
     summary_start_ = offset_;
-  } else if (!summary_start_) {
-    data_crc_ = mcap::crc(mcap::crc(data_crc_, prefix), record_);
   } else if (op == mcap::Op::footer) {
-    summary_crc_ = mcap::crc(summary_crc_, prefix);
     summary_crc_ =
         mcap::crc(summary_crc_, std::span(record_).first(std::min<std::size_t>(16, length)));
   } else {
-    summary_crc_ = mcap::crc(mcap::crc(summary_crc_, prefix), record_);
+    section_crc = mcap::crc(section_crc, record_);
   }
   return op != mcap::Op::footer;
+}
+
+// The records whose content this reader takes: in the data section, those that define channels,
+// carry messages or metadata; the DataEnd and the footer for their checks.
+bool McapReader::used(mcap::Op op) const {
+  switch (op) {
+    case mcap::Op::data_end:
+    case mcap::Op::footer:
+      return true;
+    case mcap::Op::header:
+    case mcap::Op::schema:
+    case mcap::Op::channel:
+    case mcap::Op::message:
+    case mcap::Op::chunk:
+    case mcap::Op::metadata:
+      return !summary_start_;
+    default:
+      return false;
+  }
+}
+
+void McapReader::skip(std::uint64_t length, std::uint32_t& section_crc) {
+  std::array<std::uint8_t, 1 << 16> piece{};
+  while (length > 0) {
+    const std::span<std::uint8_t> part = std::span(piece).first(
+        static_cast<std::size_t>(std::min<std::uint64_t>(length, piece.size())));
+    read_bytes(part, "a record");
+    section_crc = mcap::crc(section_crc, part);
+    length -= part.size();
+  }
 }
 
 std::optional<McapMessage> McapReader::next() {
   for (;;) {
     while (chunk_position_ < chunk_.size()) {
-      const std::uint64_t at = chunk_position_;
-      const std::string in_chunk = name_ + ": the chunk at byte " + std::to_string(chunk_offset_);
-      mcap::FieldReader prefix{std::span<const std::uint8_t>(chunk_).subspan(at), in_chunk};
-      const auto opcode = prefix.integer<std::uint8_t>("a record's opcode");
+      mcap::RecordPlace where{name_, 0, chunk_position_, chunk_offset_, true};
+      mcap::FieldReader prefix{std::span<const std::uint8_t>(chunk_).subspan(chunk_position_),
+                               where};
+      where.opcode = prefix.integer<std::uint8_t>("a record's opcode");
       const auto length = prefix.integer<std::uint64_t>("a record's length");
       const std::span<const std::uint8_t> content = prefix.take(length, "a record");
       chunk_position_ += mcap::kRecordPrefix + length;
-      const std::string where =
-          in_chunk + ", record " + std::to_string(opcode) + " at its byte " + std::to_string(at);
-      switch (static_cast<mcap::Op>(opcode)) {
+      switch (static_cast<mcap::Op>(where.opcode)) {
         case mcap::Op::schema:
           add_schema(content, where);
           break;
@@ -171,24 +210,24 @@ std::optional<McapMessage> McapReader::next() {
         case mcap::Op::message:
           return message(content, where);
         default:
-          throw RecordingError(where + ": a chunk holds only schemas, channels and messages");
+          where.fail("a chunk holds only schemas, channels and messages");
       }
     }
     if (ended_) {
       return std::nullopt;
     }
     if (!read_record()) {
-      read_footer(record_, where(record_offset_, opcode_));
+      read_footer(record_, place());
       ended_ = true;
       return std::nullopt;
     }
-    const std::string at = where(record_offset_, opcode_);
-    if (summary_start_) {
-      continue;  // the summary repeats what the data section had
+    const mcap::RecordPlace at = place();
+    if (record_.empty() && !used(static_cast<mcap::Op>(opcode_))) {
+      continue;  // read past: indexes, attachments, the summary
     }
     switch (static_cast<mcap::Op>(opcode_)) {
       case mcap::Op::header:
-        throw RecordingError(at + ": a second Header");
+        at.fail("a second Header");
       case mcap::Op::schema:
         add_schema(record_, at);
         break;
@@ -209,7 +248,8 @@ std::optional<McapMessage> McapReader::next() {
   }
 }
 
-void McapReader::start_chunk(std::span<const std::uint8_t> content, const std::string& where) {
+void McapReader::start_chunk(std::span<const std::uint8_t> content,
+                             const mcap::RecordPlace& where) {
   mcap::FieldReader r(content, where);
   r.integer<std::uint64_t>("message_start_time");
   r.integer<std::uint64_t>("message_end_time");
@@ -243,7 +283,7 @@ void McapReader::start_chunk(std::span<const std::uint8_t> content, const std::s
   chunk_position_ = 0;
 }
 
-void McapReader::add_schema(std::span<const std::uint8_t> content, const std::string& where) {
+void McapReader::add_schema(std::span<const std::uint8_t> content, const mcap::RecordPlace& where) {
   mcap::FieldReader r(content, where);
   McapSchema schema;
   schema.id = r.integer<std::uint16_t>("schema id");
@@ -256,7 +296,8 @@ void McapReader::add_schema(std::span<const std::uint8_t> content, const std::st
   schemas_.try_emplace(schema.id, std::move(schema));
 }
 
-void McapReader::add_channel(std::span<const std::uint8_t> content, const std::string& where) {
+void McapReader::add_channel(std::span<const std::uint8_t> content,
+                             const mcap::RecordPlace& where) {
   mcap::FieldReader r(content, where);
   McapChannel channel;
   channel.id = r.integer<std::uint16_t>("channel id");
@@ -274,7 +315,8 @@ void McapReader::add_channel(std::span<const std::uint8_t> content, const std::s
   channels_.try_emplace(channel.id, std::move(channel));
 }
 
-McapMessage McapReader::message(std::span<const std::uint8_t> content, const std::string& where) {
+McapMessage McapReader::message(std::span<const std::uint8_t> content,
+                                const mcap::RecordPlace& where) {
   mcap::FieldReader r(content, where);
   const auto channel_id = r.integer<std::uint16_t>("channel id");
   const auto channel = channels_.find(channel_id);
@@ -292,7 +334,8 @@ McapMessage McapReader::message(std::span<const std::uint8_t> content, const std
   return m;
 }
 
-void McapReader::add_metadata(std::span<const std::uint8_t> content, const std::string& where) {
+void McapReader::add_metadata(std::span<const std::uint8_t> content,
+                              const mcap::RecordPlace& where) {
   mcap::FieldReader r(content, where);
   const std::string name = r.string("metadata name");
   const auto map_size = r.integer<std::uint32_t>("metadata map's length");
@@ -304,7 +347,8 @@ void McapReader::add_metadata(std::span<const std::uint8_t> content, const std::
   }
 }
 
-void McapReader::read_footer(std::span<const std::uint8_t> content, const std::string& where) {
+void McapReader::read_footer(std::span<const std::uint8_t> content,
+                             const mcap::RecordPlace& where) {
   mcap::FieldReader r(content, where);
   const auto summary_start = r.integer<std::uint64_t>("summary_start");
   r.integer<std::uint64_t>("summary_offset_start");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <system_error>
@@ -36,26 +37,36 @@ const char* flowsteer_version() {
   return FLOWSTEER_VERSION;
 }
 
+std::uint64_t nanoseconds(double t_s) {
+  return t_s > 0.0 ? static_cast<std::uint64_t>(std::llround(t_s * 1e9)) : 0;
+}
+
 McapWriter::McapWriter(const std::filesystem::path& path, const McapWriterOptions& options)
     : path_(path), partial_path_(path.string() + ".partial"), options_(options) {
-  file_ = std::fopen(partial_path_.c_str(), "wb");
+  file_.reset(std::fopen(partial_path_.c_str(), "wb"));
   if (file_ == nullptr) {
     throw std::runtime_error("cannot write the recording " + path.string() + ": " +
                              std::strerror(errno));
   }
-  emit(mcap::kMagic);
-  mcap::FieldWriter w(record_);
-  const std::size_t content = w.begin_record(mcap::Op::header);
-  w.string(options_.profile);
-  w.string(options_.library);
-  w.end_record(content);
-  emit_buffer();
+  try {
+    emit(mcap::kMagic);
+    mcap::FieldWriter w(record_);
+    const std::size_t content = w.begin_record(mcap::Op::header);
+    w.string(options_.profile);
+    w.string(options_.library);
+    w.end_record(content);
+    emit_buffer();
+  } catch (...) {
+    // No destructor runs for a constructor that throws: the partial file goes here.
+    file_.reset();
+    std::error_code ignored;
+    std::filesystem::remove(partial_path_, ignored);
+    throw;
+  }
 }
 
 McapWriter::~McapWriter() {
-  if (file_ != nullptr) {
-    std::fclose(file_);
-  }
+  file_.reset();
   if (!finished_) {
     std::error_code ignored;
     std::filesystem::remove(partial_path_, ignored);
@@ -63,7 +74,7 @@ McapWriter::~McapWriter() {
 }
 
 void McapWriter::emit(std::span<const std::uint8_t> bytes) {
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) {
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file_.get()) != bytes.size()) {
     throw std::runtime_error("cannot write the recording " + path_.string() + ": " +
                              std::strerror(errno));
   }
@@ -119,9 +130,10 @@ void McapWriter::write(std::uint16_t channel_id, std::uint64_t t_ns,
   if (channel_id >= channel_records_.size()) {
     throw std::invalid_argument("McapWriter::write: no channel " + std::to_string(channel_id));
   }
-  if (chunk_message_count_++ == 0) {
-    chunk_start_ns_ = t_ns;
-  }
+  // A chunk's times are its earliest and latest message's: a robot logs a frame at its capture
+  // time, after the drive's updates of later times.
+  chunk_start_ns_ = chunk_message_count_++ == 0 ? t_ns : std::min(chunk_start_ns_, t_ns);
+  chunk_end_ns_ = std::max(chunk_end_ns_, t_ns);
   chunk_messages_[channel_id].emplace_back(t_ns, chunk_.size());
   mcap::FieldWriter w(chunk_);
   const std::size_t content = w.begin_record(mcap::Op::message);
@@ -131,7 +143,6 @@ void McapWriter::write(std::uint16_t channel_id, std::uint64_t t_ns,
   w.integer(t_ns);  // publish time
   w.bytes(data);
   w.end_record(content);
-  chunk_end_ns_ = t_ns;
   first_ns_ = message_count_ == 0 ? t_ns : std::min(first_ns_, t_ns);
   last_ns_ = std::max(last_ns_, t_ns);
   ++message_count_;
@@ -220,6 +231,8 @@ void McapWriter::flush_chunk() {
   chunk_indexes_.push_back(std::move(index));
   chunk_.clear();
   chunk_message_count_ = 0;
+  chunk_start_ns_ = 0;
+  chunk_end_ns_ = 0;
 }
 
 // The summary: one group each of schemas, channels, statistics, chunk indexes and metadata
@@ -322,7 +335,7 @@ void McapWriter::finish() {
   w.integer(mcap::crc(summary_crc_, record_));
   emit_buffer();
   emit(mcap::kMagic);
-  if (std::fclose(std::exchange(file_, nullptr)) != 0) {
+  if (std::fclose(file_.release()) != 0) {
     throw std::runtime_error("cannot write the recording " + path_.string() + ": " +
                              std::strerror(errno));
   }

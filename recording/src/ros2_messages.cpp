@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <stdexcept>
 
 #include "flowsteer/recording/cdr.hpp"
 #include "flowsteer/recording/recording_error.hpp"
@@ -95,6 +97,11 @@ Header read_header(CdrReader& r) {
   Header h;
   h.stamp.sec = r.i32("header.stamp.sec");
   h.stamp.nanosec = r.u32("header.stamp.nanosec");
+  // A stamp is a time since an epoch: never before it, its nanoseconds less than a second.
+  if (h.stamp.sec < 0 || h.stamp.nanosec >= 1'000'000'000) {
+    throw RecordingError("CDR field header.stamp: " + std::to_string(h.stamp.sec) + " s " +
+                         std::to_string(h.stamp.nanosec) + " ns is not a time");
+  }
   h.frame_id = r.string("header.frame_id");
   return h;
 }
@@ -146,8 +153,12 @@ const std::string& ros2msg_schema(const std::string& package_type) {
 }
 
 Time Time::from_ns(std::uint64_t t_ns) {
-  return {static_cast<std::int32_t>(t_ns / 1'000'000'000),
-          static_cast<std::uint32_t>(t_ns % 1'000'000'000)};
+  const std::uint64_t sec = t_ns / 1'000'000'000;
+  if (sec > static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max())) {
+    throw std::invalid_argument("ros2::Time: " + std::to_string(t_ns) +
+                                " ns is past what ROS 2's int32 seconds hold");
+  }
+  return {static_cast<std::int32_t>(sec), static_cast<std::uint32_t>(t_ns % 1'000'000'000)};
 }
 
 std::uint64_t Time::ns() const {
@@ -156,10 +167,6 @@ std::uint64_t Time::ns() const {
 
 Quaternion Quaternion::from_yaw(double yaw_rad) {
   return {0.0, 0.0, std::sin(0.5 * yaw_rad), std::cos(0.5 * yaw_rad)};
-}
-
-double Quaternion::yaw_rad() const {
-  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
 }
 
 void MessageType<Twist>::encode(const Twist& m, std::vector<std::uint8_t>& out) {

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "flowsteer/base/command.hpp"
+#include "flowsteer/base/quantity_bounds.hpp"
 #include "flowsteer/recording/recording_error.hpp"
 #include "flowsteer/recording/ros2_messages.hpp"
 
@@ -76,12 +77,51 @@ const recording::McapChannel* choose(
                        topics + "): choose one with " + option);
 }
 
-// The mount a base → camera transform gives: the optical centre's height, and the pitch of the
-// optical axis (the camera's z) below the horizon.
-base::CameraMount mount_of(const ros2::TransformStamped& t) {
-  const Eigen::Quaterniond q(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
-  const Eigen::Vector3d axis = q.normalized() * Eigen::Vector3d::UnitZ();
-  return {t.translation.z, std::atan2(-axis.z(), std::hypot(axis.x(), axis.y()))};
+// The camera's mount from the static transforms: the chain from the image's frame up to the
+// base (`base_link` or `base_footprint`, under a namespace or not) composed, its optical centre's
+// height and the pitch of its optical axis (the camera's z) below the horizon; a roll about that
+// axis is not a flowsteer mount's and is left out. None when the chain does not reach the base.
+std::optional<base::CameraMount> mount_of(
+    const std::map<std::string, ros2::TransformStamped>& by_child, std::string frame,
+    const std::string& file) {
+  Eigen::Isometry3d base_from_camera = Eigen::Isometry3d::Identity();
+  const auto is_base = [](const std::string& f) {
+    for (const char* base : {"base_link", "base_footprint"}) {
+      const std::string b = base;
+      if (f == b || (f.size() > b.size() && f.ends_with("/" + b))) {
+        return true;
+      }
+    }
+    return false;
+  };
+  for (int hop = 0; hop < 16 && !is_base(frame); ++hop) {
+    const auto t = by_child.find(frame);
+    if (t == by_child.end()) {
+      return std::nullopt;
+    }
+    const ros2::TransformStamped& link = t->second;
+    Eigen::Isometry3d parent_from_child = Eigen::Isometry3d::Identity();
+    parent_from_child.translate(
+        Eigen::Vector3d(link.translation.x, link.translation.y, link.translation.z));
+    parent_from_child.rotate(
+        Eigen::Quaterniond(link.rotation.w, link.rotation.x, link.rotation.y, link.rotation.z)
+            .normalized());
+    base_from_camera = parent_from_child * base_from_camera;
+    frame = link.header.frame_id;
+  }
+  if (!is_base(frame)) {
+    return std::nullopt;
+  }
+  const Eigen::Vector3d axis = base_from_camera.linear() * Eigen::Vector3d::UnitZ();
+  const base::CameraMount mount{base_from_camera.translation().z(),
+                                std::atan2(-axis.z(), std::hypot(axis.x(), axis.y()))};
+  try {
+    mount.validate();
+  } catch (const std::invalid_argument& e) {
+    throw RecordingError(file + ": the camera's mount from /tf_static (" + frame +
+                         " to the image's frame): " + e.what());
+  }
+  return mount;
 }
 
 camera_io::CameraModel camera_model(const ros2::CameraInfo& info, const std::string& where) {
@@ -112,6 +152,42 @@ camera_io::CameraModel camera_model(const ros2::CameraInfo& info, const std::str
   return model;
 }
 
+// The size a PNG's or a JPEG's header states, read before decoding: hostile bytes must not make
+// the decoder allocate gigabytes. None for other formats, or a header cut short.
+std::optional<cv::Size> compressed_size(std::span<const std::uint8_t> data) {
+  const auto be16 = [&](std::size_t at) { return (data[at] << 8) | data[at + 1]; };
+  const auto be32 = [&](std::size_t at) {
+    return static_cast<std::int64_t>((std::uint32_t{data[at]} << 24) |
+                                     (std::uint32_t{data[at + 1]} << 16) |
+                                     (std::uint32_t{data[at + 2]} << 8) | data[at + 3]);
+  };
+  const auto clamp = [](std::int64_t v) {
+    return static_cast<int>(std::min<std::int64_t>(v, 1 << 30));
+  };
+  if (data.size() >= 24 && data[0] == 0x89 && data[1] == 'P' && data[12] == 'I' &&
+      data[13] == 'H') {
+    return cv::Size(clamp(be32(16)), clamp(be32(20)));  // IHDR, the first chunk
+  }
+  if (data.size() < 4 || data[0] != 0xFF || data[1] != 0xD8) {
+    return std::nullopt;
+  }
+  // JPEG: segments after SOI until a start of frame (C0–CF but C4, C8, CC) holds the size.
+  for (std::size_t at = 2; at + 9 <= data.size() && data[at] == 0xFF;) {
+    const std::uint8_t marker = data[at + 1];
+    if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+      return cv::Size(be16(at + 7), be16(at + 5));
+    }
+    at += 2 + static_cast<std::size_t>(be16(at + 2));
+  }
+  return std::nullopt;
+}
+
+bool within_image_bounds(const cv::Size& size) {
+  const auto& side = base::bounds::kImageSide_px;
+  return size.width >= side.min && size.width <= side.max && size.height >= side.min &&
+         size.height <= side.max;
+}
+
 // A BGR image from an Image message's pixels.
 cv::Mat bgr_of(const ros2::Image& image, const std::string& where) {
   const std::map<std::string, std::pair<int, int>> formats = {
@@ -127,8 +203,9 @@ cv::Mat bgr_of(const ros2::Image& image, const std::string& where) {
   }
   const auto [type, conversion] = format->second;
   const std::size_t row_bytes = image.width * static_cast<std::size_t>(CV_ELEM_SIZE(type));
-  if (image.width == 0 || image.height == 0 || image.step < row_bytes ||
-      image.data.size() < std::size_t{image.step} * image.height) {
+  if (!within_image_bounds({static_cast<int>(std::min<std::uint32_t>(image.width, 1 << 30)),
+                            static_cast<int>(std::min<std::uint32_t>(image.height, 1 << 30))}) ||
+      image.step < row_bytes || image.data.size() < std::size_t{image.step} * image.height) {
     throw RecordingError(where + ": " + std::to_string(image.width) + "x" +
                          std::to_string(image.height) + " pixels of " + image.encoding +
                          " with step " + std::to_string(image.step) + " do not fit its " +
@@ -156,6 +233,12 @@ cv::Mat decode_image(const recording::McapMessage& m, const std::string& file,
   }
   const ros2::CompressedImage image = decode<CompressedImage>(m, file);
   header = image.header;
+  if (const auto size = compressed_size(image.data); size && !within_image_bounds(*size)) {
+    throw RecordingError(where + ": a " + std::to_string(size->width) + "x" +
+                         std::to_string(size->height) + " " + image.format +
+                         " image, outside a camera's sides " +
+                         base::bounds::kImageSide_px.describe());
+  }
   cv::Mat bgr = cv::imdecode(image.data, cv::IMREAD_COLOR);
   if (bgr.empty()) {
     throw RecordingError(where + ": cannot decode its " + std::to_string(image.data.size()) +
@@ -182,6 +265,42 @@ struct ImageChannel {
     }
     last_ns = m.log_time_ns;
   }
+
+  std::optional<double> frame_rate_hz() const {
+    if (count < 2 || last_ns <= first_ns) {
+      return std::nullopt;
+    }
+    return static_cast<double>(count - 1) / (static_cast<double>(last_ns - first_ns) * 1e-9);
+  }
+};
+
+// What the first pass over a recording gathers: every odometry channel's motion by stamp, the
+// first CameraInfo of each frame, each image channel, the static transforms by child frame.
+struct RecordingIndex {
+  std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, drivers::BodyVelocity>>> odometry;
+  std::map<std::string, ros2::CameraInfo> camera_infos;
+  std::map<std::uint16_t, ImageChannel> image_channels;
+  std::map<std::string, ros2::TransformStamped> static_transforms;
+
+  void add(const recording::McapMessage& m, const std::string& file) {
+    const std::string schema = schema_of(*m.channel);
+    if (schema == Odometry::name()) {
+      const ros2::Odometry o = decode<Odometry>(m, file);
+      odometry[m.channel->id].emplace_back(
+          o.header.stamp.ns(),
+          drivers::BodyVelocity{o.twist.linear.x, base::turn_rate_of(o.twist.angular.z)});
+    } else if (schema == CameraInfo::name()) {
+      const ros2::CameraInfo info = decode<CameraInfo>(m, file);
+      camera_infos.try_emplace(info.header.frame_id, info);
+    } else if (m.channel->topic == "/tf_static" && schema == TFMessage::name()) {
+      ros2::TFMessage tf = decode<TFMessage>(m, file);
+      for (ros2::TransformStamped& t : tf.transforms) {
+        static_transforms[t.child_frame_id] = std::move(t);
+      }
+    } else if (is_image(*m.channel)) {
+      image_channels[m.channel->id].add(m, file);
+    }
+  }
 };
 
 }  // namespace
@@ -196,63 +315,44 @@ void RecordedCamera::index(const RecordedTopics& topics,
                            const std::optional<camera_io::LensOptions>& lens) {
   const std::string file = path_.string();
   recording::McapReader reader(path_);
-  std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, drivers::BodyVelocity>>> odometry;
-  std::map<std::string, ros2::CameraInfo> camera_infos;  // the first of each frame
-  std::map<std::uint16_t, ImageChannel> image_channels;
-  std::vector<ros2::TransformStamped> mounts;
+  RecordingIndex found;
   while (const auto m = reader.next()) {
-    const std::string schema = schema_of(*m->channel);
-    if (schema == Odometry::name()) {
-      const ros2::Odometry o = decode<Odometry>(*m, file);
-      odometry[m->channel->id].emplace_back(
-          o.header.stamp.ns(),
-          drivers::BodyVelocity{o.twist.linear.x, base::turn_rate_of(o.twist.angular.z)});
-    } else if (schema == CameraInfo::name()) {
-      const ros2::CameraInfo info = decode<CameraInfo>(*m, file);
-      camera_infos.try_emplace(info.header.frame_id, info);
-    } else if (m->channel->topic == "/tf_static" && schema == TFMessage::name()) {
-      const ros2::TFMessage tf = decode<TFMessage>(*m, file);
-      mounts.insert(mounts.end(), tf.transforms.begin(), tf.transforms.end());
-    } else if (is_image(*m->channel)) {
-      image_channels[m->channel->id].add(*m, file);
-    }
+    found.add(*m, file);
   }
   const recording::McapChannel* image =
       choose(reader.channels(), topics.image, is_image, "image", "--image-topic", false, file);
   image_topic_ = image->topic;
-  const ImageChannel& images = image_channels.at(image->id);
-  image_frame_ = images.frame_id;
-  if (images.count > 1 && images.last_ns > images.first_ns) {
-    frame_rate_hz_ = static_cast<double>(images.count - 1) /
-                     (static_cast<double>(images.last_ns - images.first_ns) * 1e-9);
+  const auto images = found.image_channels.find(image->id);
+  if (images == found.image_channels.end()) {
+    throw RecordingError(file + ": no images on " + image_topic_ +
+                         " (a recording made with --mcap-images 0 has none)");
   }
+  image_frame_ = images->second.frame_id;
+  frame_rate_hz_ = images->second.frame_rate_hz().value_or(frame_rate_hz_);
   const recording::McapChannel* odom = choose(
       reader.channels(), topics.odometry,
       [](const recording::McapChannel& c) { return schema_of(c) == Odometry::name(); }, "odometry",
       "--odom-topic", true, file);
   if (odom != nullptr) {
     odometry_topic_ = odom->topic;
-    odometry_ = std::move(odometry[odom->id]);
+    odometry_ = std::move(found.odometry[odom->id]);
     std::stable_sort(odometry_.begin(), odometry_.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
   }
-  for (const ros2::TransformStamped& t : mounts) {
-    if (t.child_frame_id == image_frame_) {
-      mount_ = mount_of(t);
-    }
-  }
+  mount_ = mount_of(found.static_transforms, image_frame_, file);
   camera_io::LensOptions options;
   if (lens) {
     options = *lens;
   } else {
-    const auto info = camera_infos.find(image_frame_);
-    if (info == camera_infos.end()) {
+    const auto info = found.camera_infos.find(image_frame_);
+    if (info == found.camera_infos.end()) {
       throw RecordingError(file + ": no CameraInfo for the frame '" + image_frame_ + "' of " +
                            image_topic_ + ": give --camera-info or --hfov-deg");
     }
     options.model = camera_model(info->second, file + ": CameraInfo of " + image_frame_);
   }
-  lens_.emplace(options, images.size.width, images.size.height, file + ": " + image_topic_);
+  const cv::Size size = images->second.size;
+  lens_.emplace(options, size.width, size.height, file + ": " + image_topic_);
 }
 
 bool RecordedCamera::read(camera_io::Frame& frame, drivers::BodyVelocity& measured) {

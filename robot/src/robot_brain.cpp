@@ -1,6 +1,5 @@
 #include "flowsteer/robot/robot_brain.hpp"
 
-#include <cmath>
 #include <iomanip>
 
 #include "flowsteer/base/clock.hpp"
@@ -57,8 +56,8 @@ base::Command RobotBrain::step(const LoopInput& input) {
     *frame_log_ << std::defaultfloat << "\n";
   }
   if (recorder_ != nullptr) {
-    recorder_->percept(0, static_cast<std::uint64_t>(std::llround(input.frame.timestamp_s * 1e9)),
-                       brain_, input.frame.image);
+    recorder_->percept(0, recording::nanoseconds(input.frame.timestamp_s), brain_,
+                       input.frame.image);
   }
   return output.command;
 }

@@ -86,7 +86,13 @@ RobotLoopResult run_and_record(camera_io::FrameSource& camera, drivers::MobileBa
     result = run_robot_loop(camera, robot_base, brain, options, stop_requested, events);
   } catch (const std::exception& e) {
     if (recorder) {
-      recorder->finish({{"ended", std::string("error: ") + e.what()}});
+      // The run's own error is the one to report; a recording that cannot be finished is logged.
+      try {
+        recorder->finish({{"ended", std::string("error: ") + e.what()}});
+      } catch (const std::exception& recording_error) {
+        events << "flowsteer run: the recording could not be finished: " << recording_error.what()
+               << "\n";
+      }
     }
     throw;
   }
@@ -149,8 +155,8 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   std::optional<pipeline::RunRecorder> recorder;
   if (command.recording) {
     recorder.emplace(*command.recording, "monotonic", "odom");
-    recorder->add_agent("", k, launch.perception.mount.value_or(base::CameraMount{}));
-    recorder->write_mounts(static_cast<std::uint64_t>(std::llround(base::monotonic_now_s() * 1e9)));
+    recorder->add_agent("", k, launch.perception.mount);
+    recorder->write_mounts(recording::nanoseconds(base::monotonic_now_s()));
     options.recorder = &*recorder;
     brain.record_into(&*recorder);
   }
@@ -212,8 +218,9 @@ ReplaySummary replay(const ReplayCommand& command, const ReplayInput& input, std
   std::optional<pipeline::RunRecorder> recorder;
   if (command.recording) {
     recorder.emplace(*command.recording, "recording", "odom");
-    recorder->add_agent("", input.intrinsics, input.mount.value_or(base::CameraMount{}));
+    recorder->add_agent("", input.intrinsics, input.mount);
     recorder->write_mounts(0);
+    robot.record_into(&*recorder);
   }
   const cv::Size size(input.intrinsics.width_px, input.intrinsics.height_px);
   std::unique_ptr<cv::VideoWriter> video = pipeline::open_video(
@@ -253,10 +260,6 @@ ReplaySummary replay(const ReplayCommand& command, const ReplayInput& input, std
                  {seq, frame.timestamp_s, measured.speed_mps, measured.turn_rate,
                   static_cast<double>(brain.objects().size()), bearing.value_or(nan), c.accel_mps2,
                   c.turn_rate, brain.output().cost});
-    if (recorder) {
-      recorder->percept(0, static_cast<std::uint64_t>(std::llround(frame.timestamp_s * 1e9)), brain,
-                        frame.image);
-    }
     video->write(pipeline::draw_overlay(frame.image, brain.flow(), brain.objects(),
                                         input.intrinsics, bearing));
   }

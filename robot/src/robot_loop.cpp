@@ -22,8 +22,17 @@ bool moving(const drivers::BodyVelocity& measured) {
   return std::abs(measured.speed_mps) > 0.01 || std::abs(measured.turn_rate) > 0.01;
 }
 
-std::uint64_t recording_ns(double t_s) {
-  return static_cast<std::uint64_t>(std::llround(t_s * 1e9));
+// Records the zero a stop wrote to the drive. A recording that cannot be written (a full disk)
+// must not keep the base from being stopped and deactivated: its failure is logged, not thrown.
+void record_stop(pipeline::RunRecorder* recorder, std::ostream& log) noexcept {
+  if (recorder == nullptr) {
+    return;
+  }
+  try {
+    recorder->command(0, recording::nanoseconds(base::monotonic_now_s()), 0.0, 0.0);
+  } catch (const std::exception& e) {
+    log << "flowsteer run: recording the stop failed: " << e.what() << "\n";
+  }
 }
 
 // Leaves the base stopped and deactivated however the loop ends; when an error ends it (the
@@ -41,10 +50,8 @@ class BaseStopper {
     }
     try {
       base_->emergency_stop();
-      if (recorder_ != nullptr) {
-        recorder_->command(0, recording_ns(base::monotonic_now_s()), 0.0, 0.0);
-      }
       base_->deactivate();
+      record_stop(recorder_, log_);
       if (std::uncaught_exceptions() > exceptions_) {
         log_ << "flowsteer run: the run failed: base " << base_->drive().name() << " stopped\n";
       }
@@ -77,7 +84,7 @@ drivers::BodyVelocity travelled(const drivers::WheelOdometry& from,
 // every limit, the watchdog and a stop), and where the odometry puts the base.
 void record_update(pipeline::RunRecorder& recorder, double t_s, const drivers::BaseState& state,
                    const drivers::WheelGeometry& geometry, const Odometer& odometer) {
-  const std::uint64_t t_ns = recording_ns(t_s);
+  const std::uint64_t t_ns = recording::nanoseconds(t_s);
   const drivers::BodyVelocity sent = drivers::from_wheels(state.sent.wheels, geometry);
   recorder.command(0, t_ns, sent.speed_mps, sent.turn_rate);
   recorder.odometry(0, t_ns, odometer.x_m(), odometer.y_m(), odometer.yaw_rad(),
@@ -149,9 +156,7 @@ RobotLoopResult run_robot_loop(camera_io::FrameSource& camera, drivers::MobileBa
     if (robot_base != nullptr) {
       // The stopper deactivates; latching the stop first makes the zero immediate.
       robot_base->emergency_stop();
-      if (options.recorder != nullptr) {
-        options.recorder->command(0, recording_ns(base::monotonic_now_s()), 0.0, 0.0);
-      }
+      record_stop(options.recorder, log);
       log << ": base " << robot_base->drive().name() << " stopped";
     }
     log << "\n";

@@ -53,29 +53,33 @@ void add_solid(fox::SceneEntity& entity, const sim_camera::Solid& s, const fox::
 
 }  // namespace
 
-std::vector<fox::SceneEntity> scene_entities(const sim_camera::World& world, bool with_static) {
+std::vector<fox::SceneEntity> static_scene_entities(const sim_camera::World& world) {
   const sim_camera::WorldSpec& spec = world.spec();
-  std::vector<fox::SceneEntity> entities;
-  if (with_static) {
-    fox::SceneEntity& obstacles = entities.emplace_back();
-    obstacles.id = "obstacles";
-    obstacles.frame_id = "world";
-    for (const sim_camera::Solid& o : spec.obstacles) {
-      add_solid(obstacles, o, {0.6, 0.6, 0.6, 1.0});
-    }
-    fox::SceneEntity& goals = entities.emplace_back();
-    goals.id = "goals";
-    goals.frame_id = "world";
-    for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-      for (const Eigen::Vector2d& g : spec.agents[i].goals) {
-        fox::Color color = scene_color(agent_color(i));
-        color.a = 0.35;
-        const double d = 2.0 * spec.agents[i].goal_radius_m;
-        goals.cylinders.push_back({{{g.x(), g.y(), 0.01}, {}}, {d, d, 0.02}, color});
-      }
+  std::vector<fox::SceneEntity> entities(2);
+  fox::SceneEntity& obstacles = entities[0];
+  obstacles.id = "obstacles";
+  obstacles.frame_id = "world";
+  for (const sim_camera::Solid& o : spec.obstacles) {
+    add_solid(obstacles, o, {0.6, 0.6, 0.6, 1.0});
+  }
+  fox::SceneEntity& goals = entities[1];
+  goals.id = "goals";
+  goals.frame_id = "world";
+  for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+    for (const Eigen::Vector2d& g : spec.agents[i].goals) {
+      fox::Color color = scene_color(agent_color(i));
+      color.a = 0.35;
+      const double d = 2.0 * spec.agents[i].goal_radius_m;
+      goals.cylinders.push_back({{{g.x(), g.y(), 0.01}, {}}, {d, d, 0.02}, color});
     }
   }
-  fox::SceneEntity& agents = entities.emplace_back();
+  return entities;
+}
+
+std::vector<fox::SceneEntity> moving_scene_entities(const sim_camera::World& world) {
+  const sim_camera::WorldSpec& spec = world.spec();
+  std::vector<fox::SceneEntity> entities(2);
+  fox::SceneEntity& agents = entities[0];
   agents.id = "agents";
   agents.frame_id = "world";
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
@@ -95,7 +99,7 @@ std::vector<fox::SceneEntity> scene_entities(const sim_camera::World& world, boo
                             14.0,
                             scene_color(agent_color(i))});
   }
-  fox::SceneEntity& moving = entities.emplace_back();
+  fox::SceneEntity& moving = entities[1];
   moving.id = "moving";
   moving.frame_id = "world";
   for (std::size_t k = 0; k < spec.moving.size(); ++k) {

@@ -410,7 +410,7 @@ class SimulationRun {
     ++agent_steps_;
     costs_.add(world_.time_s(), i, output);
     if (recorder_) {
-      recorder_->percept(i, time_ns(world_.time_s()), loop.agent->brain(),
+      recorder_->percept(i, recording::nanoseconds(world_.time_s()), loop.agent->brain(),
                          loop.agent->frame().image);
     }
     if (options_.video && out_) {
@@ -423,21 +423,28 @@ class SimulationRun {
     }
   }
 
-  static std::uint64_t time_ns(double t_s) {
-    return static_cast<std::uint64_t>(std::llround(t_s * 1e9));
-  }
-
   // The recording's agents, each under its name as ROS writes names, and their cameras' mounts.
   void start_recording(const pipeline::RecordingOptions& options) {
     recorder_.emplace(options, "simulation", "world");
+    std::vector<std::string> names;
     for (const sim_camera::AgentSpec& a : spec_.agents) {
-      const sim_camera::CameraSpec& c = a.camera;
+      names.push_back(a.name);
+    }
+    const std::vector<std::string> namespaces = pipeline::RunRecorder::ros_names(names);
+    for (std::size_t i = 0; i < spec_.agents.size(); ++i) {
+      const sim_camera::CameraSpec& c = spec_.agents[i].camera;
       recorder_->add_agent(
-          pipeline::RunRecorder::ros_name(a.name),
+          namespaces[i],
           base::CameraIntrinsics::from_horizontal_fov(c.width_px, c.height_px, c.hfov_rad),
           base::CameraMount{c.height_m, c.pitch_rad});
     }
     recorder_->write_mounts(0);
+    // The static world on a topic of its own: a viewer that seeks shows each topic's last message.
+    const std::uint16_t static_channel =
+        recorder_->json_channel("/world/static", recording::foxglove::kSceneUpdate,
+                                recording::foxglove::scene_update_schema());
+    recorder_->write_json(static_channel, 0,
+                          recording::foxglove::scene_update_json(0, static_scene_entities(world_)));
     world_channel_ = recorder_->json_channel("/world", recording::foxglove::kSceneUpdate,
                                              recording::foxglove::scene_update_schema());
   }
@@ -447,18 +454,16 @@ class SimulationRun {
     if (!recorder_) {
       return;
     }
-    const std::uint64_t t_ns = time_ns(world_.time_s());
+    const std::uint64_t t_ns = recording::nanoseconds(world_.time_s());
     for (std::size_t i = 0; i < loops_.size(); ++i) {
       const sim_camera::AgentState& s = world_.agents()[i];
       recorder_->odometry(i, t_ns, s.position_m.x(), s.position_m.y(), s.yaw_rad, s.speed_mps,
                           s.turn_rate);
     }
     recorder_->write_transforms(t_ns);
-    const std::string scene =
-        recording::foxglove::scene_update_json(t_ns, scene_entities(world_, !scene_drawn_));
-    scene_drawn_ = true;
-    recorder_->writer().write(world_channel_, t_ns,
-                              {reinterpret_cast<const std::uint8_t*>(scene.data()), scene.size()});
+    recorder_->write_json(
+        world_channel_, t_ns,
+        recording::foxglove::scene_update_json(t_ns, moving_scene_entities(world_)));
   }
 
   // What each agent was told for the step that began at t_s: the speed and turn rate the world
@@ -469,7 +474,7 @@ class SimulationRun {
     }
     for (std::size_t i = 0; i < loops_.size(); ++i) {
       const sim_camera::AgentState& s = world_.agents()[i];
-      recorder_->command(i, time_ns(t_s), s.speed_mps, s.turn_rate);
+      recorder_->command(i, recording::nanoseconds(t_s), s.speed_mps, s.turn_rate);
     }
   }
 
@@ -552,7 +557,6 @@ class SimulationRun {
   std::optional<base::OutputDir> out_;             // none: no files
   std::optional<pipeline::RunRecorder> recorder_;  // none: no recording
   std::uint16_t world_channel_ = 0;
-  bool scene_drawn_ = false;  // the static obstacles and goals are in the recording
   int total_steps_;
   std::vector<AgentLoop> loops_;
   // This step's views rendered together: their agents, the views and where each goes.

@@ -41,7 +41,8 @@ TEST(Ros2Messages, OdometryAlignsItsDoublesAfterTheStrings) {
   EXPECT_EQ(back.header.frame_id, "odom");
   EXPECT_EQ(back.child_frame_id, "base_link");
   EXPECT_EQ(back.pose.position.y, -2.5);
-  EXPECT_NEAR(back.pose.orientation.yaw_rad(), 0.3, 1e-15);
+  const ros2::Quaternion& q = back.pose.orientation;
+  EXPECT_NEAR(2.0 * std::atan2(q.z, q.w), 0.3, 1e-15);
   EXPECT_EQ(back.twist.linear.x, 0.7);
   EXPECT_EQ(back.twist.angular.z, 0.1);
 }
@@ -72,6 +73,17 @@ TEST(Ros2Messages, TransformsKeepTheirOrder) {
   ASSERT_EQ(back.transforms.size(), 2u);
   EXPECT_EQ(back.transforms[1].child_frame_id, "b/base_link");
   EXPECT_EQ(back.transforms[1].translation.y, 4.0);
+}
+
+TEST(Ros2Messages, AStampThatIsNoTimeIsRefused) {
+  for (const Time stamp : {Time{-1, 0}, Time{1, 1'000'000'000}}) {
+    CompressedImage image;
+    image.header.stamp = stamp;
+    std::vector<std::uint8_t> bytes;
+    MessageType<CompressedImage>::encode(image, bytes);
+    EXPECT_THROW(MessageType<CompressedImage>::decode(bytes), RecordingError);
+  }
+  EXPECT_THROW(Time::from_ns(std::uint64_t{1} << 62), std::invalid_argument);
 }
 
 TEST(Ros2Messages, ShortOrMalformedBytesNameTheField) {

@@ -10,8 +10,10 @@ struct Command {
   double turn_rate = 0.0;
 };
 
-// The yaw rate ROS messages carry (REP 103: about z, which points up, positive left) of a turn
-// rate ω, and back: what a recording writes and reads (cmd_vel, odom).
+// ω_z = −ω_cy: the body's yaw rate (REP 103: about z, which points up, positive left) of a turn
+// rate ω about the camera's y axis, which points down, and back (docs/CONVENTIONS.md). The
+// project's one conversion point: the drives' wheel speeds, odometry and the recordings' cmd_vel
+// and odom go through it; everything else speaks ω.
 constexpr double yaw_rate_of(double turn_rate) {
   return -turn_rate;
 }

@@ -40,8 +40,8 @@ enum class Digits { rounded, exact };
 
 // A string as a JSON string literal, quotes included.
 std::string json_string(const std::string& s);
-// A number as JSON holds it, 6 significant digits; JSON has no NaN or infinity: those become
-// null.
+// A number as JSON holds it, rounded or exact (Digits); JSON has no NaN or infinity: those
+// become null.
 std::string json_number(double value, Digits digits = Digits::rounded);
 
 // A number as CSV cells hold it: 7 significant digits, or exactly; NaN and infinities as an empty

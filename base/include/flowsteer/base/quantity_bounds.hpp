@@ -17,7 +17,7 @@ inline constexpr Bound kStep_s{0.001, 1.0, "s"};
 inline constexpr Bound kDuration_s{0.001, 3600.0, "s"};
 inline constexpr int kMaxRunSteps = 3'600'000;  // kDuration_s.max / kStep_s.min
 inline constexpr Bound kRunSteps{1, kMaxRunSteps, "steps"};
-// A recording's camera images: every Nth frame (0: none), at most one a minute at 30 Hz.
+// A recording's camera images: every Nth frame (0: none), at least one a minute at 30 Hz.
 inline constexpr Bound kImagesEvery_frames{0, 1800, "frames"};
 
 // Where things are: a world within a kilometre of its origin (float geometry keeps millimetres

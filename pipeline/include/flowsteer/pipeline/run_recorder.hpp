@@ -38,12 +38,16 @@ class RunRecorder {
   RunRecorder(const RunRecorder&) = delete;
   RunRecorder& operator=(const RunRecorder&) = delete;
 
-  // A name as ROS allows it in topics and frames: letters, digits and '_', not led by a digit.
-  static std::string ros_name(const std::string& name);
+  // Names as ROS allows them in topics and frames, one per name given, in order: letters, digits
+  // and single underscores, not led by a digit nor ending in '_'; a name that two would share gets
+  // its index after it.
+  static std::vector<std::string> ros_names(const std::vector<std::string>& names);
 
   // Adds an agent whose topics go under /`ns` ("" for a robot's plain topics); returns its index.
+  // Without a mount (a robot without one, a replay of a video) its camera is left out of
+  // /tf_static, so that a replay of the recording does not take one it never had.
   std::size_t add_agent(const std::string& ns, const base::CameraIntrinsics& intrinsics,
-                        const base::CameraMount& mount);
+                        const std::optional<base::CameraMount>& mount);
   // /tf_static: every agent's base → camera, once the agents are added.
   void write_mounts(std::uint64_t t_ns);
 
@@ -58,10 +62,11 @@ class RunRecorder {
   // images_every-th call.
   void percept(std::size_t agent, std::uint64_t t_ns, const Brain& brain, const cv::Mat& image);
 
-  // For topics of the caller's own (the simulator's world).
-  recording::McapWriter& writer() { return writer_; }
+  // A channel of the caller's own (the simulator's world), JSON with its JSON Schema, and a
+  // message on it.
   std::uint16_t json_channel(const std::string& topic, const char* schema_name,
                              const std::string& schema);
+  void write_json(std::uint16_t channel, std::uint64_t t_ns, const std::string& json);
 
   // Writes the metadata (the clock and the agents' namespaces, with `metadata`) and the summary,
   // and gives the file its name.
@@ -71,7 +76,7 @@ class RunRecorder {
   struct Agent {
     std::string ns;
     base::CameraIntrinsics intrinsics;
-    base::CameraMount mount;
+    std::optional<base::CameraMount> mount;
     std::uint16_t cmd_vel, odom, image, camera_info, annotations, step;
     std::optional<recording::ros2::TransformStamped> pose;  // the last odometry's
     int percepts = 0;

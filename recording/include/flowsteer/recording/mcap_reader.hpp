@@ -12,6 +12,11 @@
 
 namespace flowsteer::recording {
 
+namespace mcap {
+enum class Op : std::uint8_t;
+struct RecordPlace;
+}  // namespace mcap
+
 struct McapSchema {
   std::uint16_t id = 0;
   std::string name;
@@ -67,13 +72,15 @@ class McapReader {
   // Reads the next top-level record into record_; false at the footer.
   bool read_record();
   void read_bytes(std::span<std::uint8_t> into, const char* what);
-  void start_chunk(std::span<const std::uint8_t> content, const std::string& where);
-  void add_schema(std::span<const std::uint8_t> content, const std::string& where);
-  void add_channel(std::span<const std::uint8_t> content, const std::string& where);
-  McapMessage message(std::span<const std::uint8_t> content, const std::string& where);
-  void add_metadata(std::span<const std::uint8_t> content, const std::string& where);
-  void read_footer(std::span<const std::uint8_t> content, const std::string& where);
-  std::string where(std::uint64_t offset, std::uint8_t opcode) const;
+  bool used(mcap::Op op) const;
+  void skip(std::uint64_t length, std::uint32_t& section_crc);
+  void start_chunk(std::span<const std::uint8_t> content, const mcap::RecordPlace& where);
+  void add_schema(std::span<const std::uint8_t> content, const mcap::RecordPlace& where);
+  void add_channel(std::span<const std::uint8_t> content, const mcap::RecordPlace& where);
+  McapMessage message(std::span<const std::uint8_t> content, const mcap::RecordPlace& where);
+  void add_metadata(std::span<const std::uint8_t> content, const mcap::RecordPlace& where);
+  void read_footer(std::span<const std::uint8_t> content, const mcap::RecordPlace& where);
+  mcap::RecordPlace place() const;  // of the record read last
 
   std::ifstream file_;
   std::istream& in_;

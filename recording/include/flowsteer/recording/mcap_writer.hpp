@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -17,6 +18,10 @@ enum class ChunkCompression { none, zstd, lz4 };
 // flowsteer's version (the project's, from CMake), as recordings state it.
 const char* flowsteer_version();
 
+// A time in seconds (the simulation's, a clock's) as a recording's nanoseconds; times before 0
+// are 0.
+std::uint64_t nanoseconds(double t_s);
+
 struct McapWriterOptions {
   std::string profile = "ros2";  // MCAP's profile: the ROS 2 conventions for its channels
   std::string library = std::string("flowsteer ") + flowsteer_version();  // the Header's writer
@@ -28,8 +33,7 @@ struct McapWriterOptions {
 // its message indexes; then the summary (schemas, channels, statistics, chunk and metadata
 // indexes, summary offsets) and the footer. Every CRC the format has is filled in. The file is
 // written under a temporary name beside `path` and takes its name only in finish(): a run that
-// fails leaves no half-written recording. Messages must come in order of log time (the chunk's
-// times are its first and last message's).
+// fails leaves no half-written recording.
 class McapWriter {
  public:
   // Throws std::runtime_error naming the file when it cannot be created.
@@ -52,8 +56,6 @@ class McapWriter {
   // std::runtime_error naming the file on a write error.
   void finish();
 
-  std::uint64_t message_count() const { return message_count_; }
-
  private:
   struct ChunkIndex {
     std::uint64_t start_ns, end_ns, offset, length;
@@ -74,7 +76,10 @@ class McapWriter {
   std::filesystem::path path_;
   std::filesystem::path partial_path_;
   McapWriterOptions options_;
-  std::FILE* file_ = nullptr;
+  struct Closer {
+    void operator()(std::FILE* file) const { std::fclose(file); }
+  };
+  std::unique_ptr<std::FILE, Closer> file_;
   std::uint64_t offset_ = 0;
   std::uint32_t data_crc_ = 0;     // of every byte written so far
   std::uint32_t summary_crc_ = 0;  // from the summary's start

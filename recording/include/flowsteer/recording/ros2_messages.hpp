@@ -16,6 +16,7 @@ namespace flowsteer::recording::ros2 {
 struct Time {
   std::int32_t sec = 0;
   std::uint32_t nanosec = 0;
+  // Throws std::invalid_argument past 2^31 s.
   static Time from_ns(std::uint64_t t_ns);
   std::uint64_t ns() const;
 };
@@ -32,7 +33,6 @@ struct Vector3 {
 struct Quaternion {
   double x = 0.0, y = 0.0, z = 0.0, w = 1.0;
   static Quaternion from_yaw(double yaw_rad);
-  double yaw_rad() const;
 };
 
 struct Twist {

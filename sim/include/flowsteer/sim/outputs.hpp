@@ -31,10 +31,10 @@ cv::Mat draw_topview(const sim_camera::World& world,
                      const std::vector<std::vector<Eigen::Vector2d>>& paths,
                      const std::vector<sim_camera::Collision>& collisions);
 
-// The world as Foxglove draws it in 3D (the recording's /world): the static obstacles and the
-// goals (once: `with_static`; a viewer keeps them), the agents present now with their names, in
-// the top view's colours, and the moving obstacles where they are now.
-std::vector<recording::foxglove::SceneEntity> scene_entities(const sim_camera::World& world,
-                                                             bool with_static);
+// The world as Foxglove draws it in 3D: what stands still (the recording's /world/static: the
+// obstacles and the goals), and what moves (its /world: the agents present now with their
+// names, in the top view's colours, and the moving obstacles where they are now).
+std::vector<recording::foxglove::SceneEntity> static_scene_entities(const sim_camera::World& world);
+std::vector<recording::foxglove::SceneEntity> moving_scene_entities(const sim_camera::World& world);
 
 }  // namespace flowsteer::sim
