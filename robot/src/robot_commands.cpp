@@ -1,6 +1,7 @@
 #include "flowsteer/robot/robot_commands.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -201,6 +202,18 @@ camera_io::LensOptions lens_of(const ReplayCommand& command, std::ostream& log) 
   return lens;
 }
 
+// ", camera mount from /tf_static: 0.45 m high, pitched 8.0 deg down", or nothing.
+std::string mount_text(const std::optional<base::CameraMount>& mount) {
+  if (!mount) {
+    return "";
+  }
+  char text[96];
+  std::snprintf(text, sizeof text,
+                ", camera mount from /tf_static: %.2f m high, pitched %.1f deg down",
+                mount->height_m, mount->pitch_rad / kDeg);
+  return text;
+}
+
 bool is_mcap(const std::string& path) {
   return std::filesystem::path(path).extension() == ".mcap";
 }
@@ -301,7 +314,7 @@ ReplaySummary run_replay_command(const ReplayCommand& command, std::ostream& log
     log << "flowsteer replay: " << camera.image_topic() << ", "
         << (camera.has_odometry() ? "odometry " + camera.odometry_topic()
                                   : "no odometry: speed " + std::to_string(speed_mps) + " m/s")
-        << (camera.mount() ? ", camera mount from /tf_static" : "") << "\n";
+        << mount_text(camera.mount()) << "\n";
     return replay(command,
                   {camera.intrinsics(), camera.mount(), camera.frame_rate_hz(),
                    [&](camera_io::Frame& frame, drivers::BodyVelocity& measured) {

@@ -129,7 +129,9 @@ class RecordedReplay : public ::testing::Test {
     command.video = recording.string();
     command.out_dir = (dir_ / "out").string();
     std::ostringstream log;
-    return run_replay_command(command, log);
+    const ReplaySummary summary = run_replay_command(command, log);
+    log_ = log.str();
+    return summary;
   }
 
   // The commands.csv column `name`, one value per frame.
@@ -155,6 +157,7 @@ class RecordedReplay : public ::testing::Test {
 
   fs::path dir_;
   std::vector<std::uint8_t> bytes_;
+  std::string log_;  // the last replay's
 };
 
 TEST_F(RecordedReplay, RawImagesWithOdometryGiveTheLastOdometryAtEachImage) {
@@ -169,6 +172,40 @@ TEST_F(RecordedReplay, RawImagesWithOdometryGiveTheLastOdometryAtEachImage) {
   const std::vector<double> t = column("t_s");
   ASSERT_EQ(t.size(), 12u);
   EXPECT_NEAR(t[1] - t[0], 0.05, 1e-12);
+}
+
+TEST_F(RecordedReplay, TheMountComesFromTheChainOfStaticTransformsToTheBase) {
+  const fs::path path = dir_ / "mounted.mcap";
+  {
+    recording::McapWriter w(path, {});
+    const std::uint16_t front = channel<ros2::Image>(w, "/front/image_raw");
+    const std::uint16_t info = channel<ros2::CameraInfo>(w, "/front/camera_info");
+    const std::uint16_t tf = channel<ros2::TFMessage>(w, "/tf_static");
+    // A driver's usual pair: the camera's body pitched 10° down, 0.3 m up and 0.1 m ahead, and
+    // its optical frame (z forward, x right, y down) turned from it.
+    const double half = 0.5 * 10.0 * M_PI / 180.0;
+    ros2::TransformStamped body;
+    body.header.frame_id = "robot/base_link";
+    body.child_frame_id = "camera_link";
+    body.translation = {0.1, 0.0, 0.3};
+    body.rotation = {0.0, std::sin(half), 0.0, std::cos(half)};
+    ros2::TransformStamped optical;
+    optical.header.frame_id = "camera_link";
+    optical.child_frame_id = "front_camera";
+    optical.rotation = {-0.5, 0.5, -0.5, 0.5};
+    const ros2::TFMessage mounts{{body, optical}};
+    put(w, tf, 0, mounts);
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t t_ns = 50'000'000u * static_cast<std::uint64_t>(k);
+      put(w, info, t_ns, camera_info(t_ns));
+      put(w, front, t_ns, image_message(textured(k), "rgb8", t_ns));
+    }
+    w.finish();
+  }
+  replay(path);
+  EXPECT_NE(log_.find("camera mount from /tf_static: 0.30 m high, pitched 10.0 deg down"),
+            std::string::npos)
+      << log_;
 }
 
 TEST_F(RecordedReplay, WithoutOdometryTheSpeedIsTheOneGiven) {
