@@ -46,6 +46,13 @@ fox::Solid scene_solid(const sim_camera::Solid& s, const fox::Color& color) {
   return out;
 }
 
+fox::SceneEntity in_world(const char* id) {
+  fox::SceneEntity entity;
+  entity.id = id;
+  entity.frame_id = "world";
+  return entity;
+}
+
 void add_solid(fox::SceneEntity& entity, const sim_camera::Solid& s, const fox::Color& color) {
   auto& list = s.shape == sim_camera::Solid::Shape::box ? entity.cubes : entity.cylinders;
   list.push_back(scene_solid(s, color));
@@ -55,16 +62,12 @@ void add_solid(fox::SceneEntity& entity, const sim_camera::Solid& s, const fox::
 
 std::vector<fox::SceneEntity> static_scene_entities(const sim_camera::World& world) {
   const sim_camera::WorldSpec& spec = world.spec();
-  std::vector<fox::SceneEntity> entities(2);
+  std::vector<fox::SceneEntity> entities = {in_world("obstacles"), in_world("goals")};
   fox::SceneEntity& obstacles = entities[0];
-  obstacles.id = "obstacles";
-  obstacles.frame_id = "world";
   for (const sim_camera::Solid& o : spec.obstacles) {
     add_solid(obstacles, o, {0.6, 0.6, 0.6, 1.0});
   }
   fox::SceneEntity& goals = entities[1];
-  goals.id = "goals";
-  goals.frame_id = "world";
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
     for (const Eigen::Vector2d& g : spec.agents[i].goals) {
       fox::Color color = scene_color(agent_color(i));
@@ -78,10 +81,8 @@ std::vector<fox::SceneEntity> static_scene_entities(const sim_camera::World& wor
 
 std::vector<fox::SceneEntity> moving_scene_entities(const sim_camera::World& world) {
   const sim_camera::WorldSpec& spec = world.spec();
-  std::vector<fox::SceneEntity> entities(2);
+  std::vector<fox::SceneEntity> entities = {in_world("agents"), in_world("moving")};
   fox::SceneEntity& agents = entities[0];
-  agents.id = "agents";
-  agents.frame_id = "world";
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
     if (!world.present(i)) {
       continue;
@@ -100,8 +101,6 @@ std::vector<fox::SceneEntity> moving_scene_entities(const sim_camera::World& wor
                             scene_color(agent_color(i))});
   }
   fox::SceneEntity& moving = entities[1];
-  moving.id = "moving";
-  moving.frame_id = "world";
   for (std::size_t k = 0; k < spec.moving.size(); ++k) {
     add_solid(moving, world.moving_now(k), {0.43, 0.43, 0.43, 1.0});
   }
