@@ -190,7 +190,7 @@ bool within_image_bounds(const cv::Size& size) {
 
 // A BGR image from an Image message's pixels.
 cv::Mat bgr_of(const ros2::Image& image, const std::string& where) {
-  const std::map<std::string, std::pair<int, int>> formats = {
+  static const std::map<std::string, std::pair<int, int>> formats = {
       {"rgb8", {CV_8UC3, cv::COLOR_RGB2BGR}},
       {"bgr8", {CV_8UC3, -1}},
       {"mono8", {CV_8UC1, cv::COLOR_GRAY2BGR}},
