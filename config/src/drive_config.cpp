@@ -2,6 +2,7 @@
 
 #include "drive_reader.hpp"
 #include "flowsteer/config/field_bounds.hpp"
+#include "ros2_reader.hpp"
 
 namespace flowsteer::config {
 
@@ -44,13 +45,13 @@ std::string own_section(const std::string& type) {
 // The drive's type. Settings of another drive than the chosen one are a mistake, not something
 // to ignore.
 std::string read_type(const base::YamlReader& r, const YAML::Node& drive) {
-  const std::string type =
-      r.word(drive, "drive", "type", {"sim", "odrive_can", "arduino_bridge", "roboclaw"}, "");
+  const std::string type = r.word(drive, "drive", "type",
+                                  {"sim", "odrive_can", "arduino_bridge", "roboclaw", "ros2"}, "");
   if (type.empty()) {
-    r.fail(drive, "drive.type", "missing: sim, odrive_can, arduino_bridge or roboclaw");
+    r.fail(drive, "drive.type", "missing: sim, odrive_can, arduino_bridge, roboclaw or ros2");
   }
   const std::string own = own_section(type);
-  for (const char* other : {"sim", "odrive", "arduino_bridge", "roboclaw"}) {
+  for (const char* other : {"sim", "odrive", "arduino_bridge", "roboclaw", "ros2"}) {
     if (drive[other] && own != other) {
       r.fail(drive[other], std::string("drive.") + other,
              "settings for another drive than type '" + type + "'");
@@ -122,6 +123,47 @@ drivers::OdriveCanConfig read_odrive_can(const base::YamlReader& r, const YAML::
   return c;
 }
 
+// A ROS 2 base controller: its topics default to diff_drive_controller's remapped names.
+drivers::Ros2DriveConfig read_ros2(const base::YamlReader& r, const YAML::Node& node,
+                                   const std::string& field,
+                                   const drivers::WheelGeometry& geometry) {
+  drivers::Ros2DriveConfig c;
+  c.geometry = geometry;
+  const YAML::Node settings = node ? node : YAML::Node(YAML::NodeType::Map);
+  r.only_keys(settings, field, {"domain_id", "cmd_vel", "odom", "timeout_s", "connect_timeout_s"});
+  c.domain_id = read_ros2_domain_id(r, settings, field);
+
+  const std::string cmd_vel_field = field + ".cmd_vel";
+  const YAML::Node cmd_vel = settings["cmd_vel"];
+  if (cmd_vel) {
+    r.only_keys(cmd_vel, cmd_vel_field, {"topic", "type", "frame_id"});
+  }
+  const Ros2Topic command =
+      read_ros2_topic(r, cmd_vel, cmd_vel_field, {c.cmd_vel_topic, "geometry_msgs/msg/Twist"},
+                      {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"});
+  c.cmd_vel_topic = command.topic;
+  c.stamped = command.type == "geometry_msgs/msg/TwistStamped";
+  if (cmd_vel && cmd_vel["frame_id"]) {
+    if (!c.stamped) {
+      r.fail(cmd_vel["frame_id"], cmd_vel_field + ".frame_id",
+             "only a geometry_msgs/msg/TwistStamped has a frame_id");
+    }
+    c.frame_id = r.text(cmd_vel, cmd_vel_field, "frame_id", c.frame_id, true);
+  }
+
+  const std::string odom_field = field + ".odom";
+  const YAML::Node odom = settings["odom"];
+  if (odom) {
+    r.only_keys(odom, odom_field, {"topic", "type"});
+  }
+  c.odom_topic = read_ros2_topic(r, odom, odom_field, {c.odom_topic, "nav_msgs/msg/Odometry"},
+                                 {"nav_msgs/msg/Odometry"})
+                     .topic;
+  c.timeout_s = r.bounded(settings, field, "timeout_s", c.timeout_s);
+  c.connect_timeout_s = r.bounded(settings, field, "connect_timeout_s", c.connect_timeout_s);
+  return c;
+}
+
 // What every serial drive needs: its section, with the encoder's ticks.
 void require_serial_settings(const base::YamlReader& r, const YAML::Node& drive,
                              const YAML::Node& node, const std::string& field) {
@@ -179,7 +221,7 @@ DriveSection parse_drive_section(const std::string& yaml_text, const std::string
 DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
   r.only_keys(drive, "drive",
               {"type", "loop_rate_hz", "geometry", "limits", "watchdog", "sim", "odrive",
-               "arduino_bridge", "roboclaw"});
+               "arduino_bridge", "roboclaw", "ros2"});
   DriveSection s;
   const std::string type = read_type(r, drive);
   s.loop_rate_hz = r.bounded(drive, "drive", "loop_rate_hz", s.loop_rate_hz);
@@ -205,6 +247,8 @@ DriveSection read_drive(const base::YamlReader& r, const YAML::Node& drive) {
     s.drive = read_sim(r, own_node, field, s.stage.geometry);
   } else if (type == "odrive_can") {
     s.drive = read_odrive_can(r, own_node, field);
+  } else if (type == "ros2") {
+    s.drive = read_ros2(r, own_node, field, s.stage.geometry);
   } else {
     require_serial_settings(r, drive, own_node, field);
     if (type == "arduino_bridge") {
@@ -226,6 +270,8 @@ std::unique_ptr<drivers::MobileBase> make_base(const DriveSection& section) {
           return std::make_unique<drivers::OdriveCanDrive>(config);
         } else if constexpr (std::is_same_v<C, drivers::ArduinoBridgeConfig>) {
           return std::make_unique<drivers::ArduinoBridgeDrive>(config);
+        } else if constexpr (std::is_same_v<C, drivers::Ros2DriveConfig>) {
+          return std::make_unique<drivers::Ros2Drive>(config);
         } else {
           return std::make_unique<drivers::RoboClawDrive>(config);
         }

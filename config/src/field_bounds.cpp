@@ -143,6 +143,7 @@ std::vector<FieldBound> make_robot_launch_bounds() {
       .add("camera.v4l2", device_camera)
       .add("camera.libcamera", device_camera)
       .add("camera.replay", {{"frame_rate_hz", kFrameRate_hz}})
+      .add("camera.ros2", {{"domain_id", kDomainId}, {"connect_timeout_s", kConnectTimeout_s}})
       .add("drive", {{"loop_rate_hz", kLoopRate_hz}})
       .add("drive.geometry",
            {{"wheel_separation_m", kWheelSeparation_m}, {"wheel_radius_m", kWheelRadius_m}})
@@ -161,6 +162,9 @@ std::vector<FieldBound> make_robot_launch_bounds() {
       .add("drive.arduino_bridge", {{"pid_rate_hz", kPidRate_hz}, {"boot_wait_s", kBootWait_s}})
       .add("drive.roboclaw", serial)
       .add("drive.roboclaw", {{"address", kRoboClawAddress}, {"board_timeout_s", kBoardTimeout_s}})
+      .add("drive.ros2", {{"domain_id", kDomainId},
+                          {"timeout_s", kDeviceTimeout_s},
+                          {"connect_timeout_s", kConnectTimeout_s}})
       .add("goal", {{"bearing_rad", kBearing_rad}, {"distance_m", kGoalDistance_m}})
       .add("perception", {{"height_m", kCameraHeight_m}, {"pitch_deg", kCameraPitch_deg}})
       .add("controller", kControllerRows)

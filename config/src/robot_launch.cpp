@@ -9,6 +9,7 @@
 #include "flowsteer/calibration/camera_mount.hpp"
 #include "flowsteer/config/controller_reader.hpp"
 #include "flowsteer/config/field_bounds.hpp"
+#include "ros2_reader.hpp"
 
 namespace flowsteer::config {
 namespace {
@@ -36,16 +37,64 @@ void read_size_and_rate(const base::YamlReader& r, const YAML::Node& node, const
   }
 }
 
+// A ROS 2 camera driver's topics. Its lens is CameraInfo's when a camera_info topic is named,
+// else camera.calibration's or camera.horizontal_fov_rad's, as for the other cameras.
+camera_io::Ros2CameraOptions read_ros2_camera(const base::YamlReader& r, const YAML::Node& camera,
+                                              const YAML::Node& settings, const std::string& field,
+                                              const camera_io::LensOptions& lens) {
+  r.only_keys(settings, field, {"domain_id", "image", "camera_info", "connect_timeout_s"});
+  camera_io::Ros2CameraOptions o;
+  o.domain_id = read_ros2_domain_id(r, settings, field);
+  const std::string image_field = field + ".image";
+  const YAML::Node image = settings["image"];
+  if (image) {
+    r.only_keys(image, image_field, {"topic", "type", "encoding"});
+  }
+  const Ros2Topic topic =
+      read_ros2_topic(r, image, image_field,
+                      {o.image_topic, std::string(camera_io::ros2_image_type_name(o.image_type))},
+                      {"sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage"});
+  o.image_topic = topic.topic;
+  o.image_type = *camera_io::ros2_image_type_from_name(topic.type);
+  if (image && image["encoding"]) {
+    if (o.image_type != camera_io::Ros2ImageType::image) {
+      r.fail(image["encoding"], image_field + ".encoding",
+             "only a sensor_msgs/msg/Image has an encoding");
+    }
+    o.encoding = r.text(image, image_field, "encoding", "", true);
+    if (!camera_io::is_readable_ros2_image_encoding(o.encoding)) {
+      r.fail(image["encoding"], image_field + ".encoding",
+             "'" + o.encoding + "' is not an encoding flowsteer reads (" +
+                 camera_io::ros2_image_encoding_names() + ")");
+    }
+  }
+  if (const YAML::Node info = settings["camera_info"]) {
+    if (camera["calibration"]) {
+      r.fail(info, field + ".camera_info",
+             "give camera.calibration or a camera_info topic, not both");
+    }
+    r.only_keys(info, field + ".camera_info", {"topic", "type"});
+    o.camera_info_topic = read_ros2_topic(r, info, field + ".camera_info",
+                                          {"/camera/camera_info", "sensor_msgs/msg/CameraInfo"},
+                                          {"sensor_msgs/msg/CameraInfo"})
+                              .topic;
+  }
+  o.connect_timeout_s = r.bounded(settings, field, "connect_timeout_s", o.connect_timeout_s);
+  o.lens = lens;
+  return o;
+}
+
 CameraSection read_camera(const base::YamlReader& r, const YAML::Node& camera,
                           const std::string& base_dir, std::vector<std::string>& warnings) {
-  r.only_keys(
-      camera, "camera",
-      {"type", "timeout_s", "calibration", "horizontal_fov_rad", "v4l2", "libcamera", "replay"});
-  const std::string type = r.word(camera, "camera", "type", {"v4l2", "libcamera", "replay"}, "");
+  r.only_keys(camera, "camera",
+              {"type", "timeout_s", "calibration", "horizontal_fov_rad", "v4l2", "libcamera",
+               "replay", "ros2"});
+  const std::string type =
+      r.word(camera, "camera", "type", {"v4l2", "libcamera", "replay", "ros2"}, "");
   if (type.empty()) {
-    r.fail(camera, "camera.type", "missing: v4l2, libcamera or replay");
+    r.fail(camera, "camera.type", "missing: v4l2, libcamera, replay or ros2");
   }
-  for (const char* other : {"v4l2", "libcamera", "replay"}) {
+  for (const char* other : {"v4l2", "libcamera", "replay", "ros2"}) {
     if (camera[other] && type != other) {
       r.fail(camera[other], std::string("camera.") + other,
              "settings for another camera than type '" + type + "'");
@@ -83,6 +132,8 @@ CameraSection read_camera(const base::YamlReader& r, const YAML::Node& camera,
     read_size_and_rate(r, settings, field, o);
     o.lens = lens;
     s.source = o;
+  } else if (type == "ros2") {
+    s.source = read_ros2_camera(r, camera, settings, field, lens);
   } else {
     r.only_keys(settings, field, {"path", "frame_rate_hz"});
     camera_io::ReplayOptions o;
@@ -97,7 +148,7 @@ CameraSection read_camera(const base::YamlReader& r, const YAML::Node& camera,
   }
   // A calibration is for one image size; a camera asked for another would fail only when it
   // opens, so say it here, at the line that asks.
-  if (lens.model && type != "replay") {
+  if (lens.model && type != "replay" && type != "ros2") {
     const auto check = [&](int width, int height) {
       if (width != lens.model->width_px || height != lens.model->height_px) {
         r.fail(camera["calibration"], "camera.calibration",
@@ -109,7 +160,10 @@ CameraSection read_camera(const base::YamlReader& r, const YAML::Node& camera,
     std::visit(
         [&](const auto& o) {
           if constexpr (!std::is_same_v<std::decay_t<decltype(o)>, camera_io::ReplayOptions>) {
-            check(o.width_px, o.height_px);
+            if constexpr (!std::is_same_v<std::decay_t<decltype(o)>,
+                                          camera_io::Ros2CameraOptions>) {
+              check(o.width_px, o.height_px);
+            }
           }
         },
         s.source);
@@ -251,6 +305,8 @@ std::unique_ptr<camera_io::FrameSource> make_camera(const CameraSection& section
           return std::make_unique<camera_io::V4l2Camera>(o);
         } else if constexpr (std::is_same_v<O, camera_io::ReplayOptions>) {
           return std::make_unique<camera_io::ReplaySource>(o);
+        } else if constexpr (std::is_same_v<O, camera_io::Ros2CameraOptions>) {
+          return std::make_unique<camera_io::Ros2Camera>(o);
         } else {
 #ifdef FLOWSTEER_HAVE_LIBCAMERA
           return std::make_unique<camera_io::LibcameraCamera>(o);
@@ -272,6 +328,8 @@ std::string describe_camera(const CameraSection& section) {
           return "v4l2 camera " + o.device;
         } else if constexpr (std::is_same_v<O, camera_io::ReplayOptions>) {
           return "replay " + o.path;
+        } else if constexpr (std::is_same_v<O, camera_io::Ros2CameraOptions>) {
+          return "ros2 camera " + o.image_topic + " (domain " + std::to_string(o.domain_id) + ")";
         } else {
           return "libcamera camera " + (o.camera_id.empty() ? std::string("(first)") : o.camera_id);
         }

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <utility>
@@ -71,19 +72,16 @@ bool wait_fd(int fd, short events, double timeout_s, const std::string& what) {
 // The kernel's receive stamp (SO_TIMESTAMPNS, CLOCK_REALTIME) moved onto the monotonic clock by
 // its age; now when the stamp is missing or a clock step makes it look younger than nothing.
 double receive_time_s(msghdr& message) {
-  const double now_s = base::monotonic_now_s();
   for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
     if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
       timespec stamp{};
       std::memcpy(&stamp, CMSG_DATA(c), sizeof stamp);
-      timespec realtime{};
-      ::clock_gettime(CLOCK_REALTIME, &realtime);
-      const double age_s = static_cast<double>(realtime.tv_sec - stamp.tv_sec) +
-                           1e-9 * static_cast<double>(realtime.tv_nsec - stamp.tv_nsec);
-      return now_s - std::max(0.0, age_s);
+      return base::monotonic_of_realtime_s(stamp.tv_sec, stamp.tv_nsec,
+                                           std::numeric_limits<double>::infinity())
+          .value_or(base::monotonic_now_s());
     }
   }
-  return now_s;
+  return base::monotonic_now_s();
 }
 
 }  // namespace

@@ -91,6 +91,60 @@ TEST(DriveSection, SerialSettingsThatAreNoMappingAreAnError) {
             std::string::npos);
 }
 
+TEST(DriveSection, Ros2SectionIsRead) {
+  ::unsetenv("ROS_DOMAIN_ID");
+  const DriveSection plain = parse_drive_section(
+      "drive: {type: ros2, geometry: {wheel_separation_m: 0.3, wheel_radius_m: 0.04}}\n",
+      "robot.yaml");
+  const auto& defaults = std::get<drivers::Ros2DriveConfig>(plain.drive);
+  EXPECT_EQ(defaults.domain_id, 0);
+  EXPECT_EQ(defaults.cmd_vel_topic, "/cmd_vel");
+  EXPECT_FALSE(defaults.stamped);
+  EXPECT_EQ(defaults.odom_topic, "/odom");
+  EXPECT_EQ(defaults.geometry.wheel_radius_m, 0.04);  // the stage's, for the round trip
+
+  ::setenv("ROS_DOMAIN_ID", "17", 1);
+  const DriveSection s = parse_drive_section(R"(
+drive:
+  type: ros2
+  ros2:
+    cmd_vel: {topic: /diff_cont/cmd_vel, type: geometry_msgs/TwistStamped, frame_id: base}
+    odom: {topic: /diff_cont/odom, type: nav_msgs/msg/Odometry}
+    timeout_s: 0.3
+    connect_timeout_s: 12
+)",
+                                             "robot.yaml");
+  ::unsetenv("ROS_DOMAIN_ID");
+  const auto& c = std::get<drivers::Ros2DriveConfig>(s.drive);
+  EXPECT_EQ(c.domain_id, 17);
+  EXPECT_EQ(c.cmd_vel_topic, "/diff_cont/cmd_vel");
+  EXPECT_TRUE(c.stamped);
+  EXPECT_EQ(c.frame_id, "base");
+  EXPECT_EQ(c.odom_topic, "/diff_cont/odom");
+  EXPECT_EQ(c.timeout_s, 0.3);
+  EXPECT_EQ(c.connect_timeout_s, 12.0);
+}
+
+TEST(DriveSection, Ros2ErrorsNameTheFieldAndValue) {
+  EXPECT_NE(error_of("drive: {type: ros2, ros2: {cmd_vel: {type: geometry_msgs/msg/Twist, "
+                     "frame_id: base}}}\n")
+                .find("drive.ros2.cmd_vel.frame_id: only a geometry_msgs/msg/TwistStamped"),
+            std::string::npos);
+  EXPECT_NE(error_of("drive: {type: ros2, ros2: {cmd_vel: {type: std_msgs/String}}}\n")
+                .find("drive.ros2.cmd_vel.type: 'std_msgs/String' is not a type flowsteer reads "
+                      "or writes here (geometry_msgs/msg/Twist, geometry_msgs/msg/TwistStamped)"),
+            std::string::npos);
+  EXPECT_NE(error_of("drive: {type: ros2, ros2: {odom: {topic: odom}}}\n")
+                .find("drive.ros2.odom.topic: 'odom': a topic name starts with '/'"),
+            std::string::npos);
+  EXPECT_NE(error_of("drive: {type: ros2, ros2: {domain_id: 233}}\n")
+                .find("drive.ros2.domain_id: must be from 0 to 232, got 233"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of("drive: {type: ros2, ros2: {qos: reliable}}\n").find("drive.ros2.qos: unknown key"),
+      std::string::npos);
+}
+
 TEST(DriveSection, ErrorsNameTheField) {
   EXPECT_NE(error_of("drive: {type: tank}\n").find("robot.yaml:1:15: drive.type: expected one of"),
             std::string::npos);

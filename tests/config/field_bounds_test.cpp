@@ -244,6 +244,9 @@ std::vector<std::string> launch_files_with_every_field() {
       "camera: {type: replay, replay: {path: a.mp4}}\n"
       "drive: {type: roboclaw, roboclaw: {device: /dev/ttyACM1, baud: 38400, timeout_s: 0.1, "
       "address: 128, ticks_per_wheel_rev: 1000, board_timeout_s: 1}}\n"
+      "perception: {height_m: 0.35}\n",
+      "camera: {type: ros2, ros2: {domain_id: 5, connect_timeout_s: 5}}\n"
+      "drive: {type: ros2, ros2: {domain_id: 5, timeout_s: 0.5, connect_timeout_s: 5}}\n"
       "perception: {height_m: 0.35}\n"};
 }
 

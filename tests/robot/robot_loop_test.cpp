@@ -50,7 +50,7 @@ TEST(RobotLaunch, BadFilesNameTheLineAndField) {
             "bad.yaml:4:5: camera.v4l2.devce: unknown key (expected one of: device, width_px, "
             "height_px, frame_rate_hz, pixel_format, buffer_count)");
   EXPECT_EQ(error_of("camera:\n  timeout_s: 1\n"),
-            "bad.yaml:2:3: camera.type: missing: v4l2, libcamera or replay");
+            "bad.yaml:2:3: camera.type: missing: v4l2, libcamera, replay or ros2");
   EXPECT_EQ(error_of("camera:\n  type: replay\n  v4l2: {device: /dev/video1}\n"),
             "bad.yaml:3:9: camera.v4l2: settings for another camera than type 'replay'");
   EXPECT_EQ(error_of("camera:\n  type: v4l2\n  v4l2: {pixel_format: RGB3}\n"),

@@ -101,6 +101,9 @@ inline constexpr Bound kPidRate_hz{1.0, 1000.0, "Hz"};
 inline constexpr Bound kBaud{300, 4'000'000, "baud"};
 inline constexpr Bound kCanNodeId{0, 63, ""};           // 6 bits of the CAN id
 inline constexpr Bound kRoboClawAddress{128, 135, ""};  // 0x80 .. 0x87
+inline constexpr Bound kDomainId{0, 232, ""};  // ROS 2's DDS domains (ros2_dds::kMaxDomainId)
+// DDS discovery on one host takes a fraction of a second; a robot on Wi-Fi may take seconds.
+inline constexpr Bound kConnectTimeout_s{0.1, 60.0, "s"};
 inline constexpr Bound kBearing_rad{-std::numbers::pi, std::numbers::pi, "rad"};
 inline constexpr Bound kBearing_deg{-180.0, 180.0, "deg"};
 inline constexpr Bound kGoalDistance_m{0.01, 1000.0, "m"};

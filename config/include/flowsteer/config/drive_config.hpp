@@ -7,6 +7,7 @@
 #include "flowsteer/drivers/command_stage.hpp"
 #include "flowsteer/drivers/mobile_base.hpp"
 #include "flowsteer/drivers/odrive_can.hpp"
+#include "flowsteer/drivers/ros2_drive.hpp"
 #include "flowsteer/drivers/serial_drives.hpp"
 #include "flowsteer/drivers/sim_base.hpp"
 
@@ -16,7 +17,7 @@ namespace flowsteer::config {
 // settings, and the command stage in front of it.
 struct DriveSection {
   std::variant<drivers::SimBaseConfig, drivers::OdriveCanConfig, drivers::ArduinoBridgeConfig,
-               drivers::RoboClawConfig>
+               drivers::RoboClawConfig, drivers::Ros2DriveConfig>
       drive;
   drivers::CommandStageConfig stage;
   double loop_rate_hz = 50.0;

@@ -10,6 +10,7 @@
 #include "flowsteer/camera_io/frame_source.hpp"
 #include "flowsteer/camera_io/libcamera_camera.hpp"
 #include "flowsteer/camera_io/replay_source.hpp"
+#include "flowsteer/camera_io/ros2_camera.hpp"
 #include "flowsteer/camera_io/v4l2_camera.hpp"
 #include "flowsteer/config/drive_config.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
@@ -20,7 +21,8 @@ namespace flowsteer::config {
 
 // The `camera:` section of a robot launch file (fields in launch/launch_files/README.md).
 struct CameraSection {
-  std::variant<camera_io::V4l2Options, camera_io::LibcameraOptions, camera_io::ReplayOptions>
+  std::variant<camera_io::V4l2Options, camera_io::LibcameraOptions, camera_io::ReplayOptions,
+               camera_io::Ros2CameraOptions>
       source;
   // No frame for this long stops the base.
   double timeout_s = 0.5;

@@ -1,0 +1,253 @@
+#include "flowsteer/camera_io/ros2_camera.hpp"
+
+#include <array>
+#include <stdexcept>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "flowsteer/base/bounds.hpp"
+#include "flowsteer/base/clock.hpp"
+#include "flowsteer/ros2_dds/participant.hpp"
+#include "flowsteer/ros2_dds/topics.hpp"
+
+namespace flowsteer::camera_io {
+
+namespace ros2 = recording::ros2;
+
+namespace {
+
+// A readable encoding: bytes per pixel, and the conversion to BGR (-1: a copy).
+struct Encoding {
+  std::string_view name;
+  int channels;
+  int to_bgr;
+};
+
+constexpr std::array kEncodings = {
+    Encoding{"rgb8", 3, cv::COLOR_RGB2BGR},
+    Encoding{"bgr8", 3, -1},
+    Encoding{"mono8", 1, cv::COLOR_GRAY2BGR},
+    Encoding{"yuv422", 2, cv::COLOR_YUV2BGR_UYVY},
+    Encoding{"yuv422_yuy2", 2, cv::COLOR_YUV2BGR_YUY2},
+};
+
+const Encoding* find_encoding(std::string_view name) {
+  for (const Encoding& encoding : kEncodings) {
+    if (encoding.name == name) {
+      return &encoding;
+    }
+  }
+  return nullptr;
+}
+
+// A header stamp more than this old is not taken for the capture time (a publisher that does
+// not stamp, or another host's clock): the reception time is.
+constexpr double kMaxStampAge_s = 1.0;
+
+}  // namespace
+
+std::string_view ros2_image_type_name(Ros2ImageType type) {
+  return type == Ros2ImageType::image ? "sensor_msgs/msg/Image" : "sensor_msgs/msg/CompressedImage";
+}
+
+std::optional<Ros2ImageType> ros2_image_type_from_name(std::string_view name) {
+  for (Ros2ImageType type : {Ros2ImageType::image, Ros2ImageType::compressed_image}) {
+    const std::string_view full = ros2_image_type_name(type);
+    const std::string short_name =
+        std::string(full.substr(0, full.find('/'))) + std::string(full.substr(full.rfind('/')));
+    if (name == full || name == short_name) {
+      return type;
+    }
+  }
+  return std::nullopt;
+}
+
+std::string ros2_image_encoding_names() {
+  std::string names;
+  for (const Encoding& encoding : kEncodings) {
+    names += (names.empty() ? "" : ", ") + std::string(encoding.name);
+  }
+  return names;
+}
+
+bool is_readable_ros2_image_encoding(std::string_view encoding) {
+  return find_encoding(encoding) != nullptr;
+}
+
+Ros2Camera::Ros2Camera(const Ros2CameraOptions& options)
+    : name_("ros2 camera " + options.image_topic + " (domain " + std::to_string(options.domain_id) +
+            ")"),
+      encoding_(options.encoding) {
+  if (!encoding_.empty() && !is_readable_ros2_image_encoding(encoding_)) {
+    throw std::runtime_error(name_ + ": encoding '" + encoding_ + "' cannot be read (" +
+                             ros2_image_encoding_names() + ")");
+  }
+  try {
+    participant_ = std::make_unique<ros2_dds::Participant>(options.domain_id);
+    const ros2_dds::Qos qos{ros2_dds::Reliability::best_effort, 2};
+    if (options.image_type == Ros2ImageType::image) {
+      images_ = std::make_unique<ros2_dds::Subscription<ros2::Image>>(*participant_,
+                                                                      options.image_topic, qos);
+    } else {
+      compressed_ = std::make_unique<ros2_dds::Subscription<ros2::CompressedImage>>(
+          *participant_, options.image_topic, qos);
+    }
+  } catch (const ros2_dds::DdsError& error) {
+    throw std::runtime_error(name_ + ": " + error.what());
+  }
+  const bool arrived = images_ ? images_->wait(options.connect_timeout_s)
+                               : compressed_->wait(options.connect_timeout_s);
+  if (!arrived || !take_newest()) {
+    throw std::runtime_error(name_ + ": no " +
+                             std::string(ros2_image_type_name(options.image_type)) + " within " +
+                             base::format_number(options.connect_timeout_s) +
+                             " s: is the camera driver running, on this domain?");
+  }
+  decode();
+  if (options.camera_info_topic.empty()) {
+    lens_.emplace(options.lens, bgr_.cols, bgr_.rows, name_);
+  } else {
+    wait_for_camera_info(options);
+  }
+}
+
+Ros2Camera::~Ros2Camera() = default;
+
+void Ros2Camera::wait_for_camera_info(const Ros2CameraOptions& options) {
+  ros2::CameraInfo info;
+  bool received = false;
+  try {
+    ros2_dds::Subscription<ros2::CameraInfo> infos(
+        *participant_, options.camera_info_topic,
+        ros2_dds::Qos{ros2_dds::Reliability::best_effort, 1});
+    received = infos.wait(options.connect_timeout_s) && infos.take(info);
+  } catch (const ros2_dds::DdsError& error) {
+    throw std::runtime_error(name_ + ": " + error.what());
+  }
+  const std::string source = name_ + ", camera_info " + options.camera_info_topic;
+  if (!received) {
+    throw std::runtime_error(source + ": no CameraInfo within " +
+                             base::format_number(options.connect_timeout_s) + " s");
+  }
+  LensOptions lens;
+  CameraModel& model = lens.model.emplace();
+  model.width_px = static_cast<int>(info.width);
+  model.height_px = static_cast<int>(info.height);
+  model.fx = info.k[0];
+  model.fy = info.k[4];
+  model.cx = info.k[2];
+  model.cy = info.k[5];
+  const bool no_distortion = info.d.empty() || info.distortion_model.empty();
+  const auto distortion = distortion_model_from_name(info.distortion_model);
+  if (!no_distortion && !distortion) {
+    throw std::runtime_error(source + ": distortion_model '" + info.distortion_model +
+                             "' is not one flowsteer undistorts");
+  }
+  model.distortion = no_distortion ? DistortionModel::none : *distortion;
+  if (!no_distortion) {
+    // ROS pads plumb_bob's five coefficients to more at times; the model takes its own count.
+    const std::size_t count = distortion_coefficient_count(model.distortion);
+    if (info.d.size() < count) {
+      throw std::runtime_error(source + ": " + info.distortion_model + " needs " +
+                               std::to_string(count) + " coefficients, D has " +
+                               std::to_string(info.d.size()));
+    }
+    model.coefficients.assign(info.d.begin(), info.d.begin() + static_cast<long>(count));
+  }
+  try {
+    lens_.emplace(lens, bgr_.cols, bgr_.rows, source);
+  } catch (const std::invalid_argument& error) {
+    throw std::runtime_error(error.what());
+  }
+}
+
+bool Ros2Camera::take_newest() {
+  bool took = false;
+  if (images_) {
+    while (images_->take(image_)) {
+      dropped_frames_ += took ? 1 : 0;
+      took = true;
+    }
+    header_ = image_.header;
+  } else {
+    while (compressed_->take(compressed_image_)) {
+      dropped_frames_ += took ? 1 : 0;
+      took = true;
+    }
+    header_ = compressed_image_.header;
+  }
+  return took;
+}
+
+void Ros2Camera::decode() {
+  const int rows = bgr_.empty() ? -1 : bgr_.rows;
+  const int cols = bgr_.empty() ? -1 : bgr_.cols;
+  if (compressed_) {
+    cv::imdecode(compressed_image_.data, cv::IMREAD_COLOR, &bgr_);
+    if (bgr_.empty()) {
+      throw std::runtime_error(name_ + ": a CompressedImage in format '" +
+                               compressed_image_.format + "' could not be decoded");
+    }
+  } else {
+    const ros2::Image& image = image_;
+    const Encoding* encoding = find_encoding(image.encoding);
+    if (encoding == nullptr || (!encoding_.empty() && image.encoding != encoding_)) {
+      throw std::runtime_error(name_ + ": image encoding '" + image.encoding + "' " +
+                               (encoding == nullptr
+                                    ? "cannot be read (" + ros2_image_encoding_names() + ")"
+                                    : "is not the encoding asked for, '" + encoding_ + "'"));
+    }
+    const std::size_t row_bytes = static_cast<std::size_t>(image.width) * encoding->channels;
+    if (image.width == 0 || image.height == 0 || image.step < row_bytes ||
+        image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+      throw std::runtime_error(name_ + ": a " + std::to_string(image.width) + "x" +
+                               std::to_string(image.height) + " " + image.encoding +
+                               " image with step " + std::to_string(image.step) + " and " +
+                               std::to_string(image.data.size()) + " bytes is not whole");
+    }
+    const cv::Mat wrapped(static_cast<int>(image.height), static_cast<int>(image.width),
+                          CV_8UC(encoding->channels), const_cast<std::uint8_t*>(image.data.data()),
+                          image.step);
+    if (encoding->to_bgr < 0) {
+      wrapped.copyTo(bgr_);
+    } else {
+      cv::cvtColor(wrapped, bgr_, encoding->to_bgr);
+    }
+  }
+  if (rows >= 0 && (bgr_.rows != rows || bgr_.cols != cols)) {
+    throw std::runtime_error(name_ + ": the images changed size from " + std::to_string(cols) +
+                             "x" + std::to_string(rows) + " to " + std::to_string(bgr_.cols) + "x" +
+                             std::to_string(bgr_.rows));
+  }
+}
+
+ReadStatus Ros2Camera::read(Frame& frame, double timeout_s) {
+  if (!first_pending_) {
+    try {
+      const bool arrived = images_ ? images_->wait(timeout_s) : compressed_->wait(timeout_s);
+      if (!arrived || !take_newest()) {
+        return ReadStatus::timeout;
+      }
+    } catch (const ros2_dds::DdsError& error) {
+      throw std::runtime_error(name_ + ": " + error.what());
+    }
+    decode();
+  }
+  first_pending_ = false;
+  const double now_s = base::monotonic_now_s();
+  double timestamp_s =
+      base::monotonic_of_realtime_s(header_.stamp.sec, header_.stamp.nanosec, kMaxStampAge_s)
+          .value_or(now_s);
+  if (!(timestamp_s > last_timestamp_s_)) {
+    timestamp_s = std::max(now_s, last_timestamp_s_ + 1e-6);  // frame times only increase
+  }
+  last_timestamp_s_ = timestamp_s;
+  frame.image = lens_->apply(bgr_);
+  frame.timestamp_s = timestamp_s;
+  frame.sequence = sequence_++;
+  frame.sim.reset();
+  return ReadStatus::ok;
+}
+
+}  // namespace flowsteer::camera_io
