@@ -5,6 +5,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <map>
+#include <mutex>
 #include <string_view>
 
 namespace flowsteer::ros2_dds {
@@ -99,18 +101,79 @@ std::optional<std::string> topic_name_problem(std::string_view name) {
   return std::nullopt;
 }
 
-Participant::Participant(int domain_id) : domain_id_(domain_id), handle_(0) {
+namespace {
+
+// ROS_LOCALHOST_ONLY=1 as ROS 2's middlewares take it: DDS on 127.0.0.1 only. The loopback
+// interface may carry no multicast, so discovery goes by unicast to 127.0.0.1's participants.
+constexpr const char* kLocalhostOnlyConfig =
+    "<CycloneDDS><Domain><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
+    "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
+    "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>32"
+    "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
+    "</Domain></CycloneDDS>";
+
+bool localhost_only() {
+  const char* value = std::getenv("ROS_LOCALHOST_ONLY");
+  // A configuration of the user's own (CYCLONEDDS_URI) is theirs to keep.
+  return value != nullptr && std::string_view(value) == "1" &&
+         std::getenv("CYCLONEDDS_URI") == nullptr;
+}
+
+// The domains made with the localhost configuration, each deleted with its last participant
+// (Cyclone deletes an explicit domain with everything in it, so not before).
+struct LocalhostDomain {
+  dds_entity_t handle = 0;
+  int participants = 0;
+};
+std::mutex g_domains_mutex;
+std::map<int, LocalhostDomain> g_domains;
+
+void join_localhost_domain(int domain_id) {
+  const std::lock_guard lock(g_domains_mutex);
+  LocalhostDomain& domain = g_domains[domain_id];
+  if (domain.participants == 0) {
+    domain.handle = dds_create_domain(static_cast<dds_domainid_t>(domain_id), kLocalhostOnlyConfig);
+    if (domain.handle < 0) {
+      g_domains.erase(domain_id);
+      detail::check(domain.handle, "domain " + std::to_string(domain_id) +
+                                       " on 127.0.0.1 only (ROS_LOCALHOST_ONLY=1)");
+    }
+  }
+  ++domain.participants;
+}
+
+void leave_localhost_domain(int domain_id) {
+  const std::lock_guard lock(g_domains_mutex);
+  const auto found = g_domains.find(domain_id);
+  if (found != g_domains.end() && --found->second.participants == 0) {
+    detail::delete_entity(found->second.handle);
+    g_domains.erase(found);
+  }
+}
+
+}  // namespace
+
+Participant::Participant(int domain_id)
+    : domain_id_(domain_id), handle_(0), localhost_only_(localhost_only()) {
   if (domain_id < 0 || domain_id > kMaxDomainId) {
     throw DdsError("domain id " + std::to_string(domain_id) + ": not from 0 to " +
                    std::to_string(kMaxDomainId));
   }
-  handle_ = detail::check_entity(
-      dds_create_participant(static_cast<dds_domainid_t>(domain_id), nullptr, nullptr),
-      "DDS participant on domain " + std::to_string(domain_id));
+  if (localhost_only_) {
+    join_localhost_domain(domain_id);
+  }
+  handle_ = dds_create_participant(static_cast<dds_domainid_t>(domain_id), nullptr, nullptr);
+  if (handle_ < 0 && localhost_only_) {
+    leave_localhost_domain(domain_id);
+  }
+  detail::check_entity(handle_, "DDS participant on domain " + std::to_string(domain_id));
 }
 
 Participant::~Participant() {
   detail::delete_entity(handle_);
+  if (localhost_only_) {
+    leave_localhost_domain(domain_id_);
+  }
 }
 
 }  // namespace flowsteer::ros2_dds

@@ -5,15 +5,16 @@
 # one.
 
 # What each module may use besides itself, lower floors first. Data flows camera -> flow ->
-# features -> control -> drive: the stages (camera_io, servo, drivers) know only base; pipeline
+# features -> control -> drive: the stages (camera_io, servo, drivers) know only base, and the
+# transports the camera and the drive may use (recording's ROS 2 messages, ros2_dds); pipeline
 # joins camera and servo into the Brain; the simulator runs Brains in a rendered world and the
 # evaluations measure its runs; the file readers, the robot's loop, the simulator in the loop
 # and the command sit above.
 set(allowed_base "")
 set(allowed_recording base)
+set(allowed_servo base)
 set(allowed_ros2_dds base recording)
 set(allowed_camera_io base recording ros2_dds)
-set(allowed_servo base)
 set(allowed_drivers base recording ros2_dds)
 set(allowed_calibration base camera_io)
 set(allowed_sim_camera base camera_io servo)

@@ -26,7 +26,8 @@ using config::parse_robot_launch;
 using robot::test_support::error_of;
 
 TEST(RobotLaunch, ShippedLaunchFilesParse) {
-  for (const char* name : {"v4l2_sim_base.yaml", "v4l2_odrive.yaml", "replay.yaml"}) {
+  for (const char* name :
+       {"v4l2_sim_base.yaml", "v4l2_odrive.yaml", "replay.yaml", "ros2_diff_drive.yaml"}) {
     SCOPED_TRACE(name);
     const config::RobotLaunch l =
         config::read_robot_launch(std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/" + name);
@@ -43,6 +44,14 @@ TEST(RobotLaunch, ShippedLaunchFilesParse) {
   const auto& o = std::get<camera_io::V4l2Options>(v4l2.camera.source);
   EXPECT_EQ(o.format, camera_io::PixelFormat::mjpeg);
   EXPECT_DOUBLE_EQ(v4l2.camera.timeout_s, 0.3);
+  const config::RobotLaunch ros2 =
+      config::read_robot_launch(std::string(FLOWSTEER_LAUNCH_FILES_DIR) + "/ros2_diff_drive.yaml");
+  const auto& camera = std::get<camera_io::Ros2CameraOptions>(ros2.camera.source);
+  EXPECT_EQ(camera.camera_info_topic, "/camera/camera_info");
+  const auto& drive = std::get<drivers::Ros2DriveConfig>(ros2.drive->drive);
+  EXPECT_TRUE(drive.stamped);
+  EXPECT_EQ(drive.cmd_vel_topic, "/diff_drive_controller/cmd_vel");
+  EXPECT_EQ(drive.odom_topic, "/diff_drive_controller/odom");
 }
 
 TEST(RobotLaunch, BadFilesNameTheLineAndField) {

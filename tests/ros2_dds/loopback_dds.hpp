@@ -4,17 +4,14 @@
 
 namespace flowsteer::ros2_dds_test {
 
-// Cyclone DDS on the loopback interface only, discovery by unicast to 127.0.0.1: the tests'
-// participants find each other on any machine, multicast or not, and talk to nothing outside.
-// Set before the first participant; processes started afterwards inherit it.
+// ROS_LOCALHOST_ONLY=1, as a ROS 2 user sets it: DDS on the loopback interface only, discovery by
+// unicast to 127.0.0.1 (ros2_dds::Participant, and both peers, as ROS 2's middlewares do). The
+// tests' participants find each other on any machine, multicast or not, and talk to nothing
+// outside. Set before the first participant; processes started afterwards inherit it. A
+// CYCLONEDDS_URI of the caller's would take precedence in Cyclone, so it is cleared.
 inline void use_loopback_dds() {
-  ::setenv("CYCLONEDDS_URI",
-           "<CycloneDDS><Domain><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
-           "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
-           "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>20"
-           "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
-           "</Domain></CycloneDDS>",
-           1);
+  ::unsetenv("CYCLONEDDS_URI");
+  ::setenv("ROS_LOCALHOST_ONLY", "1", 1);
 }
 
 }  // namespace flowsteer::ros2_dds_test

@@ -1,9 +1,10 @@
-// `flowsteer run` on a ROS 2 robot: a ros2 camera and a ros2 drive against
-// flowsteer_ros2_robot_peer (peer/), which plays the robot's camera driver and
-// diff_drive_controller on Cyclone DDS with its own types. The peer records every command it
-// takes; each case checks, as the robot VM test does on the CAN bus, that the base was driven,
-// that a zero command came within the bound after the fault, that nothing moved it afterwards,
-// and the exit status and message.
+// `flowsteer run` on a ROS 2 robot: a ros2 camera and a ros2 drive against a peer (peer/) that
+// plays the robot's camera driver and diff_drive_controller with its own types, on Cyclone DDS
+// (flowsteer_ros2_robot_peer) and on Fast DDS, ROS 2's default middleware
+// (flowsteer_ros2_robot_peer_fastdds). The peer records every command it takes; each case checks,
+// as the robot VM test does on the CAN bus, that the base was driven, that a zero command came
+// within the bound after the fault, that nothing moved it afterwards, and the exit status and
+// message.
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -92,12 +93,17 @@ int wait_exit(pid_t pid, double timeout_s, double* exited_s = nullptr) {
   }
 }
 
-class Ros2Robot : public ::testing::Test {
+struct Peer {
+  const char* name;
+  const char* program;
+};
+
+class Ros2Robot : public ::testing::TestWithParam<Peer> {
  protected:
   void SetUp() override {
     flowsteer::ros2_dds_test::use_loopback_dds();
     const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    dir_ = fs::path(FLOWSTEER_TEST_OUT) / name;
+    dir_ = fs::path(FLOWSTEER_TEST_OUT) / GetParam().name / name.substr(0, name.find('/'));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     // A domain per case: a case's leftovers never reach the next.
@@ -148,8 +154,8 @@ class Ros2Robot : public ::testing::Test {
 
   pid_t start_peer(std::vector<std::string> extra) const {
     std::vector<std::string> args = {
-        FLOWSTEER_PEER, "--domain", std::to_string(domain_), "--record", path("peer.csv"),
-        "--duration",   "40"};
+        GetParam().program, "--domain", std::to_string(domain_), "--record", path("peer.csv"),
+        "--duration",       "40"};
     args.insert(args.end(), extra.begin(), extra.end());
     return start(path("peer.log"), args);
   }
@@ -207,7 +213,7 @@ class Ros2Robot : public ::testing::Test {
   static inline int next_domain_ = 0;
 };
 
-TEST_F(Ros2Robot, SigintStopsTheBaseWithTwistStampedAndCameraInfo) {
+TEST_P(Ros2Robot, SigintStopsTheBaseWithTwistStampedAndCameraInfo) {
   const std::string launch = write_launch("    camera_info: {topic: /camera/camera_info}\n",
                                           "{topic: /cmd_vel, type: geometry_msgs/msg/TwistStamped, "
                                           "frame_id: base_link}");
@@ -231,7 +237,7 @@ TEST_F(Ros2Robot, SigintStopsTheBaseWithTwistStampedAndCameraInfo) {
   expect_stopped(read_record(path("peer.csv")), fault_s, kStopWithin_s);
 }
 
-TEST_F(Ros2Robot, ACameraGoneSilentStopsTheBase) {
+TEST_P(Ros2Robot, ACameraGoneSilentStopsTheBase) {
   const std::string launch = write_launch("", "{topic: /cmd_vel}");
   const pid_t peer = start_peer({"--silence", "camera", "--silence-after", "2"});
   const pid_t run = start_flowsteer(launch);
@@ -246,7 +252,7 @@ TEST_F(Ros2Robot, ACameraGoneSilentStopsTheBase) {
   expect_stopped(record, record.events.at("silent camera"), kCameraTimeout_s + kStopWithin_s);
 }
 
-TEST_F(Ros2Robot, OdometryGoneSilentStopsTheBaseAndFailsTheRun) {
+TEST_P(Ros2Robot, OdometryGoneSilentStopsTheBaseAndFailsTheRun) {
   const std::string launch = write_launch("", "{topic: /cmd_vel}");
   const pid_t peer = start_peer({"--silence", "odom", "--silence-after", "2"});
   const pid_t run = start_flowsteer(launch);
@@ -265,7 +271,7 @@ TEST_F(Ros2Robot, OdometryGoneSilentStopsTheBaseAndFailsTheRun) {
 }
 
 // A camera driver publishing Bayer images: the run ends before the base was ever commanded.
-TEST_F(Ros2Robot, AnUnreadableEncodingEndsTheRunBeforeAnyCommand) {
+TEST_P(Ros2Robot, AnUnreadableEncodingEndsTheRunBeforeAnyCommand) {
   const std::string launch = write_launch("", "{topic: /cmd_vel}");
   const pid_t peer = start_peer({"--encoding", "bayer_rggb8"});
   const pid_t run = start_flowsteer(launch);
@@ -280,5 +286,12 @@ TEST_F(Ros2Robot, AnUnreadableEncodingEndsTheRunBeforeAnyCommand) {
       << log;
   EXPECT_TRUE(read_record(path("peer.csv")).commands.empty()) << "a command was sent";
 }
+
+INSTANTIATE_TEST_SUITE_P(Peers, Ros2Robot,
+                         ::testing::Values(Peer{"cyclonedds", FLOWSTEER_CYCLONE_PEER},
+                                           Peer{"fastdds", FLOWSTEER_FASTDDS_PEER}),
+                         [](const ::testing::TestParamInfo<Peer>& info) {
+                           return std::string(info.param.name);
+                         });
 
 }  // namespace

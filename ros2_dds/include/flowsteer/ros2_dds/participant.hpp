@@ -42,7 +42,9 @@ struct Qos {
 };
 
 // One DDS domain participant: what a ROS 2 node is on the wire. Not copyable; the publishers
-// and subscriptions made from it must not outlive it.
+// and subscriptions made from it must not outlive it. Cyclone's configuration is CYCLONEDDS_URI's
+// as usual; without one, ROS_LOCALHOST_ONLY=1 keeps the participant on 127.0.0.1 as ROS 2's nodes
+// keep theirs (discovery by unicast to 127.0.0.1).
 class Participant {
  public:
   // Throws DdsError naming the domain when Cyclone DDS cannot join it, or an id out of range.
@@ -57,6 +59,7 @@ class Participant {
  private:
   int domain_id_;
   std::int32_t handle_;
+  bool localhost_only_;
 };
 
 }  // namespace flowsteer::ros2_dds
