@@ -1,74 +1,62 @@
 #include "flowsteer/recording/ros2_messages.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 
 #include "flowsteer/recording/cdr.hpp"
 #include "flowsteer/recording/recording_error.hpp"
+#include "msg_definitions.hpp"
 
 namespace flowsteer::recording::ros2 {
 
 namespace {
 
-// The .msg definitions of common_interfaces that the messages use, by "package/Type", each with
-// the types it names. Comments and constants left out; fields, types and defaults as ROS 2 has
-// them.
+// A type's .msg text (msg/, compiled in) and the types its fields name, as "package/Type".
 struct Definition {
-  const char* text;
-  std::vector<const char*> uses;
+  std::string text;
+  std::vector<std::string> uses;
 };
 
+// The types a .msg text's fields name: a field is "<type>[array] <name> [default]"; a type with
+// a '/' names its package, one that starts with a capital letter is of `package`.
+std::vector<std::string> used_types(const std::string& text, const std::string& package) {
+  std::vector<std::string> uses;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::string type = line.substr(0, line.find_first_of(" \t["));
+    if (type.empty() || !(type.find('/') != std::string::npos || std::isupper(type[0]))) {
+      continue;
+    }
+    if (type.find('/') == std::string::npos) {
+      type = package + "/" + type;
+    }
+    if (std::find(uses.begin(), uses.end(), type) == uses.end()) {
+      uses.push_back(type);
+    }
+  }
+  return uses;
+}
+
 const std::map<std::string, Definition>& definitions() {
-  static const std::map<std::string, Definition> table = {
-      {"builtin_interfaces/Time", {"int32 sec\nuint32 nanosec\n", {}}},
-      {"std_msgs/Header",
-       {"builtin_interfaces/Time stamp\nstring frame_id\n", {"builtin_interfaces/Time"}}},
-      {"geometry_msgs/Vector3", {"float64 x\nfloat64 y\nfloat64 z\n", {}}},
-      {"geometry_msgs/Point", {"float64 x\nfloat64 y\nfloat64 z\n", {}}},
-      {"geometry_msgs/Quaternion", {"float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n", {}}},
-      {"geometry_msgs/Twist", {"Vector3 linear\nVector3 angular\n", {"geometry_msgs/Vector3"}}},
-      {"geometry_msgs/Pose",
-       {"Point position\nQuaternion orientation\n",
-        {"geometry_msgs/Point", "geometry_msgs/Quaternion"}}},
-      {"geometry_msgs/PoseWithCovariance",
-       {"Pose pose\nfloat64[36] covariance\n", {"geometry_msgs/Pose"}}},
-      {"geometry_msgs/TwistWithCovariance",
-       {"Twist twist\nfloat64[36] covariance\n", {"geometry_msgs/Twist"}}},
-      {"geometry_msgs/Transform",
-       {"Vector3 translation\nQuaternion rotation\n",
-        {"geometry_msgs/Vector3", "geometry_msgs/Quaternion"}}},
-      {"geometry_msgs/TransformStamped",
-       {"std_msgs/Header header\nstring child_frame_id\nTransform transform\n",
-        {"std_msgs/Header", "geometry_msgs/Transform"}}},
-      {"nav_msgs/Odometry",
-       {"std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n"
-        "geometry_msgs/TwistWithCovariance twist\n",
-        {"std_msgs/Header", "geometry_msgs/PoseWithCovariance",
-         "geometry_msgs/TwistWithCovariance"}}},
-      {"tf2_msgs/TFMessage",
-       {"geometry_msgs/TransformStamped[] transforms\n", {"geometry_msgs/TransformStamped"}}},
-      {"sensor_msgs/CompressedImage",
-       {"std_msgs/Header header\nstring format\nuint8[] data\n", {"std_msgs/Header"}}},
-      {"sensor_msgs/Image",
-       {"std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\n"
-        "uint8 is_bigendian\nuint32 step\nuint8[] data\n",
-        {"std_msgs/Header"}}},
-      {"sensor_msgs/RegionOfInterest",
-       {"uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify\n", {}}},
-      {"sensor_msgs/CameraInfo",
-       {"std_msgs/Header header\nuint32 height\nuint32 width\nstring distortion_model\n"
-        "float64[] d\nfloat64[9] k\nfloat64[9] r\nfloat64[12] p\nuint32 binning_x\n"
-        "uint32 binning_y\nRegionOfInterest roi\n",
-        {"std_msgs/Header", "sensor_msgs/RegionOfInterest"}}},
-  };
+  static const std::map<std::string, Definition> table = [] {
+    std::map<std::string, Definition> t;
+    for (const auto& [name, text] : kMsgDefinitions) {
+      const std::string type = name;
+      t[type] = {text, used_types(text, type.substr(0, type.find('/')))};
+    }
+    return t;
+  }();
   return table;
 }
 
 void add_dependencies(const std::string& type, std::vector<std::string>& seen) {
-  for (const char* used : definitions().at(type).uses) {
+  for (const std::string& used : definitions().at(type).uses) {
     if (std::find(seen.begin(), seen.end(), used) == seen.end()) {
       seen.emplace_back(used);
       add_dependencies(used, seen);
