@@ -13,15 +13,15 @@ namespace flowsteer::ros2_dds {
 
 namespace detail {
 
-dds_return_t check(dds_return_t code, const std::string& what) {
+dds_return_t check(dds_return_t code, const char* what, const std::string& subject) {
   if (code < 0) {
-    throw DdsError(what + ": " + dds_strretcode(code));
+    throw DdsError(what + subject + ": " + dds_strretcode(code));
   }
   return code;
 }
 
-dds_entity_t check_entity(dds_entity_t entity, const std::string& what) {
-  return check(entity, what);
+dds_entity_t check_entity(dds_entity_t entity, const char* what, const std::string& subject) {
+  return check(entity, what, subject);
 }
 
 void delete_entity(dds_entity_t entity) {
@@ -37,8 +37,9 @@ dds_entity_t make_topic(const Participant& participant, const dds_topic_descript
   }
   return check_entity(
       dds_create_topic(participant.handle(), &type, ("rt" + ros_topic).c_str(), nullptr, nullptr),
-      "topic " + ros_topic + " (" + type.m_typename + ", domain " +
-          std::to_string(participant.domain_id()) + ")");
+      "topic ",
+      ros_topic + " (" + type.m_typename + ", domain " + std::to_string(participant.domain_id()) +
+          ")");
 }
 
 QosPolicy::QosPolicy(const Qos& qos) : qos_(dds_create_qos()) {
@@ -135,8 +136,8 @@ void join_localhost_domain(int domain_id) {
     domain.handle = dds_create_domain(static_cast<dds_domainid_t>(domain_id), kLocalhostOnlyConfig);
     if (domain.handle < 0) {
       g_domains.erase(domain_id);
-      detail::check(domain.handle, "domain " + std::to_string(domain_id) +
-                                       " on 127.0.0.1 only (ROS_LOCALHOST_ONLY=1)");
+      detail::check(domain.handle, "domain ",
+                    std::to_string(domain_id) + " on 127.0.0.1 only (ROS_LOCALHOST_ONLY=1)");
     }
   }
   ++domain.participants;
@@ -166,7 +167,7 @@ Participant::Participant(int domain_id)
   if (handle_ < 0 && localhost_only_) {
     leave_localhost_domain(domain_id);
   }
-  detail::check_entity(handle_, "DDS participant on domain " + std::to_string(domain_id));
+  detail::check_entity(handle_, "DDS participant on domain ", std::to_string(domain_id));
 }
 
 Participant::~Participant() {

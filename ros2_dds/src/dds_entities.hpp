@@ -8,10 +8,11 @@
 
 namespace flowsteer::ros2_dds::detail {
 
-// A return code of Cyclone DDS that is an error throws DdsError: "<what>: <Cyclone's text>".
-dds_return_t check(dds_return_t code, const std::string& what);
+// A return code of Cyclone DDS that is an error throws DdsError: "<what><subject>: <Cyclone's
+// text>", the message made only then (the checks sit on every publish and take).
+dds_return_t check(dds_return_t code, const char* what, const std::string& subject = {});
 // dds_entity_t handles are return codes too: negative ones are errors.
-dds_entity_t check_entity(dds_entity_t entity, const std::string& what);
+dds_entity_t check_entity(dds_entity_t entity, const char* what, const std::string& subject = {});
 
 // Deletes an entity and its children; errors ignored (destructors, cleanup after a failure).
 void delete_entity(dds_entity_t entity);

@@ -47,7 +47,7 @@ Publisher<Message>::Publisher(const Participant& participant, const std::string&
   try {
     writer_ =
         check_entity(dds_create_writer(participant.handle(), topic_handle_, policy.get(), nullptr),
-                     "writer on " + topic_);
+                     "writer on ", topic_);
   } catch (...) {
     detail::delete_entity(topic_handle_);
     throw;
@@ -64,13 +64,13 @@ template <typename Message>
 void Publisher<Message>::publish(const Message& message) {
   typename Wire<Message>::C wire{};
   Wire<Message>::to_wire(message, wire);
-  check(dds_write(writer_, &wire), "publishing on " + topic_);
+  check(dds_write(writer_, &wire), "publishing on ", topic_);
 }
 
 template <typename Message>
 int Publisher<Message>::subscriber_count() const {
   dds_publication_matched_status_t status{};
-  check(dds_get_publication_matched_status(writer_, &status), "matched subscriptions of " + topic_);
+  check(dds_get_publication_matched_status(writer_, &status), "matched subscriptions of ", topic_);
   return static_cast<int>(status.current_count);
 }
 
@@ -85,7 +85,7 @@ bool Publisher<Message>::wait_for_acknowledgements(double timeout_s) const {
   if (code == DDS_RETCODE_TIMEOUT) {
     return false;
   }
-  check(code, "waiting for acknowledgements on " + topic_);
+  check(code, "waiting for acknowledgements on ", topic_);
   return true;
 }
 
@@ -100,13 +100,13 @@ Subscription<Message>::Subscription(const Participant& participant, const std::s
   try {
     reader_ =
         check_entity(dds_create_reader(participant.handle(), topic_handle_, policy.get(), nullptr),
-                     "reader on " + topic_);
-    waitset_ = check_entity(dds_create_waitset(participant.handle()), "waitset for " + topic_);
+                     "reader on ", topic_);
+    waitset_ = check_entity(dds_create_waitset(participant.handle()), "waitset for ", topic_);
     // A read condition stays triggered while any sample is in the reader's cache, so a wait
     // after taking one of several returns at once.
     const dds_entity_t has_samples =
-        check_entity(dds_create_readcondition(reader_, DDS_ANY_STATE), "condition on " + topic_);
-    check(dds_waitset_attach(waitset_, has_samples, 0), "waitset for " + topic_);
+        check_entity(dds_create_readcondition(reader_, DDS_ANY_STATE), "condition on ", topic_);
+    check(dds_waitset_attach(waitset_, has_samples, 0), "waitset for ", topic_);
   } catch (...) {
     detail::delete_entity(waitset_);
     detail::delete_entity(reader_);
@@ -126,7 +126,7 @@ template <typename Message>
 bool Subscription<Message>::wait(double timeout_s) {
   const dds_return_t triggered =
       dds_waitset_wait(waitset_, nullptr, 0, detail::to_duration(timeout_s));
-  return check(triggered, "waiting on " + topic_) > 0;
+  return check(triggered, "waiting on ", topic_) > 0;
 }
 
 template <typename Message>
@@ -136,7 +136,7 @@ bool Subscription<Message>::take(Message& message) {
     void* sample = nullptr;
     dds_sample_info_t info{};
     const dds_return_t count =
-        check(dds_take(reader_, &sample, &info, 1, 1), "taking from " + topic_);
+        check(dds_take(reader_, &sample, &info, 1, 1), "taking from ", topic_);
     if (count == 0) {
       return false;
     }
@@ -153,7 +153,7 @@ bool Subscription<Message>::take(Message& message) {
 template <typename Message>
 int Subscription<Message>::publisher_count() const {
   dds_subscription_matched_status_t status{};
-  check(dds_get_subscription_matched_status(reader_, &status), "matched publishers of " + topic_);
+  check(dds_get_subscription_matched_status(reader_, &status), "matched publishers of ", topic_);
   return static_cast<int>(status.current_count);
 }
 

@@ -208,33 +208,45 @@ class Ros2Robot : public ::testing::TestWithParam<Peer> {
                 1e3 * (first_zero->t_s - fault_s), 1e3 * bound_s);
   }
 
+  // Runs until the base moves, sends `signal` 1.5 s later, and checks the stop: exit 0.
+  void expect_signal_stops(int signal, const std::string& launch,
+                           const std::vector<std::string>& peer_options) {
+    const pid_t peer = start_peer(peer_options);
+    const pid_t run = start_flowsteer(launch);
+    ASSERT_TRUE(std::isfinite(wait_until_moving(30.0))) << read_file(path("flowsteer.log"));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    const double fault_s = realtime_s();
+    ::kill(run, signal);
+    const int status = wait_exit(run, 10.0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    ::kill(peer, SIGTERM);
+    EXPECT_EQ(wait_exit(peer, 10.0), 0) << read_file(path("peer.log"));
+    const std::string log = read_file(path("flowsteer.log"));
+    EXPECT_EQ(status, 0) << log;
+    EXPECT_NE(log.find("stop requested: base ros2 /cmd_vel (domain " + std::to_string(domain_) +
+                       ") stopped"),
+              std::string::npos)
+        << log;
+    expect_stopped(read_record(path("peer.csv")), fault_s, kStopWithin_s);
+  }
+
   fs::path dir_;
   int domain_ = 0;
   static inline int next_domain_ = 0;
 };
 
 TEST_P(Ros2Robot, SigintStopsTheBaseWithTwistStampedAndCameraInfo) {
-  const std::string launch = write_launch("    camera_info: {topic: /camera/camera_info}\n",
-                                          "{topic: /cmd_vel, type: geometry_msgs/msg/TwistStamped, "
-                                          "frame_id: base_link}");
-  const pid_t peer = start_peer({"--stamped", "--camera-info"});
-  const pid_t run = start_flowsteer(launch);
-  ASSERT_TRUE(std::isfinite(wait_until_moving(30.0))) << read_file(path("flowsteer.log"));
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  const double fault_s = realtime_s();
-  ::kill(run, SIGINT);
-  const int status = wait_exit(run, 10.0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  ::kill(peer, SIGTERM);
-  EXPECT_EQ(wait_exit(peer, 10.0), 0) << read_file(path("peer.log"));
+  expect_signal_stops(SIGINT,
+                      write_launch("    camera_info: {topic: /camera/camera_info}\n",
+                                   "{topic: /cmd_vel, type: geometry_msgs/msg/TwistStamped, "
+                                   "frame_id: base_link}"),
+                      {"--stamped", "--camera-info"});
   const std::string log = read_file(path("flowsteer.log"));
-  EXPECT_EQ(status, 0) << log;
-  EXPECT_NE(log.find("stop requested: base ros2 /cmd_vel (domain " + std::to_string(domain_) +
-                     ") stopped"),
-            std::string::npos)
-      << log;
   EXPECT_NE(log.find("(160x120)"), std::string::npos) << "CameraInfo's size\n" << log;
-  expect_stopped(read_record(path("peer.csv")), fault_s, kStopWithin_s);
+}
+
+TEST_P(Ros2Robot, SigtermStopsTheBaseWithTwist) {
+  expect_signal_stops(SIGTERM, write_launch("", "{topic: /cmd_vel}"), {});
 }
 
 TEST_P(Ros2Robot, ACameraGoneSilentStopsTheBase) {
