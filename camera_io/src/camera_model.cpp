@@ -1,5 +1,6 @@
 #include "flowsteer/camera_io/camera_model.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
@@ -39,6 +40,42 @@ std::optional<DistortionModel> distortion_model_from_name(std::string_view name)
     }
   }
   return std::nullopt;
+}
+
+CameraModel camera_model_of(const recording::ros2::CameraInfo& info) {
+  // K describes the full sensor; a binned or cropped image would need it scaled and shifted.
+  const recording::ros2::RegionOfInterest& roi = info.roi;
+  const bool whole = roi.x_offset == 0 && roi.y_offset == 0 &&
+                     (roi.width == 0 || roi.width == info.width) &&
+                     (roi.height == 0 || roi.height == info.height);
+  if (info.binning_x > 1 || info.binning_y > 1 || !whole) {
+    throw std::invalid_argument("binning_x " + std::to_string(info.binning_x) + ", binning_y " +
+                                std::to_string(info.binning_y) + ", roi " +
+                                std::to_string(roi.width) + "x" + std::to_string(roi.height) + "+" +
+                                std::to_string(roi.x_offset) + "+" + std::to_string(roi.y_offset) +
+                                ": flowsteer takes only whole images, not binned");
+  }
+  CameraModel model;
+  model.width_px = static_cast<int>(info.width);
+  model.height_px = static_cast<int>(info.height);
+  model.fx = info.k[0];
+  model.cx = info.k[2];
+  model.fy = info.k[4];
+  model.cy = info.k[5];
+  const bool no_distortion =
+      std::all_of(info.d.begin(), info.d.end(), [](double d) { return d == 0.0; });
+  const auto distortion = distortion_model_from_name(info.distortion_model);
+  if (!no_distortion && !distortion) {
+    throw std::invalid_argument("distortion model '" + info.distortion_model +
+                                "' (known: plumb_bob, rational_polynomial, equidistant)");
+  }
+  if (!no_distortion) {
+    model.distortion = *distortion;
+    model.coefficients = info.d;
+    model.coefficients.resize(distortion_coefficient_count(*distortion), 0.0);
+  }
+  model.validate();
+  return model;
 }
 
 std::size_t distortion_coefficient_count(DistortionModel model) {

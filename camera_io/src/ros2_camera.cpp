@@ -47,16 +47,14 @@ constexpr double kMaxStampAge_s = 1.0;
 
 }  // namespace
 
-std::string_view ros2_image_type_name(Ros2ImageType type) {
-  return type == Ros2ImageType::image ? "sensor_msgs/msg/Image" : "sensor_msgs/msg/CompressedImage";
+std::string ros2_image_type_name(Ros2ImageType type) {
+  return type == Ros2ImageType::image ? ros2_dds::ros2_type_name<ros2::Image>()
+                                      : ros2_dds::ros2_type_name<ros2::CompressedImage>();
 }
 
 std::optional<Ros2ImageType> ros2_image_type_from_name(std::string_view name) {
   for (Ros2ImageType type : {Ros2ImageType::image, Ros2ImageType::compressed_image}) {
-    const std::string_view full = ros2_image_type_name(type);
-    const std::string short_name =
-        std::string(full.substr(0, full.find('/'))) + std::string(full.substr(full.rfind('/')));
-    if (name == full || name == short_name) {
+    if (name == ros2_image_type_name(type)) {
       return type;
     }
   }
@@ -99,9 +97,8 @@ Ros2Camera::Ros2Camera(const Ros2CameraOptions& options)
   const bool arrived = images_ ? images_->wait(options.connect_timeout_s)
                                : compressed_->wait(options.connect_timeout_s);
   if (!arrived || !take_newest()) {
-    throw std::runtime_error(name_ + ": no " +
-                             std::string(ros2_image_type_name(options.image_type)) + " within " +
-                             base::format_number(options.connect_timeout_s) +
+    throw std::runtime_error(name_ + ": no " + ros2_image_type_name(options.image_type) +
+                             " within " + base::format_number(options.connect_timeout_s) +
                              " s: is the camera driver running, on this domain?");
   }
   decode();
@@ -131,34 +128,15 @@ void Ros2Camera::wait_for_camera_info(const Ros2CameraOptions& options) {
                              base::format_number(options.connect_timeout_s) + " s");
   }
   LensOptions lens;
-  CameraModel& model = lens.model.emplace();
-  model.width_px = static_cast<int>(info.width);
-  model.height_px = static_cast<int>(info.height);
-  model.fx = info.k[0];
-  model.fy = info.k[4];
-  model.cx = info.k[2];
-  model.cy = info.k[5];
-  const bool no_distortion = info.d.empty() || info.distortion_model.empty();
-  const auto distortion = distortion_model_from_name(info.distortion_model);
-  if (!no_distortion && !distortion) {
-    throw std::runtime_error(source + ": distortion_model '" + info.distortion_model +
-                             "' is not one flowsteer undistorts");
-  }
-  model.distortion = no_distortion ? DistortionModel::none : *distortion;
-  if (!no_distortion) {
-    // ROS pads plumb_bob's five coefficients to more at times; the model takes its own count.
-    const std::size_t count = distortion_coefficient_count(model.distortion);
-    if (info.d.size() < count) {
-      throw std::runtime_error(source + ": " + info.distortion_model + " needs " +
-                               std::to_string(count) + " coefficients, D has " +
-                               std::to_string(info.d.size()));
-    }
-    model.coefficients.assign(info.d.begin(), info.d.begin() + static_cast<long>(count));
+  try {
+    lens.model = camera_model_of(info);
+  } catch (const std::invalid_argument& error) {
+    throw std::runtime_error(source + ": " + error.what());
   }
   try {
     lens_.emplace(lens, bgr_.cols, bgr_.rows, source);
   } catch (const std::invalid_argument& error) {
-    throw std::runtime_error(error.what());
+    throw std::runtime_error(error.what());  // Lens names `source`: another size than the images'
   }
 }
 
@@ -166,16 +144,16 @@ bool Ros2Camera::take_newest() {
   bool took = false;
   if (images_) {
     while (images_->take(image_)) {
-      dropped_frames_ += took ? 1 : 0;
       took = true;
     }
-    header_ = image_.header;
   } else {
     while (compressed_->take(compressed_image_)) {
-      dropped_frames_ += took ? 1 : 0;
       took = true;
     }
-    header_ = compressed_image_.header;
+  }
+  if (took) {
+    header_ = images_ ? image_.header : compressed_image_.header;
+    received_s_ = base::monotonic_now_s();
   }
   return took;
 }
@@ -184,11 +162,16 @@ void Ros2Camera::decode() {
   const int rows = bgr_.empty() ? -1 : bgr_.rows;
   const int cols = bgr_.empty() ? -1 : bgr_.cols;
   if (compressed_) {
-    cv::imdecode(compressed_image_.data, cv::IMREAD_COLOR, &bgr_);
-    if (bgr_.empty()) {
-      throw std::runtime_error(name_ + ": a CompressedImage in format '" +
-                               compressed_image_.format + "' could not be decoded");
+    // imdecode leaves its output as it was when it fails: decode into a Mat of its own.
+    const cv::Mat decoded = compressed_image_.data.empty()
+                                ? cv::Mat()
+                                : cv::imdecode(compressed_image_.data, cv::IMREAD_COLOR);
+    if (decoded.empty()) {
+      throw std::runtime_error(
+          name_ + ": a CompressedImage in format '" + compressed_image_.format + "' of " +
+          std::to_string(compressed_image_.data.size()) + " bytes could not be decoded");
     }
+    bgr_ = decoded;
   } else {
     const ros2::Image& image = image_;
     const Encoding* encoding = find_encoding(image.encoding);
@@ -223,24 +206,28 @@ void Ros2Camera::decode() {
 }
 
 ReadStatus Ros2Camera::read(Frame& frame, double timeout_s) {
-  if (!first_pending_) {
-    try {
-      const bool arrived = images_ ? images_->wait(timeout_s) : compressed_->wait(timeout_s);
-      if (!arrived || !take_newest()) {
-        return ReadStatus::timeout;
-      }
-    } catch (const ros2_dds::DdsError& error) {
-      throw std::runtime_error(name_ + ": " + error.what());
+  try {
+    // The image the constructor waited for goes out first, unless a newer one came meanwhile.
+    const bool newer =
+        first_pending_
+            ? take_newest()
+            : (images_ ? images_->wait(timeout_s) : compressed_->wait(timeout_s)) && take_newest();
+    if (!newer && !first_pending_) {
+      return ReadStatus::timeout;
     }
-    decode();
+    if (newer) {
+      decode();
+    }
+  } catch (const ros2_dds::DdsError& error) {
+    throw std::runtime_error(name_ + ": " + error.what());
   }
   first_pending_ = false;
-  const double now_s = base::monotonic_now_s();
   double timestamp_s =
       base::monotonic_of_realtime_s(header_.stamp.sec, header_.stamp.nanosec, kMaxStampAge_s)
-          .value_or(now_s);
+          .value_or(received_s_);
   if (!(timestamp_s > last_timestamp_s_)) {
-    timestamp_s = std::max(now_s, last_timestamp_s_ + 1e-6);  // frame times only increase
+    // Frame times only increase.
+    timestamp_s = std::max(received_s_, last_timestamp_s_ + 1e-6);
   }
   last_timestamp_s_ = timestamp_s;
   frame.image = lens_->apply(bgr_);

@@ -2,6 +2,7 @@
 
 #include "drive_reader.hpp"
 #include "flowsteer/config/field_bounds.hpp"
+#include "flowsteer/ros2_dds/topics.hpp"
 #include "ros2_reader.hpp"
 
 namespace flowsteer::config {
@@ -138,15 +139,16 @@ drivers::Ros2DriveConfig read_ros2(const base::YamlReader& r, const YAML::Node& 
   if (cmd_vel) {
     r.only_keys(cmd_vel, cmd_vel_field, {"topic", "type", "frame_id"});
   }
+  const std::string twist = ros2_dds::ros2_type_name<recording::ros2::Twist>();
+  const std::string twist_stamped = ros2_dds::ros2_type_name<ros2_dds::TwistStamped>();
   const Ros2Topic command =
-      read_ros2_topic(r, cmd_vel, cmd_vel_field, {c.cmd_vel_topic, "geometry_msgs/msg/Twist"},
-                      {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"});
+      read_ros2_topic(r, cmd_vel, cmd_vel_field, {c.cmd_vel_topic, twist}, {twist, twist_stamped});
   c.cmd_vel_topic = command.topic;
-  c.stamped = command.type == "geometry_msgs/msg/TwistStamped";
+  c.stamped = command.type == twist_stamped;
   if (cmd_vel && cmd_vel["frame_id"]) {
     if (!c.stamped) {
       r.fail(cmd_vel["frame_id"], cmd_vel_field + ".frame_id",
-             "only a geometry_msgs/msg/TwistStamped has a frame_id");
+             "only a " + twist_stamped + " has a frame_id");
     }
     c.frame_id = r.text(cmd_vel, cmd_vel_field, "frame_id", c.frame_id, true);
   }
@@ -156,9 +158,8 @@ drivers::Ros2DriveConfig read_ros2(const base::YamlReader& r, const YAML::Node& 
   if (odom) {
     r.only_keys(odom, odom_field, {"topic", "type"});
   }
-  c.odom_topic = read_ros2_topic(r, odom, odom_field, {c.odom_topic, "nav_msgs/msg/Odometry"},
-                                 {"nav_msgs/msg/Odometry"})
-                     .topic;
+  const std::string odometry = ros2_dds::ros2_type_name<recording::ros2::Odometry>();
+  c.odom_topic = read_ros2_topic(r, odom, odom_field, {c.odom_topic, odometry}, {odometry}).topic;
   c.timeout_s = r.bounded(settings, field, "timeout_s", c.timeout_s);
   c.connect_timeout_s = r.bounded(settings, field, "connect_timeout_s", c.connect_timeout_s);
   return c;

@@ -9,6 +9,7 @@
 #include "flowsteer/calibration/camera_mount.hpp"
 #include "flowsteer/config/controller_reader.hpp"
 #include "flowsteer/config/field_bounds.hpp"
+#include "flowsteer/ros2_dds/topics.hpp"
 #include "ros2_reader.hpp"
 
 namespace flowsteer::config {
@@ -59,7 +60,8 @@ camera_io::Ros2CameraOptions read_ros2_camera(const base::YamlReader& r, const Y
   if (image && image["encoding"]) {
     if (o.image_type != camera_io::Ros2ImageType::image) {
       r.fail(image["encoding"], image_field + ".encoding",
-             "only a sensor_msgs/msg/Image has an encoding");
+             "only a " + camera_io::ros2_image_type_name(camera_io::Ros2ImageType::image) +
+                 " has an encoding");
     }
     o.encoding = r.text(image, image_field, "encoding", "", true);
     if (!camera_io::is_readable_ros2_image_encoding(o.encoding)) {
@@ -69,14 +71,16 @@ camera_io::Ros2CameraOptions read_ros2_camera(const base::YamlReader& r, const Y
     }
   }
   if (const YAML::Node info = settings["camera_info"]) {
-    if (camera["calibration"]) {
-      r.fail(info, field + ".camera_info",
-             "give camera.calibration or a camera_info topic, not both");
+    for (const char* lens_field : {"calibration", "horizontal_fov_rad"}) {
+      if (camera[lens_field]) {
+        r.fail(info, field + ".camera_info",
+               std::string("give camera.") + lens_field + " or a camera_info topic, not both");
+      }
     }
     r.only_keys(info, field + ".camera_info", {"topic", "type"});
+    const std::string camera_info = ros2_dds::ros2_type_name<recording::ros2::CameraInfo>();
     o.camera_info_topic = read_ros2_topic(r, info, field + ".camera_info",
-                                          {"/camera/camera_info", "sensor_msgs/msg/CameraInfo"},
-                                          {"sensor_msgs/msg/CameraInfo"})
+                                          {"/camera/camera_info", camera_info}, {camera_info})
                               .topic;
   }
   o.connect_timeout_s = r.bounded(settings, field, "connect_timeout_s", o.connect_timeout_s);

@@ -18,7 +18,7 @@ int read_ros2_domain_id(const base::YamlReader& r, const YAML::Node& node,
 
 Ros2Topic read_ros2_topic(const base::YamlReader& r, const YAML::Node& topic_node,
                           const std::string& topic_field, const Ros2Topic& defaults,
-                          std::initializer_list<const char*> types) {
+                          std::initializer_list<std::string> types) {
   if (!topic_node) {
     return defaults;
   }
@@ -29,7 +29,7 @@ Ros2Topic read_ros2_topic(const base::YamlReader& r, const YAML::Node& topic_nod
   }
   const std::string type = r.text(topic_node, topic_field, "type", defaults.type, true);
   std::string accepted;
-  for (const std::string full : types) {
+  for (const std::string& full : types) {
     // "pkg/msg/Type" or "pkg/Type"
     const std::string short_name = full.substr(0, full.find('/')) + full.substr(full.rfind('/'));
     if (type == full || type == short_name) {

@@ -14,7 +14,7 @@ int read_ros2_domain_id(const base::YamlReader& r, const YAML::Node& node,
                         const std::string& field);
 
 // A topic the launch file names: `topic` (a ROS 2 topic name) and `type`, one of `types`
-// ("pkg/msg/Type", also accepted as "pkg/Type"), as its full name.
+// (ros2_dds::ros2_type_name's "pkg/msg/Type", also accepted as "pkg/Type"), as its full name.
 struct Ros2Topic {
   std::string topic;
   std::string type;
@@ -24,6 +24,6 @@ struct Ros2Topic {
 // checks its keys); the defaults where it or they are absent.
 Ros2Topic read_ros2_topic(const base::YamlReader& r, const YAML::Node& node,
                           const std::string& field, const Ros2Topic& defaults,
-                          std::initializer_list<const char*> types);
+                          std::initializer_list<std::string> types);
 
 }  // namespace flowsteer::config

@@ -1,5 +1,6 @@
 #include "flowsteer/drivers/ros2_drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <ctime>
 #include <numbers>
@@ -50,23 +51,45 @@ Ros2Drive::Ros2Drive(Ros2DriveConfig config)
     throw std::invalid_argument("ros2 drive: domain id " + std::to_string(config_.domain_id) +
                                 " not from 0 to " + std::to_string(ros2_dds::kMaxDomainId));
   }
-  if (!(config_.timeout_s > 0.0) || !(config_.connect_timeout_s > 0.0)) {
-    throw std::invalid_argument("ros2 drive: timeouts must be positive");
+  const std::pair<const char*, double> positive[] = {
+      {"timeout_s", config_.timeout_s},
+      {"connect_timeout_s", config_.connect_timeout_s},
+      {"wheel_separation_m", config_.geometry.wheel_separation_m},
+      {"wheel_radius_m", config_.geometry.wheel_radius_m}};
+  for (const auto& [field, value] : positive) {
+    if (!(value > 0.0)) {
+      throw std::invalid_argument(std::string("ros2 drive: ") + field + " " +
+                                  base::format_number(value) + " must be positive");
+    }
   }
-  if (!(config_.geometry.wheel_separation_m > 0.0) || !(config_.geometry.wheel_radius_m > 0.0)) {
-    throw std::invalid_argument("ros2 drive: wheel geometry must be positive");
-  }
+  stamped_command_ = std::make_unique<ros2_dds::TwistStamped>();
+  stamped_command_->header.frame_id = config_.frame_id;
 }
 
 Ros2Drive::~Ros2Drive() = default;
 
 void Ros2Drive::require_configured() const {
-  if (!participant_) {
-    throw DriveError(name_ + ": not configured");
+  if (!configured_) {
+    throw DriveError("not configured");
   }
 }
 
+// From scratch each time (MobileBase configures again after a failure): no pose, odometry or
+// endpoint of an earlier connection is kept.
 void Ros2Drive::configure() {
+  configured_ = false;
+  active_ = false;
+  last_odometry_s_.reset();
+  last_pose_.reset();
+  state_ = {};
+  twist_.reset();
+  twist_stamped_.reset();
+  odometry_.reset();
+  participant_.reset();
+  const double deadline_s = base::monotonic_now_s() + config_.connect_timeout_s;
+  const auto left_s = [&] { return std::max(0.0, deadline_s - base::monotonic_now_s()); };
+  const std::string wait = " within " + base::format_number(config_.connect_timeout_s) +
+                           " s: is the robot's base controller running, on this domain?";
   try {
     participant_ = std::make_unique<ros2_dds::Participant>(config_.domain_id);
     const ros2_dds::Qos qos;  // ROS 2's default: reliable, volatile, keep last 10
@@ -79,21 +102,21 @@ void Ros2Drive::configure() {
     }
     odometry_ = std::make_unique<ros2_dds::Subscription<ros2::Odometry>>(*participant_,
                                                                          config_.odom_topic, qos);
+    const bool subscribed = config_.stamped ? twist_stamped_->wait_for_subscriber(left_s())
+                                            : twist_->wait_for_subscriber(left_s());
+    if (!subscribed) {
+      throw DriveError("no subscriber on " + config_.cmd_vel_topic + wait);
+    }
+    while (!last_odometry_s_ && odometry_->wait(left_s())) {
+      take_odometry();
+    }
   } catch (const ros2_dds::DdsError& error) {
     throw DriveError(error.what());
   }
-  const bool subscribed = config_.stamped
-                              ? twist_stamped_->wait_for_subscriber(config_.connect_timeout_s)
-                              : twist_->wait_for_subscriber(config_.connect_timeout_s);
-  const std::string wait = " within " + base::format_number(config_.connect_timeout_s) +
-                           " s: is the robot's base controller running, on this domain?";
-  if (!subscribed) {
-    throw DriveError("no subscriber on " + config_.cmd_vel_topic + wait);
-  }
-  if (!odometry_->wait(config_.connect_timeout_s)) {
+  if (!last_odometry_s_) {
     throw DriveError("no odometry on " + config_.odom_topic + wait);
   }
-  take_odometry();
+  configured_ = true;
   publish({});
 }
 
@@ -126,7 +149,9 @@ void Ros2Drive::publish(const BodyVelocity& body) {
   twist.angular.z = base::yaw_rate_of(body.turn_rate);
   try {
     if (config_.stamped) {
-      twist_stamped_->publish({{realtime_now(), config_.frame_id}, twist});
+      stamped_command_->header.stamp = realtime_now();
+      stamped_command_->twist = twist;
+      twist_stamped_->publish(*stamped_command_);
     } else {
       twist_->publish(twist);
     }
@@ -144,7 +169,8 @@ void Ros2Drive::write(const WheelSpeeds& wheels) {
   if (!std::isfinite(wheels.left_radps) || !std::isfinite(wheels.right_radps)) {
     publish({});
     active_ = false;
-    throw DriveError("wheel speed not finite");
+    throw DriveError("wheel speeds not finite: left " + base::format_number(wheels.left_radps) +
+                     ", right " + base::format_number(wheels.right_radps) + " rad/s");
   }
   publish(stop ? BodyVelocity{} : from_wheels(wheels, config_.geometry));
 }

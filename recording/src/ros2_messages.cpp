@@ -264,12 +264,13 @@ void MessageType<CameraInfo>::encode(const CameraInfo& m, std::vector<std::uint8
   w.f64_array(m.k);
   w.f64_array(m.r);
   w.f64_array(m.p);
-  w.u32(0);  // binning_x, binning_y: none
-  w.u32(0);
-  for (int field = 0; field < 4; ++field) {  // roi: the whole image
-    w.u32(0);
-  }
-  w.u8(0);
+  w.u32(m.binning_x);
+  w.u32(m.binning_y);
+  w.u32(m.roi.x_offset);
+  w.u32(m.roi.y_offset);
+  w.u32(m.roi.height);
+  w.u32(m.roi.width);
+  w.u8(m.roi.do_rectify ? 1 : 0);
 }
 CameraInfo MessageType<CameraInfo>::decode(std::span<const std::uint8_t> data) {
   CdrReader r(data);
@@ -282,7 +283,14 @@ CameraInfo MessageType<CameraInfo>::decode(std::span<const std::uint8_t> data) {
   r.f64_array(m.k, "k");
   r.f64_array(m.r, "r");
   r.f64_array(m.p, "p");
-  return m;  // binning and roi: not used
+  m.binning_x = r.u32("binning_x");
+  m.binning_y = r.u32("binning_y");
+  m.roi.x_offset = r.u32("roi.x_offset");
+  m.roi.y_offset = r.u32("roi.y_offset");
+  m.roi.height = r.u32("roi.height");
+  m.roi.width = r.u32("roi.width");
+  m.roi.do_rectify = r.u8("roi.do_rectify") != 0;
+  return m;
 }
 
 }  // namespace flowsteer::recording::ros2

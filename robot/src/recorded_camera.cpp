@@ -125,31 +125,11 @@ std::optional<base::CameraMount> mount_of(
 }
 
 camera_io::CameraModel camera_model(const ros2::CameraInfo& info, const std::string& where) {
-  camera_io::CameraModel model;
-  model.width_px = static_cast<int>(info.width);
-  model.height_px = static_cast<int>(info.height);
-  model.fx = info.k[0];
-  model.cx = info.k[2];
-  model.fy = info.k[4];
-  model.cy = info.k[5];
-  const bool no_distortion =
-      std::all_of(info.d.begin(), info.d.end(), [](double d) { return d == 0.0; });
-  const auto distortion = camera_io::distortion_model_from_name(info.distortion_model);
-  if (!no_distortion && !distortion) {
-    throw RecordingError(where + ": distortion model '" + info.distortion_model +
-                         "' (known: plumb_bob, rational_polynomial, equidistant)");
-  }
-  if (!no_distortion) {
-    model.distortion = *distortion;
-    model.coefficients = info.d;
-    model.coefficients.resize(camera_io::distortion_coefficient_count(*distortion), 0.0);
-  }
   try {
-    model.validate();
+    return camera_io::camera_model_of(info);
   } catch (const std::invalid_argument& e) {
     throw RecordingError(where + ": " + e.what());
   }
-  return model;
 }
 
 // The size a PNG's or a JPEG's header states, read before decoding: hostile bytes must not make

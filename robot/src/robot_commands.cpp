@@ -144,7 +144,7 @@ RobotLoopResult run_robot_command(const RunCommand& command,
   options.camera_name = config::describe_camera(launch.camera);
   const base::CameraIntrinsics& k = camera->intrinsics();
   events << "flowsteer run: " << options.camera_name << " (" << k.width_px << "x" << k.height_px
-         << "), "
+         << ", fx " << k.fx_px << " px), "
          << (robot_base ? "drive " + std::string(robot_base->drive().name())
                         : std::string("no drive: commands are logged, not sent"))
          << ", flow " << servo::to_string(launch.perception.flow) << ", segmentation "

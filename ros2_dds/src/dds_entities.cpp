@@ -104,8 +104,8 @@ std::optional<std::string> topic_name_problem(std::string_view name) {
 
 namespace {
 
-// ROS_LOCALHOST_ONLY=1 as ROS 2's middlewares take it: DDS on 127.0.0.1 only. The loopback
-// interface may carry no multicast, so discovery goes by unicast to 127.0.0.1's participants.
+// Localhost only as ROS 2's middlewares take it: DDS on 127.0.0.1 only. The loopback interface
+// may carry no multicast, so discovery goes by unicast to 127.0.0.1's participants.
 constexpr const char* kLocalhostOnlyConfig =
     "<CycloneDDS><Domain><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
     "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
@@ -113,10 +113,14 @@ constexpr const char* kLocalhostOnlyConfig =
     "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
     "</Domain></CycloneDDS>";
 
+// ROS_LOCALHOST_ONLY=1 (Humble, Iron) or ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (Jazzy on).
 bool localhost_only() {
-  const char* value = std::getenv("ROS_LOCALHOST_ONLY");
+  const auto is = [](const char* variable, std::string_view value) {
+    const char* set = std::getenv(variable);
+    return set != nullptr && std::string_view(set) == value;
+  };
   // A configuration of the user's own (CYCLONEDDS_URI) is theirs to keep.
-  return value != nullptr && std::string_view(value) == "1" &&
+  return (is("ROS_LOCALHOST_ONLY", "1") || is("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")) &&
          std::getenv("CYCLONEDDS_URI") == nullptr;
 }
 
@@ -133,12 +137,13 @@ void join_localhost_domain(int domain_id) {
   const std::lock_guard lock(g_domains_mutex);
   LocalhostDomain& domain = g_domains[domain_id];
   if (domain.participants == 0) {
-    domain.handle = dds_create_domain(static_cast<dds_domainid_t>(domain_id), kLocalhostOnlyConfig);
-    if (domain.handle < 0) {
+    const dds_entity_t handle =
+        dds_create_domain(static_cast<dds_domainid_t>(domain_id), kLocalhostOnlyConfig);
+    if (handle < 0) {
       g_domains.erase(domain_id);
-      detail::check(domain.handle, "domain ",
-                    std::to_string(domain_id) + " on 127.0.0.1 only (ROS_LOCALHOST_ONLY=1)");
+      detail::check(handle, "domain ", std::to_string(domain_id) + " on 127.0.0.1 only");
     }
+    domain.handle = handle;
   }
   ++domain.participants;
 }

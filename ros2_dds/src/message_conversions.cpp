@@ -148,8 +148,10 @@ void Wire<ros2::CameraInfo>::to_wire(const ros2::CameraInfo& message, C& wire) {
   std::copy(message.k.begin(), message.k.end(), wire.k);
   std::copy(message.r.begin(), message.r.end(), wire.r);
   std::copy(message.p.begin(), message.p.end(), wire.p);
-  wire.binning_x = wire.binning_y = 0;
-  wire.roi = {};
+  wire.binning_x = message.binning_x;
+  wire.binning_y = message.binning_y;
+  const ros2::RegionOfInterest& roi = message.roi;
+  wire.roi = {roi.x_offset, roi.y_offset, roi.height, roi.width, roi.do_rectify};
 }
 void Wire<ros2::CameraInfo>::from_wire(const C& wire, ros2::CameraInfo& message) {
   header_from_wire(wire.header, message.header);
@@ -160,6 +162,10 @@ void Wire<ros2::CameraInfo>::from_wire(const C& wire, ros2::CameraInfo& message)
   std::copy(std::begin(wire.k), std::end(wire.k), message.k.begin());
   std::copy(std::begin(wire.r), std::end(wire.r), message.r.begin());
   std::copy(std::begin(wire.p), std::end(wire.p), message.p.begin());
+  message.binning_x = wire.binning_x;
+  message.binning_y = wire.binning_y;
+  const auto& roi = wire.roi;
+  message.roi = {roi.x_offset, roi.y_offset, roi.height, roi.width, roi.do_rectify};
 }
 
 }  // namespace flowsteer::ros2_dds::detail

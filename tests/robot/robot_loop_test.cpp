@@ -60,6 +60,14 @@ TEST(RobotLaunch, BadFilesNameTheLineAndField) {
             "height_px, frame_rate_hz, pixel_format, buffer_count)");
   EXPECT_EQ(error_of("camera:\n  timeout_s: 1\n"),
             "bad.yaml:2:3: camera.type: missing: v4l2, libcamera, replay or ros2");
+  EXPECT_EQ(error_of("camera:\n  type: ros2\n  horizontal_fov_rad: 1\n  ros2:\n"
+                     "    camera_info: {topic: /cam/info}\n"),
+            "bad.yaml:5:18: camera.ros2.camera_info: give camera.horizontal_fov_rad or a "
+            "camera_info topic, not both");
+  EXPECT_EQ(error_of("camera:\n  type: ros2\n  ros2:\n    image: {type: "
+                     "sensor_msgs/CompressedImage, encoding: rgb8}\n"),
+            "bad.yaml:4:58: camera.ros2.image.encoding: only a sensor_msgs/msg/Image has an "
+            "encoding");
   EXPECT_EQ(error_of("camera:\n  type: replay\n  v4l2: {device: /dev/video1}\n"),
             "bad.yaml:3:9: camera.v4l2: settings for another camera than type 'replay'");
   EXPECT_EQ(error_of("camera:\n  type: v4l2\n  v4l2: {pixel_format: RGB3}\n"),

@@ -34,6 +34,8 @@ using flowsteer::vm_test::start_logged;
 constexpr double kStopWithin_s = 0.5;
 constexpr double kCameraTimeout_s = 0.5;
 constexpr double kOdomTimeout_s = 0.4;
+// The peers' lens without their CameraInfo: 160 px wide at a focal length of 100 px.
+const std::string kPeerLens = "  horizontal_fov_rad: 1.349482\n";
 
 struct Command {
   double t_s;
@@ -112,7 +114,9 @@ class Ros2Robot : public ::testing::TestWithParam<Peer> {
 
   std::string path(const std::string& file) const { return (dir_ / file).string(); }
 
-  std::string write_launch(const std::string& camera_extra, const std::string& cmd_vel) const {
+  // camera_ros2: more of camera.ros2; lens: more of camera.
+  std::string write_launch(const std::string& camera_ros2, const std::string& lens,
+                           const std::string& cmd_vel) const {
     const std::string d = std::to_string(domain_);
     std::ofstream(path("robot.yaml"))
         << "camera:\n"
@@ -120,13 +124,12 @@ class Ros2Robot : public ::testing::TestWithParam<Peer> {
            "  timeout_s: "
         << kCameraTimeout_s
         << "\n"
-           "  horizontal_fov_rad: 1.5708\n"
            "  ros2:\n"
            "    domain_id: "
         << d
         << "\n"
            "    image: {topic: /camera/image_raw, type: sensor_msgs/msg/Image}\n"
-        << camera_extra
+        << camera_ros2 << lens
         << "drive:\n"
            "  type: ros2\n"
            "  loop_rate_hz: 50\n"
@@ -237,20 +240,20 @@ class Ros2Robot : public ::testing::TestWithParam<Peer> {
 
 TEST_P(Ros2Robot, SigintStopsTheBaseWithTwistStampedAndCameraInfo) {
   expect_signal_stops(SIGINT,
-                      write_launch("    camera_info: {topic: /camera/camera_info}\n",
+                      write_launch("    camera_info: {topic: /camera/camera_info}\n", "",
                                    "{topic: /cmd_vel, type: geometry_msgs/msg/TwistStamped, "
                                    "frame_id: base_link}"),
                       {"--stamped", "--camera-info"});
   const std::string log = read_file(path("flowsteer.log"));
-  EXPECT_NE(log.find("(160x120)"), std::string::npos) << "CameraInfo's size\n" << log;
+  EXPECT_NE(log.find("(160x120, fx 100 px)"), std::string::npos) << "CameraInfo's lens\n" << log;
 }
 
 TEST_P(Ros2Robot, SigtermStopsTheBaseWithTwist) {
-  expect_signal_stops(SIGTERM, write_launch("", "{topic: /cmd_vel}"), {});
+  expect_signal_stops(SIGTERM, write_launch("", kPeerLens, "{topic: /cmd_vel}"), {});
 }
 
 TEST_P(Ros2Robot, ACameraGoneSilentStopsTheBase) {
-  const std::string launch = write_launch("", "{topic: /cmd_vel}");
+  const std::string launch = write_launch("", kPeerLens, "{topic: /cmd_vel}");
   const pid_t peer = start_peer({"--silence", "camera", "--silence-after", "2"});
   const pid_t run = start_flowsteer(launch);
   const int status = wait_exit(run, 40.0);
@@ -265,7 +268,7 @@ TEST_P(Ros2Robot, ACameraGoneSilentStopsTheBase) {
 }
 
 TEST_P(Ros2Robot, OdometryGoneSilentStopsTheBaseAndFailsTheRun) {
-  const std::string launch = write_launch("", "{topic: /cmd_vel}");
+  const std::string launch = write_launch("", kPeerLens, "{topic: /cmd_vel}");
   const pid_t peer = start_peer({"--silence", "odom", "--silence-after", "2"});
   const pid_t run = start_flowsteer(launch);
   const int status = wait_exit(run, 40.0);
@@ -284,7 +287,7 @@ TEST_P(Ros2Robot, OdometryGoneSilentStopsTheBaseAndFailsTheRun) {
 
 // A camera driver publishing Bayer images: the run ends before the base was ever commanded.
 TEST_P(Ros2Robot, AnUnreadableEncodingEndsTheRunBeforeAnyCommand) {
-  const std::string launch = write_launch("", "{topic: /cmd_vel}");
+  const std::string launch = write_launch("", kPeerLens, "{topic: /cmd_vel}");
   const pid_t peer = start_peer({"--encoding", "bayer_rggb8"});
   const pid_t run = start_flowsteer(launch);
   const int status = wait_exit(run, 30.0);

@@ -90,7 +90,8 @@ inline Options parse(int argc, char** argv) {
   return o;
 }
 
-// The robot: a base that obeys each command at once, a camera 160x120 of 90° looking at a wall
+// The robot: a base that obeys each command at once, a camera 160x120 (focal length kFocal_px,
+// 77° wide) looking at a wall
 // of grey blocks 10 cm wide 4 m ahead, which looms as the base drives towards it, with a
 // camera's noise (±3 grey levels, new each frame: no two images are the same). Every command is
 // recorded with the realtime clock, one line each, flushed:
@@ -100,6 +101,7 @@ class Robot {
  public:
   static constexpr int kWidth = 160;
   static constexpr int kHeight = 120;
+  static constexpr double kFocal_px = 100.0;  // what its CameraInfo says
 
   explicit Robot(const Options& options)
       : options_(options),
@@ -171,7 +173,7 @@ class Robot {
 
  private:
   void render(double distance_m) {
-    const double f_px = 0.5 * kWidth;  // 90° horizontal field of view
+    const double f_px = kFocal_px;
     for (int v = 0; v < kHeight; ++v) {
       for (int u = 0; u < kWidth; ++u) {
         const double x_m = (u + 0.5 - 0.5 * kWidth) / f_px * distance_m;

@@ -137,7 +137,7 @@ int main(int argc, char** argv) {
         double d[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
         info.d._buffer = d;
         info.d._length = info.d._maximum = 5;
-        const double f = 0.5 * image.width, cx = 0.5 * image.width, cy = 0.5 * image.height;
+        const double f = peer::Robot::kFocal_px, cx = 0.5 * image.width, cy = 0.5 * image.height;
         const double k[9] = {f, 0, cx, 0, f, cy, 0, 0, 1};
         std::memcpy(info.k, k, sizeof k);
         check(dds_write(infos, &info), "write camera_info");

@@ -269,7 +269,7 @@ int main(int argc, char** argv) {
         camera_info.width = image.width;
         camera_info.distortion_model = "plumb_bob";
         camera_info.d = {0.0, 0.0, 0.0, 0.0, 0.0};
-        const double f = 0.5 * image.width;
+        const double f = peer::Robot::kFocal_px;
         camera_info.k = {f, 0, 0.5 * image.width, 0, f, 0.5 * image.height, 0, 0, 1};
         infos->write(&camera_info);
       }

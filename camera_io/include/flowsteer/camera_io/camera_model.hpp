@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "flowsteer/base/camera.hpp"
+#include "flowsteer/recording/ros2_messages.hpp"
 
 namespace flowsteer::camera_io {
 
@@ -43,6 +44,13 @@ struct CameraModel {
   // Throws std::invalid_argument naming the first field that is wrong.
   void validate() const;
 };
+
+// The model a ROS 2 CameraInfo describes (a recording's, a camera driver's): its size, K, and,
+// unless D is all zero, its distortion model with D padded or cut to the model's count. Throws
+// std::invalid_argument naming binning or a region of interest (K would not be the image's), a
+// distortion model flowsteer does not undistort, or the first field that is wrong
+// (CameraModel::validate).
+CameraModel camera_model_of(const recording::ros2::CameraInfo& info);
 
 // Turns a camera's distorted images into undistorted pinhole images with the same size and
 // camera matrix (CameraModel::pinhole()); wide fisheye views lose what falls outside that frame.

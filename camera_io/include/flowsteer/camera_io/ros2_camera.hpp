@@ -25,9 +25,8 @@ enum class Ros2ImageType {
   compressed_image,  // sensor_msgs/msg/CompressedImage (JPEG, PNG: whatever OpenCV decodes)
 };
 
-// "sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage"; the inverse accepts the name with
-// or without "/msg".
-std::string_view ros2_image_type_name(Ros2ImageType type);
+// "sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage", and back.
+std::string ros2_image_type_name(Ros2ImageType type);
 std::optional<Ros2ImageType> ros2_image_type_from_name(std::string_view name);
 
 // The Image encodings a Ros2Camera reads ("rgb8, bgr8, ..."), and whether one is among them.
@@ -53,9 +52,9 @@ struct Ros2CameraOptions {
 // A ROS 2 camera driver's images, subscribed over DDS as a ROS 2 node would (best effort, keep
 // last 2: it matches reliable and best-effort publishers, and a slow loop gets the newest
 // image). Each read() delivers the newest image that arrived, converted to BGR and undistorted;
-// older ones not read are counted as dropped. Frame times are the header's stamps moved onto
-// the monotonic clock by their age (the reception time when a stamp is missing, in the future
-// or over a second old). Not thread-safe.
+// older ones are skipped. Frame times are the header's stamps moved onto the monotonic clock by
+// their age (the time the image was taken from DDS when a stamp is unset, in the future or over
+// a second old). Not thread-safe.
 class Ros2Camera final : public FrameSource {
  public:
   // Waits for the first image (and CameraInfo) for connect_timeout_s. Throws std::runtime_error
@@ -70,8 +69,6 @@ class Ros2Camera final : public FrameSource {
   // Throws std::runtime_error naming the topic for an image that cannot be decoded, is in
   // another encoding than asked, or changed size.
   ReadStatus read(Frame& frame, double timeout_s) override;
-
-  std::uint64_t dropped_frames() const { return dropped_frames_; }
 
  private:
   bool take_newest();
@@ -89,9 +86,9 @@ class Ros2Camera final : public FrameSource {
   cv::Mat bgr_;
   std::optional<Lens> lens_;
   bool first_pending_ = true;  // the image the constructor waited for is not delivered yet
+  double received_s_ = 0.0;    // when the image taken last was taken from DDS
   double last_timestamp_s_ = 0.0;
   std::uint64_t sequence_ = 0;
-  std::uint64_t dropped_frames_ = 0;
 };
 
 }  // namespace flowsteer::camera_io

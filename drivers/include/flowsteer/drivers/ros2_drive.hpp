@@ -50,8 +50,8 @@ class Ros2Drive final : public Drive {
   ~Ros2Drive() override;
 
   std::string_view name() const override { return name_; }
-  // Joins the domain and waits up to connect_timeout_s for a subscriber on cmd_vel and a first
-  // odometry message; DriveError naming what is missing otherwise.
+  // Joins the domain and waits up to connect_timeout_s, in all, for a subscriber on cmd_vel and
+  // a first odometry message; DriveError naming what is missing otherwise.
   void configure() override;
   void activate() override;
   // Publishes zero and waits (up to timeout_s) until the controller acknowledged it.
@@ -68,7 +68,9 @@ class Ros2Drive final : public Drive {
 
   Ros2DriveConfig config_;
   std::string name_;
+  bool configured_ = false;
   bool active_ = false;
+  std::unique_ptr<ros2_dds::TwistStamped> stamped_command_;  // reused: its frame_id is set once
   std::unique_ptr<ros2_dds::Participant> participant_;
   std::unique_ptr<ros2_dds::Publisher<recording::ros2::Twist>> twist_;
   std::unique_ptr<ros2_dds::Publisher<ros2_dds::TwistStamped>> twist_stamped_;

@@ -81,6 +81,14 @@ struct Image {
   std::vector<std::uint8_t> data;
 };
 
+struct RegionOfInterest {
+  std::uint32_t x_offset = 0;
+  std::uint32_t y_offset = 0;
+  std::uint32_t height = 0;  // 0 with width 0: the whole image
+  std::uint32_t width = 0;
+  bool do_rectify = false;
+};
+
 struct CameraInfo {
   Header header;
   std::uint32_t height = 0;
@@ -90,6 +98,9 @@ struct CameraInfo {
   std::array<double, 9> k{};
   std::array<double, 9> r{};
   std::array<double, 12> p{};
+  std::uint32_t binning_x = 0;  // 0 or 1: none
+  std::uint32_t binning_y = 0;
+  RegionOfInterest roi;
 };
 
 // The ros2msg schema text MCAP stores for "package/Type": the type's fields, then each type it

@@ -43,8 +43,8 @@ struct Qos {
 
 // One DDS domain participant: what a ROS 2 node is on the wire. Not copyable; the publishers
 // and subscriptions made from it must not outlive it. Cyclone's configuration is CYCLONEDDS_URI's
-// as usual; without one, ROS_LOCALHOST_ONLY=1 keeps the participant on 127.0.0.1 as ROS 2's nodes
-// keep theirs (discovery by unicast to 127.0.0.1).
+// as usual; without one, ROS_LOCALHOST_ONLY=1 (or ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST) keeps
+// the participant on 127.0.0.1 as ROS 2's nodes keep theirs (discovery by unicast to 127.0.0.1).
 class Participant {
  public:
   // Throws DdsError naming the domain when Cyclone DDS cannot join it, or an id out of range.
