@@ -81,6 +81,13 @@ Ros2Camera::Ros2Camera(const Ros2CameraOptions& options)
     throw std::runtime_error(name_ + ": encoding '" + encoding_ + "' cannot be read (" +
                              ros2_image_encoding_names() + ")");
   }
+  // Both subscriptions from the start, so that a CameraInfo published while the first image is
+  // awaited is not missed; one deadline for both.
+  const double deadline_s = base::monotonic_now_s() + options.connect_timeout_s;
+  const auto left_s = [&] { return std::max(0.0, deadline_s - base::monotonic_now_s()); };
+  const std::string within = " within " + base::format_number(options.connect_timeout_s) + " s";
+  std::unique_ptr<ros2_dds::Subscription<ros2::CameraInfo>> infos;
+  bool arrived = false;
   try {
     participant_ = std::make_unique<ros2_dds::Participant>(options.domain_id);
     const ros2_dds::Qos qos{ros2_dds::Reliability::best_effort, 2};
@@ -91,41 +98,41 @@ Ros2Camera::Ros2Camera(const Ros2CameraOptions& options)
       compressed_ = std::make_unique<ros2_dds::Subscription<ros2::CompressedImage>>(
           *participant_, options.image_topic, qos);
     }
+    if (!options.camera_info_topic.empty()) {
+      infos = std::make_unique<ros2_dds::Subscription<ros2::CameraInfo>>(
+          *participant_, options.camera_info_topic, qos);
+    }
+    while (!arrived && (images_ ? images_->wait(left_s()) : compressed_->wait(left_s()))) {
+      arrived = take_newest();
+    }
   } catch (const ros2_dds::DdsError& error) {
     throw std::runtime_error(name_ + ": " + error.what());
   }
-  const bool arrived = images_ ? images_->wait(options.connect_timeout_s)
-                               : compressed_->wait(options.connect_timeout_s);
-  if (!arrived || !take_newest()) {
-    throw std::runtime_error(name_ + ": no " + ros2_image_type_name(options.image_type) +
-                             " within " + base::format_number(options.connect_timeout_s) +
-                             " s: is the camera driver running, on this domain?");
+  if (!arrived) {
+    throw std::runtime_error(name_ + ": no " + ros2_image_type_name(options.image_type) + within +
+                             ": is the camera driver running, on this domain?");
   }
   decode();
-  if (options.camera_info_topic.empty()) {
-    lens_.emplace(options.lens, bgr_.cols, bgr_.rows, name_);
+  if (infos) {
+    use_camera_info(*infos, left_s(), name_ + ", camera_info " + options.camera_info_topic, within);
   } else {
-    wait_for_camera_info(options);
+    lens_.emplace(options.lens, bgr_.cols, bgr_.rows, name_);
   }
 }
 
 Ros2Camera::~Ros2Camera() = default;
 
-void Ros2Camera::wait_for_camera_info(const Ros2CameraOptions& options) {
+void Ros2Camera::use_camera_info(ros2_dds::Subscription<ros2::CameraInfo>& infos, double timeout_s,
+                                 const std::string& source, const std::string& within) {
   ros2::CameraInfo info;
   bool received = false;
   try {
-    ros2_dds::Subscription<ros2::CameraInfo> infos(
-        *participant_, options.camera_info_topic,
-        ros2_dds::Qos{ros2_dds::Reliability::best_effort, 1});
-    received = infos.wait(options.connect_timeout_s) && infos.take(info);
+    received = infos.wait(timeout_s) && infos.take(info);
   } catch (const ros2_dds::DdsError& error) {
-    throw std::runtime_error(name_ + ": " + error.what());
+    throw std::runtime_error(source + ": " + error.what());
   }
-  const std::string source = name_ + ", camera_info " + options.camera_info_topic;
   if (!received) {
-    throw std::runtime_error(source + ": no CameraInfo within " +
-                             base::format_number(options.connect_timeout_s) + " s");
+    throw std::runtime_error(source + ": no CameraInfo" + within);
   }
   LensOptions lens;
   try {

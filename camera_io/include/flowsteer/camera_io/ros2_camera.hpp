@@ -57,9 +57,9 @@ struct Ros2CameraOptions {
 // a second old). Not thread-safe.
 class Ros2Camera final : public FrameSource {
  public:
-  // Waits for the first image (and CameraInfo) for connect_timeout_s. Throws std::runtime_error
-  // naming the topic and domain when none comes, the encoding cannot be read, or CameraInfo's
-  // size or model does not fit the images.
+  // Waits connect_timeout_s, in all, for the first image (and CameraInfo). Throws
+  // std::runtime_error naming the topic and domain when none comes, the encoding cannot be read, or
+  // CameraInfo's size or model does not fit the images.
   explicit Ros2Camera(const Ros2CameraOptions& options);
   ~Ros2Camera() override;
   Ros2Camera(const Ros2Camera&) = delete;
@@ -73,7 +73,9 @@ class Ros2Camera final : public FrameSource {
  private:
   bool take_newest();
   void decode();
-  void wait_for_camera_info(const Ros2CameraOptions& options);
+  // The lens from the first CameraInfo within timeout_s; `source` and `within` for errors.
+  void use_camera_info(ros2_dds::Subscription<recording::ros2::CameraInfo>& infos, double timeout_s,
+                       const std::string& source, const std::string& within);
 
   std::string name_;
   std::string encoding_;
