@@ -168,9 +168,16 @@ void check_bounds(const config::RobotLaunch& launch) {
   expect(kCameraTimeout_s, launch.camera.timeout_s, "camera.timeout_s");
   std::visit(
       [](const auto& o) {
+        using O = std::decay_t<decltype(o)>;
         expect(kHfov_rad, o.lens.horizontal_fov_rad, "camera.horizontal_fov_rad");
-        expect(kFrameRate_hz, o.frame_rate_hz, "camera.frame_rate_hz");
-        if constexpr (!std::is_same_v<std::decay_t<decltype(o)>, camera_io::ReplayOptions>) {
+        if constexpr (std::is_same_v<O, camera_io::Ros2CameraOptions>) {
+          expect(kDomainId, o.domain_id, "camera.ros2.domain_id");
+          expect(kConnectTimeout_s, o.connect_timeout_s, "camera.ros2.connect_timeout_s");
+        } else {
+          expect(kFrameRate_hz, o.frame_rate_hz, "camera.frame_rate_hz");
+        }
+        if constexpr (!std::is_same_v<O, camera_io::ReplayOptions> &&
+                      !std::is_same_v<O, camera_io::Ros2CameraOptions>) {
           expect(kImageSide_px, o.width_px, "camera.width_px");
           expect(kImageSide_px, o.height_px, "camera.height_px");
           expect(kBufferCount, o.buffer_count, "camera.buffer_count");
@@ -190,6 +197,11 @@ void check_bounds(const config::RobotLaunch& launch) {
     expect(kWheelSpeed_radps, l.max_wheel_speed_radps, "limits.max_wheel_speed_radps");
     expect(kWatchdogTimeout_s, d.stage.watchdog.timeout_s, "watchdog.timeout_s");
     expect(kWatchdogRamp_s, d.stage.watchdog.ramp_s, "watchdog.ramp_s");
+    if (const auto* ros2 = std::get_if<drivers::Ros2DriveConfig>(&d.drive)) {
+      expect(kDomainId, ros2->domain_id, "drive.ros2.domain_id");
+      expect(kDeviceTimeout_s, ros2->timeout_s, "drive.ros2.timeout_s");
+      expect(kConnectTimeout_s, ros2->connect_timeout_s, "drive.ros2.connect_timeout_s");
+    }
   }
   if (launch.goal) {
     expect(kBearing_rad, launch.goal->bearing_rad, "goal.bearing_rad");
