@@ -10,6 +10,7 @@
 #include <signal.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -108,8 +109,17 @@ class Ros2Robot : public ::testing::TestWithParam<Peer> {
     dir_ = fs::path(FLOWSTEER_TEST_OUT) / GetParam().name / name.substr(0, name.find('/'));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    // A domain per case: a case's leftovers never reach the next.
-    domain_ = 150 + next_domain_++;
+    // A domain of its own for each case and peer: cases that run at once (ctest -j, each case a
+    // process) or one after the other never hear each other.
+    const std::string cases[] = {"SigintStopsTheBaseWithTwistStampedAndCameraInfo",
+                                 "SigtermStopsTheBaseWithTwist", "ACameraGoneSilentStopsTheBase",
+                                 "OdometryGoneSilentStopsTheBaseAndFailsTheRun",
+                                 "AnUnreadableEncodingEndsTheRunBeforeAnyCommand"};
+    const auto found =
+        std::find(std::begin(cases), std::end(cases), name.substr(0, name.find('/')));
+    ASSERT_NE(found, std::end(cases)) << "give " << name << " a domain";
+    domain_ = 150 + static_cast<int>(found - std::begin(cases)) +
+              (std::string(GetParam().name) == "fastdds" ? 10 : 0);
   }
 
   std::string path(const std::string& file) const { return (dir_ / file).string(); }
@@ -235,7 +245,6 @@ class Ros2Robot : public ::testing::TestWithParam<Peer> {
 
   fs::path dir_;
   int domain_ = 0;
-  static inline int next_domain_ = 0;
 };
 
 TEST_P(Ros2Robot, SigintStopsTheBaseWithTwistStampedAndCameraInfo) {
