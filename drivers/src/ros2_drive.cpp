@@ -18,10 +18,6 @@ namespace ros2 = recording::ros2;
 
 namespace {
 
-double yaw_of(const ros2::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-}
-
 double wrapped(double angle_rad) {
   return std::remainder(angle_rad, 2.0 * std::numbers::pi);
 }
@@ -183,8 +179,8 @@ void Ros2Drive::take_odometry() {
     last_odometry_s_ = base::monotonic_now_s();
     const ros2::Pose& pose = message_.pose;
     if (last_pose_) {
-      const double heading = yaw_of(last_pose_->orientation);
-      const double turn = wrapped(yaw_of(pose.orientation) - heading);
+      const double heading = last_pose_->orientation.yaw_rad();
+      const double turn = wrapped(pose.orientation.yaw_rad() - heading);
       const double mid = heading + 0.5 * turn;
       const double chord_m = (pose.position.x - last_pose_->position.x) * std::cos(mid) +
                              (pose.position.y - last_pose_->position.y) * std::sin(mid);

@@ -157,6 +157,10 @@ Quaternion Quaternion::from_yaw(double yaw_rad) {
   return {0.0, 0.0, std::sin(0.5 * yaw_rad), std::cos(0.5 * yaw_rad)};
 }
 
+double Quaternion::yaw_rad() const {
+  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+}
+
 void MessageType<Twist>::encode(const Twist& m, std::vector<std::uint8_t>& out) {
   CdrWriter w(out);
   write_twist(w, m);

@@ -33,6 +33,8 @@ struct Vector3 {
 struct Quaternion {
   double x = 0.0, y = 0.0, z = 0.0, w = 1.0;
   static Quaternion from_yaw(double yaw_rad);
+  // The rotation's yaw about z (REP 103), whatever its roll and pitch.
+  double yaw_rad() const;
 };
 
 struct Twist {
