@@ -2,7 +2,7 @@
 # Usage: run_vm.sh KERNEL_CACHE WORK_DIR INIT TIMEOUT_S [--memory-mb N] [--cpus N]
 #                  [--modules "m1 m2"] [--binaries "b1 b2"] [--files "/abs/f1 src=/dest"]
 # A test VM: fetches the kernel (cached under KERNEL_CACHE, which every VM test shares), builds
-# WORK_DIR/initramfs.cpio.gz with INIT as /init and the modules and binaries (a name without a
+# WORK_DIR/initramfs.cpio with INIT as /init and the modules and binaries (a name without a
 # slash is looked up on PATH), boots it with N MB of memory (default 512) and N CPUs (default
 # 1) for at most TIMEOUT_S
 # and leaves the console in WORK_DIR/console.log. Exits 77 with the reason on stdout when qemu
@@ -30,5 +30,5 @@ fi
 
 kroot=$("$here/fetch_kernel.sh" "$kernel_cache")
 # The rest of the arguments (--modules, --binaries, --files) are make_initramfs.sh's.
-"$here/make_initramfs.sh" "$kroot" "$work/initramfs.cpio.gz" "$init" "$@"
-"$here/boot.sh" "$kroot" "$work/initramfs.cpio.gz" "$work/console.log" "$timeout_s" "$memory_mb" "$cpus"
+"$here/make_initramfs.sh" "$kroot" "$work/initramfs.cpio" "$init" "$@"
+"$here/boot.sh" "$kroot" "$work/initramfs.cpio" "$work/console.log" "$timeout_s" "$memory_mb" "$cpus"
