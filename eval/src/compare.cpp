@@ -12,6 +12,7 @@
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/sim/outputs.hpp"
+#include "report_pages.hpp"
 #include "run_choices.hpp"
 
 namespace flowsteer::eval {
@@ -205,6 +206,7 @@ CompareResult run_compare(const sim_camera::WorldSpec& world, const CompareOptio
     }
     sim::write_image(out->staging_path("topviews.png"), side_by_side(topviews));
     sim::write_image(out->staging_path("turn_rates.png"), side_by_side(histograms));
+    write_compare_page(result, rows, out->staging_dir());
     out->commit();
   }
   return result;

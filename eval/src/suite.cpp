@@ -10,7 +10,9 @@
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/base/output_files.hpp"
+#include "flowsteer/report/run_report.hpp"
 #include "process_pool.hpp"
+#include "report_pages.hpp"
 #include "run_choices.hpp"
 #include "suite_files.hpp"
 
@@ -397,6 +399,7 @@ SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& o
   result.wall_s = clock.elapsed_ms() / 1e3;
   file_runs(result.runs, options.keep_runs, out);
   write_suite_files(result, out);
+  write_suite_page(result, out.staging_dir());
   out.commit();
   return result;
 }
@@ -416,8 +419,24 @@ SuiteResult merge_suite_shards(const std::vector<std::filesystem::path>& shard_d
     }
   }
   write_suite_files(merged, out);
+  write_suite_page(merged, out.staging_dir());
   out.commit();
   return merged;
+}
+
+std::vector<std::string> write_suite_reports(const std::filesystem::path& dir) {
+  const SuiteResult result = read_suite_files(dir);
+  std::vector<std::string> problems;
+  for (const SuiteRun& run : result.runs) {
+    const std::filesystem::path run_dir = dir / "runs" / run.folder_name();
+    if (std::filesystem::is_directory(run_dir) && !run.failed()) {
+      for (const std::string& problem : report::write_run_report(run_dir)) {
+        problems.push_back(run.folder_name() + ": " + problem);
+      }
+    }
+  }
+  write_suite_page(result, dir);
+  return problems;
 }
 
 void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out) {

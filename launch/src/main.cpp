@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   commands.push_back(cli::add_run(app));
   commands.push_back(cli::add_replay(app));
   commands.push_back(cli::add_sil(app));
+  commands.push_back(cli::add_report(app));
 
   try {
     app.parse(argc, argv);

@@ -23,6 +23,7 @@
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/pipeline/overlay.hpp"
 #include "flowsteer/recording/foxglove_messages.hpp"
+#include "flowsteer/report/run_report.hpp"
 #include "flowsteer/sim/outputs.hpp"
 #include "flowsteer/sim/simulated_agent.hpp"
 
@@ -150,14 +151,39 @@ class CostLog {
   std::vector<Cell> cells_;
 };
 
-// t, agent, x, y, heading, v, a_c, omega: a row of trajectories.csv.
-using TrajectoryRow = std::array<double, 8>;
+// t, agent, x, y, heading, v, a_c, omega, clearance_m, min_ttc_s: a row of trajectories.csv.
+using TrajectoryRow = std::array<double, 10>;
 
 void write_trajectories(const std::filesystem::path& path, const std::vector<TrajectoryRow>& rows) {
   // Exact: a recording's poses and other tools compare to these bit for bit.
-  base::CsvTable csv({"t", "agent", "x", "y", "heading", "v", "a_c", "omega"}, base::Digits::exact);
+  base::CsvTable csv(
+      {"t", "agent", "x", "y", "heading", "v", "a_c", "omega", "clearance_m", "min_ttc_s"},
+      base::Digits::exact);
   for (const TrajectoryRow& row : rows) {
     csv.add({row.begin(), row.end()});
+  }
+  csv.write(path);
+}
+
+// The smallest time to contact among the objects an agent's brain saw approaching this step; NaN
+// when none approached.
+double min_ttc_s(const pipeline::Brain& brain) {
+  double least_s = std::numeric_limits<double>::quiet_NaN();
+  for (const servo::ObjectFeatures& object : brain.objects()) {
+    if (object.status == servo::MotionStatus::approaching && object.ttc_s > 0.0 &&
+        !(object.ttc_s >= least_s)) {
+      least_s = object.ttc_s;
+    }
+  }
+  return least_s;
+}
+
+// collisions.csv: each contact as it began (t, agent, with, x, y; "with" as World names it).
+void write_collisions(const std::filesystem::path& path,
+                      const std::vector<sim_camera::Collision>& collisions) {
+  base::CsvTable csv({"with", "t", "agent", "x", "y"});
+  for (const sim_camera::Collision& c : collisions) {
+    csv.add({c.with}, {c.time_s, static_cast<double>(c.agent), c.position_m.x(), c.position_m.y()});
   }
   csv.write(path);
 }
@@ -255,10 +281,15 @@ class SimulationRun {
       drive(options_.driven_agent);
     }
     for (std::size_t i = 0; i < loops_.size(); ++i) {
+      AgentLoop& loop = loops_[i];
       const sim_camera::AgentState& s = world_.agents()[i];
+      const double clearance_m = world_.clearance(i);
+      loop.result.min_clearance_m = std::min(loop.result.min_clearance_m, clearance_m);
+      const double ttc_s = loop.steered && loop.agent ? min_ttc_s(loop.agent->brain())
+                                                      : std::numeric_limits<double>::quiet_NaN();
       trajectories_.push_back({world_.time_s(), static_cast<double>(i), s.position_m.x(),
                                s.position_m.y(), s.yaw_rad, s.speed_mps, commands_[i].accel_mps2,
-                               commands_[i].turn_rate});
+                               commands_[i].turn_rate, clearance_m, ttc_s});
       paths_[i].push_back(s.position_m);
     }
     const double t_s = world_.time_s();
@@ -276,6 +307,8 @@ class SimulationRun {
     result.duration_s = world_.time_s();
     for (std::size_t i = 0; i < loops_.size(); ++i) {
       paths_[i].push_back(world_.agents()[i].position_m);  // where the last step left it
+      loops_[i].result.min_clearance_m =
+          std::min(loops_[i].result.min_clearance_m, world_.clearance(i));
       result.agents.push_back(agent_result(i));
     }
     result.collisions = collisions_;
@@ -304,6 +337,7 @@ class SimulationRun {
       return;
     }
     write_trajectories(out_->staging_path("trajectories.csv"), trajectories_);
+    write_collisions(out_->staging_path("collisions.csv"), result.collisions);
     costs_.table().write(out_->staging_path("costs.csv"));
     for (AgentLoop& loop : loops_) {
       if (loop.video) {
@@ -312,6 +346,7 @@ class SimulationRun {
     }
     write_image(out_->staging_path("topview.png"), result.topview);
     write_summary_json(out_->staging_path("summary.json"), result);
+    report::write_run_report(out_->staging_dir());
     out_->commit();
   }
 
@@ -513,7 +548,6 @@ class SimulationRun {
       const Eigen::Vector2d p = world_.agents()[i].position_m;
       loop.result.path_length_m += (p - loop.last_position).norm();
       loop.last_position = p;
-      loop.result.min_clearance_m = std::min(loop.result.min_clearance_m, world_.clearance(i));
     }
     for (const sim_camera::Collision& c : world_.new_collisions()) {
       ++loops_[c.agent].result.collisions;

@@ -11,6 +11,7 @@
 # evaluations measure its runs; the file readers, the robot's loop, the simulator in the loop
 # and the command sit above.
 set(allowed_base "")
+set(allowed_report base)
 set(allowed_recording base)
 set(allowed_servo base)
 set(allowed_ros2_dds base recording)
@@ -19,12 +20,12 @@ set(allowed_drivers base recording ros2_dds)
 set(allowed_calibration base camera_io)
 set(allowed_sim_camera base camera_io servo)
 set(allowed_pipeline base recording camera_io servo)
-set(allowed_sim base recording camera_io servo sim_camera pipeline)
-set(allowed_eval base recording camera_io servo sim_camera pipeline sim)
+set(allowed_sim base report recording camera_io servo sim_camera pipeline)
+set(allowed_eval base report recording camera_io servo sim_camera pipeline sim)
 set(allowed_config base ros2_dds camera_io servo sim_camera drivers calibration)
 set(allowed_robot base recording camera_io servo drivers calibration pipeline config)
-set(allowed_sil base recording camera_io servo sim_camera drivers calibration pipeline sim config)
-set(allowed_launch base recording camera_io servo sim_camera drivers calibration pipeline sim eval config
+set(allowed_sil base report recording camera_io servo sim_camera drivers calibration pipeline sim config)
+set(allowed_launch base report recording camera_io servo sim_camera drivers calibration pipeline sim eval config
     robot sil)
 
 cmake_policy(VERSION 3.25)

@@ -488,19 +488,37 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
   std::ostringstream log;
   const SimResult r = run_simulation(builtin_scenario("crossing"), options, log);
   EXPECT_EQ(r.steps, 10);
-  for (const char* file : {"trajectories.csv", "costs.csv", "topview.png", "summary.json",
-                           "agent_0.mp4", "agent_5.mp4"}) {
+  for (const char* file : {"trajectories.csv", "costs.csv", "collisions.csv", "topview.png",
+                           "summary.json", "report.html", "agent_0.mp4", "agent_5.mp4"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
   }
   std::ifstream trajectories(dir / "trajectories.csv");
   std::string header;
   std::getline(trajectories, header);
-  EXPECT_EQ(header, "t,agent,x,y,heading,v,a_c,omega");
+  EXPECT_EQ(header, "t,agent,x,y,heading,v,a_c,omega,clearance_m,min_ttc_s");
   int rows = 0;
+  double least_clearance_m = INFINITY;
   for (std::string line; std::getline(trajectories, line);) {
     ++rows;
+    double cells[10];
+    std::istringstream row(line);
+    for (double& cell : cells) {
+      std::string text;
+      std::getline(row, text, ',');
+      cell = text.empty() ? NAN : std::stod(text);
+    }
+    least_clearance_m = std::min(least_clearance_m, cells[8]);
+    // A time to contact, where there is one, is of something approaching: positive.
+    EXPECT_TRUE(std::isnan(cells[9]) || cells[9] > 0.0) << line;
   }
   EXPECT_EQ(rows, 10 * 6);
+  // Each step's clearance is the world's: their least, with the last state's, is the summary's.
+  double summary_least_m = INFINITY;
+  for (const AgentResult& a : r.agents) {
+    summary_least_m = std::min(summary_least_m, a.min_clearance_m);
+  }
+  EXPECT_GE(least_clearance_m, summary_least_m);
+  EXPECT_LT(least_clearance_m - summary_least_m, 0.05);
   std::ifstream costs(dir / "costs.csv");
   std::getline(costs, header);
   EXPECT_EQ(header, "t,agent,heading,approach_speed,clearance,braking,anticipation,total");
@@ -519,7 +537,7 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) {
     ++entries;
   }
-  EXPECT_EQ(entries, 10);
+  EXPECT_EQ(entries, 12);
   std::filesystem::remove_all(dir);
 }
 

@@ -42,6 +42,8 @@ Subcommand add_sim(CLI::App& app);
 Subcommand add_compare(CLI::App& app);
 Subcommand add_scenarios(CLI::App& app);
 Subcommand add_bounds(CLI::App& app);
+// `report FOLDER`: a run's or a suite's report.html written again from its files.
+Subcommand add_report(CLI::App& app);
 // `eval flow`, `eval robustness`, `eval suite` and `eval merge`.
 std::vector<Subcommand> add_eval(CLI::App& app);
 Subcommand add_eval_suite(CLI::App& eval);

@@ -22,6 +22,8 @@ class OutputDir {
   OutputDir& operator=(const OutputDir&) = delete;
 
   std::filesystem::path staging_path(const std::string& file_name) const;
+  // The staging folder itself, for what reads the files staged there before the commit.
+  const std::filesystem::path& staging_dir() const { return staging_; }
   // Moves every file and folder of the staging folder into place; a folder replaces the one of
   // the same name.
   void commit();

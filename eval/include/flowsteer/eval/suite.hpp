@@ -120,6 +120,11 @@ SuiteResult run_suite(const std::vector<SuiteCase>& cases, const SuiteOptions& o
 SuiteResult merge_suite_shards(const std::vector<std::filesystem::path>& shard_dirs,
                                const std::filesystem::path& out_dir);
 
+// The report pages of a suite's folder written again (`flowsteer report`): each kept run's
+// report.html from its files, then the suite's. Returns what could not be read, each named by
+// its run; throws base::ConfigError naming the folder when it is not a suite's output.
+std::vector<std::string> write_suite_reports(const std::filesystem::path& dir);
+
 // One line per run, then per configuration the clean cases and the total score.
 void print_suite_table(const std::vector<SuiteRun>& runs, std::ostream& out);
 

@@ -1,0 +1,278 @@
+#include "svg.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace flowsteer::report {
+
+namespace {
+
+constexpr double kWidth = 760.0;
+constexpr double kHeight = 270.0;
+constexpr double kLeft = 64.0;  // room for the y ticks' labels
+constexpr double kRight = 14.0;
+constexpr double kTop = 50.0;  // the title, and the legend under it
+constexpr double kBottom = 40.0;
+// A line of more points than this is drawn as the least and greatest value of each of
+// kMaxPoints / 2 spans of its samples: the plot stays small and keeps every spike.
+constexpr std::size_t kMaxPoints = 1200;
+constexpr std::size_t kMaxLegend = 10;  // more series are named by the top view's legend
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", value);
+  return text;
+}
+
+std::string tick_label(double value, double step) {
+  char text[32];
+  const int decimals = step >= 1.0 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
+  std::snprintf(text, sizeof text, "%.*f", decimals, std::abs(value) < 1e-12 ? 0.0 : value);
+  return text;
+}
+
+// A step of 1, 2 or 5 times a power of ten giving about five ticks over the range.
+double tick_step(double range) {
+  const double raw = range / 5.0;
+  const double power = std::pow(10.0, std::floor(std::log10(raw)));
+  for (const double m : {1.0, 2.0, 5.0}) {
+    if (m * power >= raw) {
+      return m * power;
+    }
+  }
+  return 10.0 * power;
+}
+
+struct Range {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void extend(double v) {
+    if (std::isfinite(v)) {
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  bool empty() const { return lo > hi; }
+};
+
+double clipped(double value, const Plot& plot) {
+  return plot.y_max && value > *plot.y_max ? *plot.y_max : value;
+}
+
+// The samples a series is drawn with: all of them, or each span's least and greatest in time
+// order.
+std::vector<std::size_t> drawn_samples(const Series& s) {
+  const std::size_t n = std::min(s.t_s.size(), s.values.size());
+  std::vector<std::size_t> kept;
+  if (n <= kMaxPoints) {
+    for (std::size_t k = 0; k < n; ++k) {
+      kept.push_back(k);
+    }
+    return kept;
+  }
+  const std::size_t spans = kMaxPoints / 2;
+  for (std::size_t span = 0; span < spans; ++span) {
+    const std::size_t from = span * n / spans;
+    const std::size_t to = (span + 1) * n / spans;
+    std::size_t least = from;
+    std::size_t most = from;
+    for (std::size_t k = from; k < to; ++k) {
+      // A gap (NaN) in the span is kept, so the line breaks there too.
+      if (!std::isfinite(s.values[k])) {
+        least = most = k;
+        break;
+      }
+      least = s.values[k] < s.values[least] ? k : least;
+      most = s.values[k] > s.values[most] ? k : most;
+    }
+    kept.push_back(std::min(least, most));
+    if (least != most) {
+      kept.push_back(std::max(least, most));
+    }
+  }
+  return kept;
+}
+
+class Frame {
+ public:
+  Frame(Range x, Range y) : x_(x), y_(y) {}
+  double x(double t) const {
+    return kLeft + (t - x_.lo) / (x_.hi - x_.lo) * (kWidth - kLeft - kRight);
+  }
+  double y(double v) const {
+    return kHeight - kBottom - (v - y_.lo) / (y_.hi - y_.lo) * (kHeight - kTop - kBottom);
+  }
+  const Range& xs() const { return x_; }
+  const Range& ys() const { return y_; }
+
+ private:
+  Range x_;
+  Range y_;
+};
+
+// The data's range, widened to include 0 and to a non-empty span.
+Range value_range(const Plot& plot) {
+  Range y;
+  y.extend(0.0);
+  for (const Series& s : plot.series) {
+    for (const double v : s.values) {
+      y.extend(clipped(v, plot));
+    }
+  }
+  if (y.hi - y.lo < 1e-9) {
+    y.hi = y.lo + 1.0;
+  }
+  return y;
+}
+
+Range time_range(const Plot& plot) {
+  Range x;
+  for (const Series& s : plot.series) {
+    for (const double t : s.t_s) {
+      x.extend(t);
+    }
+  }
+  for (const double t : plot.marks_t_s) {
+    x.extend(t);
+  }
+  if (x.empty()) {
+    x = {0.0, 1.0};
+  }
+  if (x.hi - x.lo < 1e-9) {
+    x.hi = x.lo + 1.0;
+  }
+  return x;
+}
+
+void axes(std::string& svg, const Frame& f, const Plot& plot) {
+  const double y_step = tick_step(f.ys().hi - f.ys().lo);
+  for (double v = std::ceil(f.ys().lo / y_step) * y_step; v <= f.ys().hi + 1e-9; v += y_step) {
+    svg += "<line class=\"grid\" x1=\"" + number(kLeft) + "\" x2=\"" + number(kWidth - kRight) +
+           "\" y1=\"" + number(f.y(v)) + "\" y2=\"" + number(f.y(v)) + "\"/>";
+    svg += "<text class=\"tick\" x=\"" + number(kLeft - 6) + "\" y=\"" + number(f.y(v) + 4) +
+           "\" text-anchor=\"end\">" + tick_label(v, y_step) + "</text>";
+  }
+  const double x_step = tick_step(f.xs().hi - f.xs().lo);
+  for (double t = std::ceil(f.xs().lo / x_step) * x_step; t <= f.xs().hi + 1e-9; t += x_step) {
+    svg += "<line class=\"axis\" x1=\"" + number(f.x(t)) + "\" x2=\"" + number(f.x(t)) +
+           "\" y1=\"" + number(kHeight - kBottom) + "\" y2=\"" + number(kHeight - kBottom + 5) +
+           "\"/><text class=\"tick\" x=\"" + number(f.x(t)) + "\" y=\"" +
+           number(kHeight - kBottom + 18) + "\" text-anchor=\"middle\">" + tick_label(t, x_step) +
+           "</text>";
+  }
+  svg += "<line class=\"axis\" x1=\"" + number(kLeft) + "\" x2=\"" + number(kWidth - kRight) +
+         "\" y1=\"" + number(kHeight - kBottom) + "\" y2=\"" + number(kHeight - kBottom) + "\"/>";
+  svg += "<line class=\"axis\" x1=\"" + number(kLeft) + "\" x2=\"" + number(kLeft) + "\" y1=\"" +
+         number(kTop) + "\" y2=\"" + number(kHeight - kBottom) + "\"/>";
+  svg += "<text class=\"label\" x=\"" + number(0.5 * (kLeft + kWidth - kRight)) + "\" y=\"" +
+         number(kHeight - 6) + "\" text-anchor=\"middle\">time (s)</text>";
+  svg += "<text class=\"label\" transform=\"translate(14 " +
+         number(0.5 * (kTop + kHeight - kBottom)) + ") rotate(-90)\" text-anchor=\"middle\">" +
+         escaped(plot.y_label) + "</text>";
+}
+
+void lines(std::string& svg, const Frame& f, const Plot& plot) {
+  for (const Series& s : plot.series) {
+    std::string d;
+    bool pen_down = false;
+    for (const std::size_t k : drawn_samples(s)) {
+      const double v = clipped(s.values[k], plot);
+      if (!std::isfinite(v) || !std::isfinite(s.t_s[k])) {
+        pen_down = false;
+        continue;
+      }
+      d += pen_down ? 'L' : 'M';
+      d += number(f.x(s.t_s[k])) + " " + number(f.y(v));
+      pen_down = true;
+    }
+    if (!d.empty()) {
+      svg += "<path class=\"series\" stroke=\"" + css_color(s.color) + "\" d=\"" + d +
+             "\"><title>" + escaped(s.name) + "</title></path>";
+    }
+  }
+}
+
+void marks(std::string& svg, const Frame& f, const Plot& plot) {
+  for (const double t : plot.marks_t_s) {
+    svg += "<line class=\"mark\" x1=\"" + number(f.x(t)) + "\" x2=\"" + number(f.x(t)) +
+           "\" y1=\"" + number(kTop) + "\" y2=\"" + number(kHeight - kBottom) + "\"><title>" +
+           escaped(plot.marks_label) + " at t = " + tick_label(t, 0.01) + " s</title></line>";
+  }
+}
+
+void legend(std::string& svg, const Plot& plot) {
+  double x = kWidth - kRight;
+  auto entry = [&](const std::string& name, const std::string& color, const char* kind) {
+    const double width = 22.0 + 6.5 * static_cast<double>(name.size());
+    x -= width;
+    svg += std::string("<line class=\"") + kind + "\" x1=\"" + number(x) + "\" x2=\"" +
+           number(x + 14) + "\" y1=\"36\" y2=\"36\" stroke=\"" + color + "\"/>" +
+           "<text class=\"tick\" x=\"" + number(x + 18) + "\" y=\"40\">" + escaped(name) +
+           "</text>";
+  };
+  if (!plot.marks_t_s.empty()) {
+    entry(plot.marks_label, "#d00000", "mark");
+  }
+  if (plot.series.size() <= kMaxLegend) {
+    for (auto s = plot.series.rbegin(); s != plot.series.rend(); ++s) {
+      entry(s->name, css_color(s->color), "series");
+    }
+  }
+}
+
+}  // namespace
+
+std::string escaped(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string css_color(const Rgb& color) {
+  char text[16];
+  std::snprintf(text, sizeof text, "#%02x%02x%02x", color.r, color.g, color.b);
+  return text;
+}
+
+std::string svg_of(const Plot& plot) {
+  const Frame frame(time_range(plot), value_range(plot));
+  std::string svg = "<svg class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " +
+                    number(kWidth) + " " + number(kHeight) + "\" width=\"" + number(kWidth) +
+                    "\" height=\"" + number(kHeight) + "\" role=\"img\" aria-label=\"" +
+                    escaped(plot.title) + "\">";
+  svg += "<text class=\"title\" x=\"" + number(kLeft) + "\" y=\"20\">" + escaped(plot.title) +
+         "</text>";
+  axes(svg, frame, plot);
+  const std::size_t before = svg.size();
+  lines(svg, frame, plot);
+  if (svg.size() == before && !plot.empty_note.empty()) {
+    svg += "<text class=\"note\" x=\"" + number(0.5 * (kLeft + kWidth)) + "\" y=\"" +
+           number(0.5 * kHeight) + "\" text-anchor=\"middle\">" + escaped(plot.empty_note) +
+           "</text>";
+  }
+  marks(svg, frame, plot);
+  legend(svg, plot);
+  return svg + "</svg>";
+}
+
+}  // namespace flowsteer::report
