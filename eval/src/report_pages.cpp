@@ -82,6 +82,7 @@ std::vector<Cell> run_row(const SuiteRun& run, const std::filesystem::path& dir)
   status.alert = !run.clean();
   Cell why = text_cell(reason(run, dir / "runs" / run.folder_name()));
   why.alert = !run.clean();
+  why.prose = true;
   Cell page = text_cell("not kept");
   if (std::filesystem::exists(run_dir / "report.html")) {
     page.text = "run page";

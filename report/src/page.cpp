@@ -51,7 +51,8 @@ table { border-collapse: collapse; } th, td { padding: 3px 10px; border-bottom: 
   text-align: left; } table.sortable th { cursor: pointer; user-select: none; }
 th[aria-sort="ascending"]::after { content: " \25b2"; }
 th[aria-sort="descending"]::after { content: " \25bc"; }
-td.alert { color: #b00000; font-weight: 600; } .swatch { display: inline-block; width: 12px;
+td { white-space: nowrap; } td.prose { white-space: normal; min-width: 22em; max-width: 44em; }
+td.alert { color: #b00000; } .swatch { display: inline-block; width: 12px;
   height: 12px; margin-right: 6px; vertical-align: -1px; }
 img { max-width: 100%; border: 1px solid #ccc; }
 svg.plot { display: block; margin: 6px 0 14px; } svg.plot .title { font-size: 14px;
@@ -86,8 +87,9 @@ std::string heading(const std::string& text) {
 
 std::string cell_html(const Cell& cell) {
   std::string html = "<td";
-  if (cell.alert) {
-    html += " class=\"alert\"";
+  if (cell.alert || cell.prose) {
+    html += std::string(" class=\"") + (cell.alert ? "alert" : "") +
+            (cell.alert && cell.prose ? " " : "") + (cell.prose ? "prose" : "") + "\"";
   }
   if (cell.sort_value) {
     html += " data-sort=\"" +

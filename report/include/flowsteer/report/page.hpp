@@ -48,6 +48,7 @@ struct Cell {
   std::optional<double> sort_value;
   std::string link;           // a relative address, or none
   bool alert = false;         // drawn as a problem (red)
+  bool prose = false;         // words that wrap in a wide column (a reason), not a value
   std::optional<Rgb> swatch;  // a colour square before the text (an agent's colour)
 };
 
