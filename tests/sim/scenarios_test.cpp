@@ -12,9 +12,11 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/pipeline/overlay.hpp"
 #include "flowsteer/sim/outputs.hpp"
 #include "flowsteer/sim/simulation.hpp"
 
@@ -514,6 +516,12 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
   }
   const cv::Mat top = cv::imread((dir / "topview.png").string());
   EXPECT_GT(top.cols, 100);
+  // The 32 px views enlarged enough for the TTC labels to be legible.
+  cv::VideoCapture video((dir / "agent_0.mp4").string());
+  cv::Mat frame;
+  ASSERT_TRUE(video.read(frame));
+  EXPECT_GE(frame.cols, 640);
+  EXPECT_EQ(frame.size(), pipeline::overlay_size({32, 32}));
   // Nothing left behind but the outputs.
   int entries = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) {
