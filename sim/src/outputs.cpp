@@ -47,9 +47,9 @@ void add_solid(fox::SceneEntity& entity, const sim_camera::Solid& s, const fox::
 }  // namespace
 
 cv::Scalar agent_color(std::size_t agent) {
-  static const cv::Scalar palette[] = {{200, 60, 30},  {40, 160, 40},  {30, 60, 220},
-                                       {180, 40, 180}, {20, 170, 200}, {120, 90, 20},
-                                       {90, 90, 90},   {60, 200, 140}};
+  static const cv::Scalar palette[kAgentColors] = {{200, 60, 30},  {40, 160, 40},  {30, 60, 220},
+                                                   {180, 40, 180}, {20, 170, 200}, {120, 90, 20},
+                                                   {90, 90, 90},   {60, 200, 140}};
   return palette[agent % std::size(palette)];
 }
 

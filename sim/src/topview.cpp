@@ -200,27 +200,33 @@ void draw_time_marks(cv::Mat& image, const Plot& plot,
   }
 }
 
-// A swatch and a name per agent, in as many columns as fit; what does not fit in
-// kLegendMaxRows rows is counted in the last cell.
-int legend_rows(const sim_camera::WorldSpec& spec, int width_px, int* columns, int* cell_px) {
-  int name_px = 0;
+// A swatch and a name per agent, in as many columns as fit, column by column; what does not
+// fit in kLegendMaxRows rows is counted in the last cell.
+struct LegendGrid {
+  int rows = 1;
+  int columns = 1;
+  int cell_px = 1;
+};
+
+LegendGrid legend_grid(const sim_camera::WorldSpec& spec, int width_px) {
+  int name_px = text_width("+999 more", kLabelScale);
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
     name_px = std::max(name_px, text_width(agent_label(spec, i), kLabelScale));
   }
-  *cell_px = 30 + std::max(name_px, text_width("+999 more", kLabelScale)) + 16;
-  *columns = std::max(1, (width_px - 2 * kCaptionMargin) / *cell_px);
-  const int rows = (static_cast<int>(spec.agents.size()) + *columns - 1) / *columns;
-  return std::min(rows, kLegendMaxRows);
+  LegendGrid grid;
+  grid.cell_px = 30 + name_px + 16;
+  grid.columns = std::max(1, (width_px - 2 * kCaptionMargin) / grid.cell_px);
+  const int agents = static_cast<int>(spec.agents.size());
+  grid.rows = std::clamp((agents + grid.columns - 1) / grid.columns, 1, kLegendMaxRows);
+  return grid;
 }
 
 void draw_legend(cv::Mat& image, const sim_camera::WorldSpec& spec, int top_px) {
-  int columns = 1;
-  int cell_px = 1;
-  const int rows = legend_rows(spec, image.cols, &columns, &cell_px);
-  const auto cells = static_cast<std::size_t>(rows * columns);
+  const LegendGrid grid = legend_grid(spec, image.cols);
+  const auto cells = static_cast<std::size_t>(grid.rows * grid.columns);
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {
-    const cv::Point at(kCaptionMargin + static_cast<int>(i) / rows * cell_px,
-                       top_px + static_cast<int>(i) % rows * kRowPx);
+    const cv::Point at(kCaptionMargin + static_cast<int>(i) / grid.rows * grid.cell_px,
+                       top_px + static_cast<int>(i) % grid.rows * kRowPx);
     if (i + 1 == cells && spec.agents.size() > cells) {
       char more[32];
       std::snprintf(more, sizeof more, "+%zu more", spec.agents.size() - i);
@@ -233,15 +239,21 @@ void draw_legend(cv::Mat& image, const sim_camera::WorldSpec& spec, int top_px) 
   }
 }
 
-std::string marks_text(const TimeMarks& marks) {
-  char text[96];
+// What the time marks mean and, where there are more agents than colours, that they repeat.
+std::string key_text(const TimeMarks& marks, std::size_t agents) {
+  char text[128];
   std::snprintf(text, sizeof text, "time marks: a dot every %g s, numbered every %g s", marks.dot_s,
                 marks.label_s);
-  return text;
+  if (agents <= kAgentColors) {
+    return text;
+  }
+  char repeat[64];
+  std::snprintf(repeat, sizeof repeat, "; colours repeat after %zu agents", kAgentColors);
+  return std::string(text) + repeat;
 }
 
-// A scale bar, then what the time marks mean.
-void draw_key(cv::Mat& image, int top_px, double bar_m, double px_per_m, const TimeMarks& marks) {
+// A scale bar, then key_text.
+void draw_key(cv::Mat& image, int top_px, double bar_m, double px_per_m, const std::string& text) {
   const int bar_px = static_cast<int>(bar_m * px_per_m);
   const int row = top_px + 12;
   const cv::Point a(kCaptionMargin, row);
@@ -252,8 +264,8 @@ void draw_key(cv::Mat& image, int top_px, double bar_m, double px_per_m, const T
   char bar[16];
   std::snprintf(bar, sizeof bar, "%g m", bar_m);
   cv::putText(image, bar, b + cv::Point(8, 5), kFont, kLabelScale, kInk, 1, cv::LINE_AA);
-  cv::putText(image, marks_text(marks), b + cv::Point(24 + text_width(bar, kLabelScale), 5), kFont,
-              kLabelScale, kInk, 1, cv::LINE_AA);
+  cv::putText(image, text, b + cv::Point(24 + text_width(bar, kLabelScale), 5), kFont, kLabelScale,
+              kInk, 1, cv::LINE_AA);
 }
 
 std::string caption_text(const sim_camera::World& world, std::size_t collisions, double px_per_m) {
@@ -273,6 +285,48 @@ double path_duration_s(const std::vector<std::vector<Eigen::Vector2d>>& paths, d
   return static_cast<double>(steps) * step_s;
 }
 
+// Where everything goes: the plot, its ticks and time marks, the rows under it.
+struct Layout {
+  Plot plot;
+  double tick_m = 1.0;
+  TimeMarks marks;
+  std::string key;  // key_text
+  std::string caption;
+  cv::Size size;
+  int legend_top_px = 0;
+  int key_top_px = 0;
+};
+
+Layout layout(const sim_camera::World& world,
+              const std::vector<std::vector<Eigen::Vector2d>>& paths, std::size_t collisions) {
+  const sim_camera::WorldSpec& spec = world.spec();
+  const Eigen::AlignedBox2d bounds = world_bounds(spec, paths);
+  Layout l;
+  l.plot.lo_m = bounds.min() - Eigen::Vector2d::Constant(kWorldMarginM);
+  l.plot.hi_m = bounds.max() + Eigen::Vector2d::Constant(kWorldMarginM);
+  const Eigen::Vector2d extent = l.plot.hi_m - l.plot.lo_m;
+  l.plot.px_per_m = kWorldPx / extent.maxCoeff();
+  l.tick_m = tick_step(45.0 / l.plot.px_per_m);
+  l.marks.label_s = time_mark_interval_s(path_duration_s(paths, spec.step_s));
+  l.marks.dot_s = tick_step(l.marks.label_s / 5.0);
+  l.key = key_text(l.marks, spec.agents.size());
+  l.caption = caption_text(world, collisions, l.plot.px_per_m);
+  const cv::Size plot_px(static_cast<int>(extent.x() * l.plot.px_per_m),
+                         static_cast<int>(extent.y() * l.plot.px_per_m));
+  const int framed_px = kAxisLeftPx + plot_px.width + kPadRightPx;
+  const int key_px = static_cast<int>(l.tick_m * l.plot.px_per_m) + 40 +
+                     text_width(l.key, kLabelScale) + text_width("99 m", kLabelScale);
+  // A narrow world (a corridor) is centred in an image wide enough for the texts under it.
+  l.size.width = std::max({framed_px, text_width(l.caption, kCaptionScale) + 2 * kCaptionMargin,
+                           key_px + 2 * kCaptionMargin});
+  l.plot.rect = cv::Rect(kAxisLeftPx + (l.size.width - framed_px) / 2, kPadTopPx, plot_px.width,
+                         plot_px.height);
+  l.legend_top_px = l.plot.rect.br().y + kAxisBelowPx + 6;
+  l.key_top_px = l.legend_top_px + legend_grid(spec, l.size.width).rows * kRowPx + 4;
+  l.size.height = l.key_top_px + kRowPx + 30;
+  return l;
+}
+
 }  // namespace
 
 double time_mark_interval_s(double duration_s) {
@@ -282,46 +336,19 @@ double time_mark_interval_s(double duration_s) {
 cv::Mat draw_topview(const sim_camera::World& world,
                      const std::vector<std::vector<Eigen::Vector2d>>& paths,
                      const std::vector<sim_camera::Collision>& collisions) {
-  const sim_camera::WorldSpec& spec = world.spec();
-  const Eigen::AlignedBox2d bounds = world_bounds(spec, paths);
-  Plot plot;
-  plot.lo_m = bounds.min() - Eigen::Vector2d::Constant(kWorldMarginM);
-  plot.hi_m = bounds.max() + Eigen::Vector2d::Constant(kWorldMarginM);
-  const Eigen::Vector2d extent = plot.hi_m - plot.lo_m;
-  plot.px_per_m = kWorldPx / extent.maxCoeff();
-  const double tick_m = tick_step(45.0 / plot.px_per_m);
-  TimeMarks marks;
-  marks.label_s = time_mark_interval_s(path_duration_s(paths, spec.step_s));
-  marks.dot_s = tick_step(marks.label_s / 5.0);
-
-  const std::string caption = caption_text(world, collisions.size(), plot.px_per_m);
-  const cv::Size plot_px(static_cast<int>(extent.x() * plot.px_per_m),
-                         static_cast<int>(extent.y() * plot.px_per_m));
-  const int framed_px = kAxisLeftPx + plot_px.width + kPadRightPx;
-  const int key_px = static_cast<int>(tick_m * plot.px_per_m) + 40 +
-                     text_width(marks_text(marks), kLabelScale) + text_width("99 m", kLabelScale);
-  // A narrow world (a corridor) is centred in an image wide enough for the texts under it.
-  const int width = std::max({framed_px, text_width(caption, kCaptionScale) + 2 * kCaptionMargin,
-                              key_px + 2 * kCaptionMargin});
-  plot.rect =
-      cv::Rect(kAxisLeftPx + (width - framed_px) / 2, kPadTopPx, plot_px.width, plot_px.height);
-  int columns = 1;
-  int cell_px = 1;
-  const int legend_top = plot.rect.br().y + kAxisBelowPx + 6;
-  const int key_top = legend_top + legend_rows(spec, width, &columns, &cell_px) * kRowPx + 4;
-  cv::Mat image(key_top + kRowPx + 30, width, CV_8UC3, kPaper);
-
-  draw_axes(image, plot, tick_m);
-  draw_scene(image, plot, world);
-  draw_paths(image, plot, world, paths);
-  draw_time_marks(image, plot, paths, spec.step_s, marks);
+  const Layout l = layout(world, paths, collisions.size());
+  cv::Mat image(l.size, CV_8UC3, kPaper);
+  draw_axes(image, l.plot, l.tick_m);
+  draw_scene(image, l.plot, world);
+  draw_paths(image, l.plot, world, paths);
+  draw_time_marks(image, l.plot, paths, world.spec().step_s, l.marks);
   for (const auto& c : collisions) {
-    cv::drawMarker(image, plot.px(c.position_m), cv::Scalar(0, 0, 255), cv::MARKER_TILTED_CROSS, 18,
-                   3);
+    cv::drawMarker(image, l.plot.px(c.position_m), cv::Scalar(0, 0, 255), cv::MARKER_TILTED_CROSS,
+                   18, 3);
   }
-  draw_legend(image, spec, legend_top);
-  draw_key(image, key_top, tick_m, plot.px_per_m, marks);
-  cv::putText(image, caption, {kCaptionMargin, image.rows - 10}, kFont, kCaptionScale, kInk, 1,
+  draw_legend(image, world.spec(), l.legend_top_px);
+  draw_key(image, l.key_top_px, l.tick_m, l.plot.px_per_m, l.key);
+  cv::putText(image, l.caption, {kCaptionMargin, image.rows - 10}, kFont, kCaptionScale, kInk, 1,
               cv::LINE_AA);
   return image;
 }

@@ -35,7 +35,9 @@ cv::Mat draw_topview(const sim_camera::World& world,
                      const std::vector<std::vector<Eigen::Vector2d>>& paths,
                      const std::vector<sim_camera::Collision>& collisions);
 
-// Agent i's colour in the top view and in the 3D scene; the palette repeats after 8 agents.
+// Agent i's colour in the top view and in the 3D scene; the palette repeats after
+// kAgentColors agents.
+inline constexpr std::size_t kAgentColors = 8;
 cv::Scalar agent_color(std::size_t agent);
 
 // The smallest of 1, 2 or 5 times a power of ten that is at least `at_least` (> 0): the step
