@@ -54,39 +54,72 @@ cv::Mat side_by_side(const std::vector<cv::Mat>& panels) {
   return out;
 }
 
+// A histogram panel's plot area; the rest holds the axes' labels.
+const cv::Rect kHistogramPlot(64, 30, 370, 200);
+const cv::Size kHistogramPx(470, 290);
+const cv::Scalar kAxisInk(0, 0, 0);
+
+void put_axis_text(cv::Mat& image, const std::string& text, cv::Point at) {
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, 0.45, kAxisInk, 1, cv::LINE_AA);
+}
+
+int axis_text_px(const std::string& text) {
+  return cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, nullptr).width;
+}
+
+// The share of samples per bin, 0 to max_share, ticked and labelled in percent.
+void draw_share_axis(cv::Mat& image, double max_share) {
+  const cv::Rect& r = kHistogramPlot;
+  cv::line(image, {r.x, r.y}, {r.x, r.br().y}, kAxisInk, 1);
+  const double tick = sim::tick_step(max_share / 5.0);
+  for (double share = 0.0; share <= max_share + 1e-12; share += tick) {
+    const int row = r.br().y - static_cast<int>(std::lround(share / max_share * r.height));
+    cv::line(image, {r.x - 5, row}, {r.x, row}, kAxisInk, 1);
+    char label[16];
+    std::snprintf(label, sizeof label, "%g %%", 100.0 * share);
+    put_axis_text(image, label, {r.x - 8 - axis_text_px(label), row + 5});
+  }
+  put_axis_text(image, "share of samples", {8, r.y - 12});
+}
+
+// The turn rate from the first bin's edge to the last one's, ticked at both ends and at 0.
+void draw_rate_axis(cv::Mat& image, const std::vector<double>& edges) {
+  const cv::Rect& r = kHistogramPlot;
+  cv::line(image, {r.x, r.br().y}, {r.br().x, r.br().y}, kAxisInk, 1);
+  for (const double rate : {edges.front(), 0.0, edges.back()}) {
+    const int col = r.x + static_cast<int>(std::lround((rate - edges.front()) /
+                                                       (edges.back() - edges.front()) * r.width));
+    cv::line(image, {col, r.br().y}, {col, r.br().y + 5}, kAxisInk, 1);
+    char label[16];
+    std::snprintf(label, sizeof label, rate == 0.0 ? "0" : "%+.2f", rate);
+    put_axis_text(image, label, {col - axis_text_px(label) / 2, r.br().y + 22});
+  }
+  const std::string title = "turn rate (rad/s)";
+  put_axis_text(image, title, {r.x + (r.width - axis_text_px(title)) / 2, r.br().y + 46});
+}
+
 // One histogram as bars, as a share of the run's non-zero samples, on a common scale.
 cv::Mat draw_histogram(const std::vector<int>& counts, const std::vector<double>& edges,
                        double max_share) {
-  const int width = 420;
-  const int height = 260;
-  const int left = 40;
-  const int bottom = 30;
-  cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::Mat image(kHistogramPx, CV_8UC3, cv::Scalar(255, 255, 255));
   int total = 0;
   for (const int c : counts) {
     total += c;
   }
-  const double bar = static_cast<double>(width - left - 10) / static_cast<double>(counts.size());
+  const cv::Rect& r = kHistogramPlot;
+  const double bar = static_cast<double>(r.width) / static_cast<double>(counts.size());
   for (std::size_t k = 0; k < counts.size(); ++k) {
     const double share = total > 0 ? static_cast<double>(counts[k]) / total : 0.0;
-    const int top = height - bottom - static_cast<int>(share / max_share * (height - bottom - 20));
-    const int x0 = left + static_cast<int>(k * bar);
-    cv::rectangle(image, {x0 + 1, top}, {static_cast<int>(x0 + bar) - 1, height - bottom},
+    const int top = r.br().y - static_cast<int>(share / max_share * r.height);
+    const int x0 = r.x + static_cast<int>(static_cast<double>(k) * bar);
+    cv::rectangle(image, {x0 + 1, top}, {static_cast<int>(x0 + bar) - 1, r.br().y},
                   cv::Scalar(180, 110, 40), cv::FILLED);
   }
-  cv::line(image, {left, height - bottom}, {width - 10, height - bottom}, cv::Scalar(0, 0, 0), 1);
+  draw_share_axis(image, max_share);
+  draw_rate_axis(image, edges);
   char label[64];
-  std::snprintf(label, sizeof label, "%.2f", edges.front());
-  cv::putText(image, label, {left - 10, height - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  std::snprintf(label, sizeof label, "%+.2f rad/s", edges.back());
-  cv::putText(image, label, {width - 110, height - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  cv::putText(image, "0", {left + (width - left - 10) / 2 - 4, height - 10},
-              cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   std::snprintf(label, sizeof label, "n = %d (|w| >= %.0e)", total, kStillTurnRate);
-  cv::putText(image, label, {left, 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1,
-              cv::LINE_AA);
+  put_axis_text(image, label, {r.br().x - axis_text_px(label), r.y - 12});
   return image;
 }
 

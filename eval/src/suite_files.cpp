@@ -169,50 +169,196 @@ std::string suite_json(const SuiteResult& result) {
   return out.str();
 }
 
-// Every run's top view, scaled into a grid; runs that are not clean framed in red, the case and
-// the configuration under each.
-cv::Mat contact_sheet(const std::vector<SuiteRun>& runs, const std::filesystem::path& topviews) {
-  constexpr int kCell = 300;
-  constexpr int kCaption = 44;
-  constexpr int kGap = 10;
-  constexpr int kFrame = 6;
-  const int n = std::max<int>(1, static_cast<int>(runs.size()));
-  const int columns = std::min(8, static_cast<int>(std::ceil(std::sqrt(n))));
-  const int rows = (n + columns - 1) / columns;
-  cv::Mat sheet(rows * (kCell + kCaption + kGap) + kGap, columns * (kCell + kGap) + kGap, CV_8UC3,
-                cv::Scalar(255, 255, 255));
-  const cv::Scalar red(0, 0, 220);
-  for (std::size_t k = 0; k < runs.size(); ++k) {
-    const SuiteRun& run = runs[k];
-    const cv::Rect cell(kGap + static_cast<int>(k) % columns * (kCell + kGap),
-                        kGap + static_cast<int>(k) / columns * (kCell + kCaption + kGap), kCell,
-                        kCell);
-    const cv::Mat view = cv::imread((topviews / (run.folder_name() + ".png")).string());
-    if (view.empty()) {
-      sheet(cell).setTo(cv::Scalar(225, 225, 225));
-      cv::putText(sheet, "no top view", {cell.x + 12, cell.y + kCell / 2}, cv::FONT_HERSHEY_SIMPLEX,
-                  0.6, red, 1, cv::LINE_AA);
-    } else {
-      const double scale =
-          std::min(static_cast<double>(kCell) / view.cols, static_cast<double>(kCell) / view.rows);
-      cv::Mat fitted;
-      cv::resize(view, fitted, {}, scale, scale, cv::INTER_AREA);
-      fitted.copyTo(sheet(cv::Rect(cell.x + (kCell - fitted.cols) / 2,
-                                   cell.y + (kCell - fitted.rows) / 2, fitted.cols, fitted.rows)));
-    }
-    if (!run.clean()) {
-      cv::rectangle(sheet, cell, red, kFrame);
-    }
-    cv::putText(sheet, run.case_name + (run.failed() ? " (failed)" : ""),
-                {cell.x, cell.y + kCell + 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5,
-                run.clean() ? cv::Scalar(30, 30, 30) : red, 1, cv::LINE_AA);
-    cv::putText(sheet, to_string(run.configuration), {cell.x, cell.y + kCell + 36},
-                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(90, 90, 90), 1, cv::LINE_AA);
+constexpr int kSheetFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr int kTilePx = 400;
+constexpr int kTileGapPx = 12;
+constexpr int kLinePx = 26;      // a caption line under a tile
+constexpr int kDetailLines = 2;  // at most, for the configuration and for the verdict each
+const cv::Scalar kSheetRed(0, 0, 220);
+
+// A line of a tile's caption and how it is drawn.
+struct CaptionLine {
+  std::string text;
+  double scale = 0.6;
+  int thickness = 1;
+  cv::Scalar color;
+};
+
+int sheet_text_px(const std::string& text, const CaptionLine& style) {
+  return cv::getTextSize(text, kSheetFont, style.scale, style.thickness, nullptr).width;
+}
+
+// The longest start of `text` that fits width_px with "..." after it.
+std::string cut_to_fit(std::string text, const CaptionLine& style, int width_px) {
+  while (!text.empty() && sheet_text_px(text + "...", style) > width_px) {
+    text.pop_back();
   }
-  return sheet;
+  return text + "...";
+}
+
+// The parts of `text` that wrap keeps whole, each ending after a `stop` (a space: words; a
+// comma: the items of a list), without the spaces around them.
+std::vector<std::string> pieces(const std::string& text, char stop) {
+  std::vector<std::string> out(1);
+  for (const char c : text) {
+    if (c != ' ' || !out.back().empty()) {
+      out.back() += c;
+    }
+    if (c == stop) {
+      out.emplace_back();
+    }
+  }
+  for (std::string& piece : out) {
+    piece.erase(piece.find_last_not_of(' ') + 1);
+  }
+  std::erase_if(out, [](const std::string& piece) { return piece.empty(); });
+  return out;
+}
+
+// `text` in lines of width_px at most, broken after a `stop`; what does not fit in max_lines
+// is cut off with "...".
+std::vector<std::string> wrap(const std::string& text, char stop, const CaptionLine& style,
+                              int width_px, int max_lines) {
+  auto px = [&](const std::string& line) { return sheet_text_px(line, style); };
+  std::vector<std::string> lines(1);
+  for (const std::string& piece : pieces(text, stop)) {
+    const std::string longer = lines.back().empty() ? piece : lines.back() + " " + piece;
+    if (px(longer) <= width_px || lines.back().empty()) {
+      lines.back() = longer;
+    } else {
+      lines.push_back(piece);
+    }
+  }
+  if (static_cast<int>(lines.size()) > max_lines) {
+    lines.resize(static_cast<std::size_t>(max_lines));
+    lines.back() = cut_to_fit(lines.back(), style, width_px);
+  }
+  for (std::string& line : lines) {
+    if (px(line) > width_px) {
+      line = cut_to_fit(line, style, width_px);
+    }
+  }
+  return lines;
+}
+
+std::vector<CaptionLine> tile_caption(const SuiteRun& run) {
+  std::vector<CaptionLine> caption = {{run.case_name, 0.7, 2, cv::Scalar(30, 30, 30)}};
+  const CaptionLine configuration{"", 0.6, 1, cv::Scalar(90, 90, 90)};
+  for (std::string& line :
+       wrap(configuration_label(run.configuration), ',', configuration, kTilePx, kDetailLines)) {
+    caption.push_back(configuration);
+    caption.back().text = std::move(line);
+  }
+  const CaptionLine verdict{"", 0.6, 2, run.clean() ? cv::Scalar(40, 130, 40) : kSheetRed};
+  for (std::string& line : wrap(run_verdict(run), ' ', verdict, kTilePx, kDetailLines)) {
+    caption.push_back(verdict);
+    caption.back().text = std::move(line);
+  }
+  return caption;
+}
+
+// A run's top view scaled into its tile, or a grey tile saying there is none.
+void draw_tile(cv::Mat& sheet, const cv::Rect& tile, const std::filesystem::path& view_path) {
+  const cv::Mat view = cv::imread(view_path.string());
+  if (view.empty()) {
+    sheet(tile).setTo(cv::Scalar(225, 225, 225));
+    cv::putText(sheet, "no top view", {tile.x + 12, tile.y + kTilePx / 2}, kSheetFont, 0.7,
+                cv::Scalar(90, 90, 90), 2, cv::LINE_AA);
+    return;
+  }
+  const double scale =
+      std::min(static_cast<double>(kTilePx) / view.cols, static_cast<double>(kTilePx) / view.rows);
+  cv::Mat fitted;
+  cv::resize(view, fitted, {}, scale, scale, cv::INTER_AREA);
+  fitted.copyTo(sheet(cv::Rect(tile.x + (kTilePx - fitted.cols) / 2,
+                               tile.y + (kTilePx - fitted.rows) / 2, fitted.cols, fitted.rows)));
 }
 
 }  // namespace
+
+std::string configuration_label(const SuiteConfiguration& c) {
+  std::vector<std::string> parts;
+  auto add = [&](const char* what, const auto& value) {
+    if (value) {
+      parts.push_back(std::string(what) + " " + std::string(servo::to_string(*value)));
+    }
+  };
+  add("flow", c.flow);
+  add("segmentation", c.segmentation);
+  add("depth", c.depth);
+  add("controller", c.controller);
+  add("law", c.law);
+  add("without", c.without);
+  if (c.resolution) {
+    parts.push_back(std::to_string(*c.resolution) + " px");
+  }
+  if (c.camera_noise_levels) {
+    parts.push_back("noise " + base::format_csv_number(*c.camera_noise_levels));
+  }
+  if (parts.empty()) {
+    return "the case's own settings";
+  }
+  std::string label = parts.front();
+  for (std::size_t k = 1; k < parts.size(); ++k) {
+    label += ", " + parts[k];
+  }
+  return label;
+}
+
+std::string run_verdict(const SuiteRun& run) {
+  if (run.failed()) {
+    return "failed: " + run.error;
+  }
+  if (run.clean()) {
+    return "clean";
+  }
+  const sim::RunSummary& s = run.summary;
+  std::vector<std::string> parts;
+  if (s.collisions > 0) {
+    parts.push_back(std::to_string(s.collisions) +
+                    (s.collisions == 1 ? " collision" : " collisions"));
+    if (s.obstacle_collisions > 0) {
+      parts.back() += " (" + std::to_string(s.obstacle_collisions) + " with obstacles)";
+    }
+  }
+  if (s.goals_reached < s.agents_with_goal()) {
+    parts.push_back("goals " + std::to_string(s.goals_reached) + "/" +
+                    std::to_string(s.agents_with_goal()));
+  }
+  return parts.size() == 1 ? parts.front() : parts.front() + ", " + parts.back();
+}
+
+cv::Mat contact_sheet(const std::vector<SuiteRun>& runs, const std::filesystem::path& topviews) {
+  std::vector<std::vector<CaptionLine>> captions;
+  std::size_t caption_lines = 1;
+  for (const SuiteRun& run : runs) {
+    captions.push_back(tile_caption(run));
+    caption_lines = std::max(caption_lines, captions.back().size());
+  }
+  const int caption_px = static_cast<int>(caption_lines) * kLinePx + 8;
+  const int n = std::max<int>(1, static_cast<int>(runs.size()));
+  const int columns = std::min(8, static_cast<int>(std::ceil(std::sqrt(n))));
+  const int rows = (n + columns - 1) / columns;
+  cv::Mat sheet(rows * (kTilePx + caption_px + kTileGapPx) + kTileGapPx,
+                columns * (kTilePx + kTileGapPx) + kTileGapPx, CV_8UC3, cv::Scalar(255, 255, 255));
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const cv::Rect tile(
+        kTileGapPx + static_cast<int>(k) % columns * (kTilePx + kTileGapPx),
+        kTileGapPx + static_cast<int>(k) / columns * (kTilePx + caption_px + kTileGapPx), kTilePx,
+        kTilePx);
+    draw_tile(sheet, tile, topviews / (runs[k].folder_name() + ".png"));
+    if (!runs[k].clean()) {
+      cv::rectangle(sheet, tile, kSheetRed, 6);
+    }
+    int baseline = tile.br().y + kLinePx - 4;
+    for (const CaptionLine& line : captions[k]) {
+      cv::putText(sheet, line.text, {tile.x, baseline}, kSheetFont, line.scale, line.color,
+                  line.thickness, cv::LINE_AA);
+      baseline += kLinePx;
+    }
+  }
+  return sheet;
+}
 
 std::string summary_fields(const sim::RunSummary& s) {
   const double values[kScoreColumns] = {static_cast<double>(s.agents),

@@ -2,6 +2,9 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/eval/suite.hpp"
@@ -13,6 +16,18 @@ namespace flowsteer::eval {
 std::string summary_fields(const sim::RunSummary& summary);
 // Throws std::runtime_error naming `source` when the text is not such fields.
 sim::RunSummary parse_summary_fields(const std::string& text, const std::string& source);
+
+// What a run's configuration sets, for people: "flow dis_fast, 64 px", or "the case's own
+// settings" where it sets nothing.
+std::string configuration_label(const SuiteConfiguration& configuration);
+
+// Why a run is not clean ("2 collisions (1 with obstacles), goals 3/4", "failed: <its error>"),
+// or "clean".
+std::string run_verdict(const SuiteRun& run);
+
+// Every run's top view (topviews/<run's folder name>.png) scaled into a grid, runs that are not
+// clean framed in red; under each its case, configuration_label and run_verdict.
+cv::Mat contact_sheet(const std::vector<SuiteRun>& runs, const std::filesystem::path& topviews);
 
 // suite.csv, suite.txt, suite.json and contact_sheet.png into out's staging folder, whose
 // topviews/ already holds the runs' top views; the caller commits.

@@ -1,5 +1,6 @@
 #include "flowsteer/pipeline/overlay.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -14,10 +15,49 @@ namespace {
 const cv::Scalar kFoeColor(255, 120, 0);
 const cv::Scalar kCentreColor(0, 140, 255);
 const cv::Scalar kGoalColor(200, 80, 255);
+constexpr int kMinOverlayWidthPx = 640;
+
+// Where a normalised image point lies in the image enlarged `scale` times: its pixel's centre.
+struct EnlargedView {
+  const base::CameraIntrinsics& k;
+  int scale;
+  cv::Point px(const Eigen::Vector2d& p) const {
+    return {static_cast<int>(std::lround((k.fx_px * p.x() + k.cx_px + 0.5) * scale - 0.5)),
+            static_cast<int>(std::lround((k.fy_px * p.y() + k.cy_px + 0.5) * scale - 0.5))};
+  }
+};
+
+// An object's centre and, where it has one, its FOE and its TTC; sized for the enlarged view.
+void draw_object(cv::Mat& view, const servo::ObjectFeatures& o, const EnlargedView& enlarged) {
+  const double font = std::max(0.7, view.cols / 550.0);
+  const int mark_px = std::max(3, view.cols / 100);
+  const cv::Point centre = enlarged.px(o.centre);
+  if (o.has_foe()) {
+    const cv::Point foe = enlarged.px(o.foe);
+    cv::circle(view, foe, mark_px + 1, kFoeColor, 2, cv::LINE_AA);
+    cv::line(view, foe, centre, kFoeColor, 2, cv::LINE_AA);
+  }
+  cv::circle(view, centre, mark_px, kCentreColor, cv::FILLED, cv::LINE_AA);  // over the FOE's line
+  if (!o.has_foe()) {
+    return;
+  }
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1fs", o.ttc_s);
+  // Outlined in black: legible on the sky, the ground and the objects alike.
+  const cv::Point at = centre + cv::Point(mark_px + 2, -mark_px - 2);
+  cv::putText(view, text, at, cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar::all(0), 4, cv::LINE_AA);
+  cv::putText(view, text, at, cv::FONT_HERSHEY_SIMPLEX, font, kCentreColor, 2, cv::LINE_AA);
+}
+
 }  // namespace
 
+int overlay_scale(cv::Size image) {
+  return std::max(1, (kMinOverlayWidthPx + 2 * image.width - 1) / (2 * image.width));
+}
+
 cv::Size overlay_size(cv::Size image) {
-  return {2 * image.width, image.height};
+  const int scale = overlay_scale(image);
+  return {2 * image.width * scale, image.height * scale};
 }
 
 cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude) {
@@ -46,34 +86,22 @@ cv::Mat flow_to_color(const servo::FlowField& flow, double max_magnitude) {
 cv::Mat draw_overlay(const cv::Mat& image, const servo::FlowField& flow,
                      std::span<const servo::ObjectFeatures> objects,
                      const base::CameraIntrinsics& k, std::optional<double> goal_bearing_rad) {
-  const cv::Size size = image.size();
-  cv::Mat canvas(overlay_size(size), CV_8UC3, cv::Scalar::all(0));
+  // Blown up by whole pixels first, then drawn on, so that the marks and the text stay sharp.
+  const EnlargedView enlarged{k, overlay_scale(image.size())};
+  const cv::Size size = image.size() * enlarged.scale;
+  cv::Mat canvas(overlay_size(image.size()), CV_8UC3, cv::Scalar::all(0));
   cv::Mat view = canvas(cv::Rect(0, 0, size.width, size.height));
-  image.copyTo(view);
-  flow_to_color(flow, 0.5).copyTo(canvas(cv::Rect(size.width, 0, size.width, size.height)));
-  auto to_pixel = [&](const Eigen::Vector2d& p) {
-    return cv::Point(static_cast<int>(std::lround(k.fx_px * p.x() + k.cx_px)),
-                     static_cast<int>(std::lround(k.fy_px * p.y() + k.cy_px)));
-  };
-  const double font = std::max(0.3, size.width / 400.0);
+  cv::resize(image, view, size, 0, 0, cv::INTER_NEAREST);
+  cv::resize(flow_to_color(flow, 0.5), canvas(cv::Rect(size.width, 0, size.width, size.height)),
+             size, 0, 0, cv::INTER_NEAREST);
   for (const servo::ObjectFeatures& o : objects) {
-    const cv::Point centre = to_pixel(o.centre);
-    cv::circle(view, centre, 3, kCentreColor, cv::FILLED);
-    if (o.has_foe()) {
-      const cv::Point foe = to_pixel(o.foe);
-      cv::circle(view, foe, 4, kFoeColor, 1);
-      cv::line(view, foe, centre, kFoeColor, 1);
-      char text[32];
-      std::snprintf(text, sizeof text, "%.1fs", o.ttc_s);
-      cv::putText(view, text, centre + cv::Point(4, -4), cv::FONT_HERSHEY_SIMPLEX, font,
-                  kCentreColor, 1);
-    }
+    draw_object(view, o, enlarged);
   }
   if (goal_bearing_rad) {
     const double bearing = std::clamp(*goal_bearing_rad, -1.5, 1.5);
-    const int col = static_cast<int>(std::lround(k.fx_px * std::tan(bearing) + k.cx_px));
+    const int col = enlarged.px({std::tan(bearing), 0.0}).x;
     if (col >= 0 && col < size.width) {
-      cv::line(view, {col, 0}, {col, size.height / 6}, kGoalColor, 2);
+      cv::line(view, {col, 0}, {col, size.height / 6}, kGoalColor, 4);
     }
   }
   return canvas;

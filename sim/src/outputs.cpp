@@ -1,14 +1,11 @@
 #include "flowsteer/sim/outputs.hpp"
 
-#include <algorithm>
+#include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 
-#include <Eigen/Geometry>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/pipeline/overlay.hpp"
@@ -16,17 +13,6 @@
 namespace flowsteer::sim {
 
 namespace {
-
-constexpr int kCaptionFont = cv::FONT_HERSHEY_SIMPLEX;
-constexpr double kCaptionScale = 0.55;
-constexpr int kCaptionMargin = 8;  // px, left of the top view's caption and at least as much right
-
-cv::Scalar agent_color(std::size_t i) {
-  static const cv::Scalar palette[] = {{200, 60, 30},  {40, 160, 40},  {30, 60, 220},
-                                       {180, 40, 180}, {20, 170, 200}, {120, 90, 20},
-                                       {90, 90, 90},   {60, 200, 140}};
-  return palette[i % std::size(palette)];
-}
 
 namespace fox = recording::foxglove;
 
@@ -59,6 +45,23 @@ void add_solid(fox::SceneEntity& entity, const sim_camera::Solid& s, const fox::
 }
 
 }  // namespace
+
+cv::Scalar agent_color(std::size_t agent) {
+  static const cv::Scalar palette[kAgentColors] = {{200, 60, 30},  {40, 160, 40},  {30, 60, 220},
+                                                   {180, 40, 180}, {20, 170, 200}, {120, 90, 20},
+                                                   {90, 90, 90},   {60, 200, 140}};
+  return palette[agent % std::size(palette)];
+}
+
+double tick_step(double at_least) {
+  const double decade = std::pow(10.0, std::floor(std::log10(at_least)));
+  for (const double mantissa : {1.0, 2.0, 5.0}) {
+    if (mantissa * decade >= at_least) {
+      return mantissa * decade;
+    }
+  }
+  return 10.0 * decade;
+}
 
 std::vector<fox::SceneEntity> static_scene_entities(const sim_camera::World& world) {
   const sim_camera::WorldSpec& spec = world.spec();
@@ -160,104 +163,6 @@ cv::Mat draw_overlay(const SimulatedAgent& agent) {
   const pipeline::Brain& brain = agent.brain();
   return pipeline::draw_overlay(agent.frame().image, brain.flow(), brain.objects(),
                                 agent.intrinsics(), brain.goal_bearing_rad());
-}
-
-cv::Mat draw_topview(const sim_camera::World& world,
-                     const std::vector<std::vector<Eigen::Vector2d>>& paths,
-                     const std::vector<sim_camera::Collision>& collisions) {
-  const sim_camera::WorldSpec& spec = world.spec();
-  Eigen::AlignedBox2d bounds;
-  for (const auto& path : paths) {
-    for (const auto& p : path) {
-      bounds.extend(p);
-    }
-  }
-  for (const auto& a : spec.agents) {
-    bounds.extend(a.start_m);
-    for (const auto& g : a.goals) {
-      bounds.extend(g);
-    }
-  }
-  for (const auto& o : spec.obstacles) {
-    if (o.shape == sim_camera::Solid::Shape::box) {
-      for (const Eigen::Vector2d& corner : sim_camera::box_corners(o)) {
-        bounds.extend(corner);
-      }
-    } else {
-      bounds.extend(o.centre_m - Eigen::Vector2d(o.radius_m, o.radius_m));
-      bounds.extend(o.centre_m + Eigen::Vector2d(o.radius_m, o.radius_m));
-    }
-  }
-  const Eigen::Vector2d margin(1.5, 1.5);
-  const Eigen::Vector2d lo = bounds.min() - margin;
-  const Eigen::Vector2d extent = bounds.max() + margin - lo;
-  const double scale = 900.0 / std::max(extent.x(), extent.y());
-  char caption[200];
-  std::snprintf(caption, sizeof caption, "%s  t = %.1f s  collisions: %zu  (1 m = %.0f px)%s",
-                spec.name.c_str(), world.time_s(), collisions.size(), scale,
-                spec.arrival == sim_camera::Arrival::leave ? "  ring: left on arrival" : "");
-  const int caption_width = cv::getTextSize(caption, kCaptionFont, kCaptionScale, 1, nullptr).width;
-  // A narrow world (a corridor) is centred in an image wide enough for the caption.
-  const int world_width = static_cast<int>(extent.x() * scale);
-  const cv::Size size(std::max(world_width, caption_width + 2 * kCaptionMargin),
-                      static_cast<int>(extent.y() * scale) + 30);
-  const int left = (size.width - world_width) / 2;
-  cv::Mat image(size, CV_8UC3, cv::Scalar(250, 250, 250));
-  // World y points up in the picture.
-  auto px = [&](const Eigen::Vector2d& p) {
-    return cv::Point(left + static_cast<int>((p.x() - lo.x()) * scale),
-                     static_cast<int>(size.height - 30 - (p.y() - lo.y()) * scale));
-  };
-  auto draw_solid = [&](const sim_camera::Solid& s, const cv::Scalar& color, int thickness) {
-    if (s.shape == sim_camera::Solid::Shape::cylinder) {
-      cv::circle(image, px(s.centre_m), static_cast<int>(s.radius_m * scale), color, thickness,
-                 cv::LINE_AA);
-      return;
-    }
-    std::vector<cv::Point> corners;
-    for (const Eigen::Vector2d& corner : sim_camera::box_corners(s)) {
-      corners.push_back(px(corner));
-    }
-    if (thickness == cv::FILLED) {
-      cv::fillConvexPoly(image, corners, color, cv::LINE_AA);
-    } else {
-      cv::polylines(image, corners, true, color, thickness, cv::LINE_AA);
-    }
-  };
-  for (const auto& o : spec.obstacles) {
-    draw_solid(o, cv::Scalar(150, 150, 150), cv::FILLED);
-  }
-  for (std::size_t k = 0; k < spec.moving.size(); ++k) {
-    const auto& m = spec.moving[k];
-    for (std::size_t w = 1; w < m.waypoints.size(); ++w) {
-      cv::line(image, px(m.waypoints[w - 1]), px(m.waypoints[w]), cv::Scalar(200, 200, 200), 1);
-    }
-    draw_solid(world.moving_now(k), cv::Scalar(110, 110, 110), 2);
-  }
-  for (std::size_t i = 0; i < paths.size(); ++i) {
-    const cv::Scalar color = agent_color(i);
-    const auto& path = paths[i];
-    for (std::size_t k = 1; k < path.size(); ++k) {
-      cv::line(image, px(path[k - 1]), px(path[k]), color, 2, cv::LINE_AA);
-    }
-    const auto& agent = spec.agents[i];
-    cv::circle(image, px(agent.start_m), static_cast<int>(agent.radius_m * scale), color, 1,
-               cv::LINE_AA);
-    if (!path.empty()) {
-      // Filled where the agent ended in the world, a thick ring where it left it.
-      cv::circle(image, px(path.back()), static_cast<int>(agent.radius_m * scale), color,
-                 world.present(i) ? cv::FILLED : 3, cv::LINE_AA);
-    }
-    for (const auto& g : agent.goals) {
-      cv::drawMarker(image, px(g), color, cv::MARKER_CROSS, 14, 2);
-    }
-  }
-  for (const auto& c : collisions) {
-    cv::drawMarker(image, px(c.position_m), cv::Scalar(0, 0, 255), cv::MARKER_TILTED_CROSS, 18, 3);
-  }
-  cv::putText(image, caption, {kCaptionMargin, size.height - 10}, kCaptionFont, kCaptionScale,
-              cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
-  return image;
 }
 
 }  // namespace flowsteer::sim

@@ -13,11 +13,13 @@
 #include <stdexcept>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/eval/suite.hpp"
 #include "process_pool.hpp"
+#include "suite_files.hpp"
 
 namespace flowsteer::eval {
 namespace {
@@ -119,6 +121,56 @@ TEST(SuiteScore, AnAgentsEffortStopsWhenItReachesItsGoal) {
   EXPECT_NEAR(s.composite01,
               (a.active_time_s + a.kinetic_energy_sum + b.active_time_s + b.kinetic_energy_sum) / 2,
               1e-9);
+}
+
+SuiteRun run_with(int collisions, int obstacle_collisions, int goals_reached) {
+  SuiteRun run;
+  run.case_name = "case";
+  run.summary.agents = 4;
+  run.summary.collisions = collisions;
+  run.summary.obstacle_collisions = obstacle_collisions;
+  run.summary.goals_reached = goals_reached;
+  return run;
+}
+
+TEST(SuiteContactSheet, EachRunSaysWhyItIsNotClean) {
+  EXPECT_EQ(run_verdict(run_with(0, 0, 4)), "clean");
+  EXPECT_EQ(run_verdict(run_with(2, 1, 4)), "2 collisions (1 with obstacles)");
+  EXPECT_EQ(run_verdict(run_with(1, 0, 3)), "1 collision, goals 3/4");
+  EXPECT_EQ(run_verdict(run_with(0, 0, 3)), "goals 3/4");
+  SuiteRun failed;
+  failed.error = "worker killed by signal 9";
+  EXPECT_EQ(run_verdict(failed), "failed: worker killed by signal 9");
+}
+
+TEST(SuiteContactSheet, ConfigurationsNameWhatTheySet) {
+  EXPECT_EQ(configuration_label({}), "the case's own settings");
+  SuiteConfiguration c;
+  c.flow = servo::FlowMethod::dis_fast;
+  c.resolution = 64;
+  c.camera_noise_levels = 2.5;
+  EXPECT_EQ(configuration_label(c), "flow dis_fast, 64 px, noise 2.5");
+}
+
+// Red (kSheetRed) pixels in `image`.
+int red_pixels(const cv::Mat& image) {
+  cv::Mat red;
+  cv::inRange(image, cv::Scalar(0, 0, 200), cv::Scalar(60, 60, 255), red);
+  return cv::countNonZero(red);
+}
+
+TEST(SuiteContactSheet, OnlyRunsThatAreNotCleanAreFramedAndCaptionedInRed) {
+  SuiteRun clean = run_with(0, 0, 4);
+  SuiteRun bumped = run_with(2, 0, 4);
+  bumped.index = 1;
+  // No top views: each tile says so in grey, so that only frames and verdicts are red.
+  const cv::Mat sheet = contact_sheet({clean, bumped}, "/nonexistent");
+  ASSERT_EQ(sheet.cols % 2, 0);
+  const cv::Mat left = sheet.colRange(0, sheet.cols / 2);
+  const cv::Mat right = sheet.colRange(sheet.cols / 2, sheet.cols);
+  // The frame: 6 px wide round a 400 px tile.
+  EXPECT_GT(red_pixels(right), 4 * 400 * 5);
+  EXPECT_EQ(red_pixels(left), 0);
 }
 
 TEST(WorkerProcesses, EachTaskEndsOnItsOwnAndNoneStopsTheOthers) {

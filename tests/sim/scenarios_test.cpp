@@ -12,9 +12,11 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
+#include "flowsteer/pipeline/overlay.hpp"
 #include "flowsteer/sim/outputs.hpp"
 #include "flowsteer/sim/simulation.hpp"
 
@@ -532,6 +534,12 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
   }
   const cv::Mat top = cv::imread((dir / "topview.png").string());
   EXPECT_GT(top.cols, 100);
+  // The 32 px views enlarged enough for the TTC labels to be legible.
+  cv::VideoCapture video((dir / "agent_0.mp4").string());
+  cv::Mat frame;
+  ASSERT_TRUE(video.read(frame));
+  EXPECT_GE(frame.cols, 640);
+  EXPECT_EQ(frame.size(), pipeline::overlay_size({32, 32}));
   // Nothing left behind but the outputs.
   int entries = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) {
@@ -572,6 +580,92 @@ TEST(SimOutputs, TopviewOfANarrowWorldIsWideEnoughForItsCaption) {
   }
   EXPECT_GT(rightmost, 0);
   EXPECT_LT(rightmost, top.cols - 4);
+}
+
+// Rows of `image` holding ink (dark pixels) within `columns`, as runs of consecutive rows.
+int ink_row_runs(const cv::Mat& image, cv::Range columns) {
+  cv::Mat grey;
+  cv::cvtColor(image.colRange(columns), grey, cv::COLOR_BGR2GRAY);
+  int runs = 0;
+  bool in_run = false;
+  for (int row = 0; row < grey.rows; ++row) {
+    const bool ink = cv::countNonZero(grey.row(row) < 128) > 0;
+    runs += ink && !in_run ? 1 : 0;
+    in_run = ink;
+  }
+  return runs;
+}
+
+// Three agents walking side by side, 1 m apart, 10 m in 10 s.
+sim_camera::WorldSpec three_walkers() {
+  sim_camera::WorldSpec spec;
+  spec.name = "walkers";
+  for (const char* name : {"ann", "bob", "cy"}) {
+    sim_camera::AgentSpec walker;
+    walker.name = name;
+    walker.start_m = {-5.0, static_cast<double>(spec.agents.size())};
+    walker.goals = {{5.0, walker.start_m.y()}};
+    spec.agents.push_back(walker);
+  }
+  return spec;
+}
+
+std::vector<std::vector<Eigen::Vector2d>> straight_paths(const sim_camera::WorldSpec& spec) {
+  std::vector<std::vector<Eigen::Vector2d>> paths;
+  for (const sim_camera::AgentSpec& a : spec.agents) {
+    paths.emplace_back();
+    for (int k = 0; k <= 200; ++k) {
+      paths.back().push_back(a.start_m + (a.goals.front() - a.start_m) * k / 200.0);
+    }
+  }
+  return paths;
+}
+
+// Rows of the top view where `color` is drawn exactly.
+std::vector<int> rows_with(const cv::Mat& image, const cv::Scalar& color) {
+  cv::Mat match;
+  cv::inRange(image, color, color, match);
+  std::vector<int> rows;
+  for (int row = 0; row < match.rows; ++row) {
+    if (cv::countNonZero(match.row(row)) > 0) {
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
+TEST(SimOutputs, TopviewLegendShowsEveryAgentsColourBelowTheWorld) {
+  const sim_camera::WorldSpec spec = three_walkers();
+  const sim_camera::World world(spec);
+  const cv::Mat top = draw_topview(world, straight_paths(spec), {});
+  // Each path, its time marks and its circles span 50 px at most from top to bottom; the
+  // world's margin (1.5 m, ~100 px) lies between the lowest path and the legend.
+  for (std::size_t i = 0; i < spec.agents.size(); ++i) {
+    const std::vector<int> rows = rows_with(top, agent_color(i));
+    ASSERT_FALSE(rows.empty()) << i;
+    EXPECT_GT(rows.back(), rows.front() + 100) << "agent " << i << " has no swatch in a legend";
+  }
+}
+
+TEST(SimOutputs, TopviewHasMetreTicksLeftOfTheWorld) {
+  const sim_camera::WorldSpec spec = three_walkers();
+  const sim_camera::World world(spec);
+  const cv::Mat top = draw_topview(world, straight_paths(spec), {});
+  // The world spans 5 m in y: a labelled tick every metre at 69 px a metre.
+  EXPECT_GE(ink_row_runs(top.rowRange(30, top.rows - 120), {0, 50}), 4);
+}
+
+TEST(SimOutputs, TopviewTimeMarksAreFourToTenAlongARun) {
+  for (const double duration_s : {3.0, 10.0, 15.6, 21.0, 30.0, 120.0, 600.0}) {
+    const double interval_s = time_mark_interval_s(duration_s);
+    EXPECT_GE(duration_s / interval_s, 4.0) << duration_s;
+    EXPECT_LE(duration_s / interval_s, 10.0) << duration_s;
+  }
+  EXPECT_DOUBLE_EQ(tick_step(0.9), 1.0);
+  EXPECT_DOUBLE_EQ(tick_step(1.2), 2.0);
+  EXPECT_DOUBLE_EQ(tick_step(3.0), 5.0);
+  EXPECT_DOUBLE_EQ(tick_step(0.04), 0.05);
+  EXPECT_DOUBLE_EQ(tick_step(10.0), 10.0);
 }
 
 }  // namespace

@@ -26,10 +26,27 @@ void write_image(const std::filesystem::path& path, const cv::Mat& image);
 // (pipeline::draw_overlay).
 cv::Mat draw_overlay(const SimulatedAgent& agent);
 
-// The world from above (CGF Fig. 5): obstacles, paths coloured per agent, goals, collisions.
+// The world from above (CGF Fig. 5): obstacles, paths coloured per agent with time marks at
+// the same moments on every path, goals, collisions; metre ticks along the left and bottom
+// edges, then a legend of the agents' colours, a scale bar and what the time marks mean, and a
+// caption (scenario, time, collisions, pixels per metre). paths[i][k] is where agent i was at
+// k × the world's step_s.
 cv::Mat draw_topview(const sim_camera::World& world,
                      const std::vector<std::vector<Eigen::Vector2d>>& paths,
                      const std::vector<sim_camera::Collision>& collisions);
+
+// Agent i's colour in the top view and in the 3D scene; the palette repeats after
+// kAgentColors agents.
+inline constexpr std::size_t kAgentColors = 8;
+cv::Scalar agent_color(std::size_t agent);
+
+// The smallest of 1, 2 or 5 times a power of ten that is at least `at_least` (> 0): the step
+// between an axis' ticks.
+double tick_step(double at_least);
+
+// The interval between the top view's numbered time marks for a run of duration_s: 4 to 10
+// of them.
+double time_mark_interval_s(double duration_s);
 
 // The world as Foxglove draws it in 3D: what stands still (the recording's /world/static: the
 // obstacles and the goals), and what moves (its /world: the agents present now with their
