@@ -11,6 +11,7 @@
 
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/base/output_files.hpp"
+#include "flowsteer/report/page.hpp"
 #include "flowsteer/sim/outputs.hpp"
 #include "report_pages.hpp"
 #include "run_choices.hpp"
@@ -71,7 +72,7 @@ int axis_text_px(const std::string& text) {
 void draw_share_axis(cv::Mat& image, double max_share) {
   const cv::Rect& r = kHistogramPlot;
   cv::line(image, {r.x, r.y}, {r.x, r.br().y}, kAxisInk, 1);
-  const double tick = sim::tick_step(max_share / 5.0);
+  const double tick = report::tick_step(max_share / 5.0);
   for (double share = 0.0; share <= max_share + 1e-12; share += tick) {
     const int row = r.br().y - static_cast<int>(std::lround(share / max_share * r.height));
     cv::line(image, {r.x - 5, row}, {r.x, row}, kAxisInk, 1);

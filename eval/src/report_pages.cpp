@@ -6,6 +6,7 @@
 
 #include "flowsteer/report/page.hpp"
 #include "flowsteer/report/run_report.hpp"
+#include "suite_files.hpp"
 
 namespace flowsteer::eval {
 
@@ -52,25 +53,14 @@ std::string contacts_named(const std::filesystem::path& run_dir) {
   return named;
 }
 
-// Why a run is not clean, in words; empty for a clean run.
+// The run's verdict (run_verdict), with who touched what where its folder was kept.
 std::string reason(const SuiteRun& run, const std::filesystem::path& run_dir) {
-  if (run.failed()) {
-    return "failed: " + run.error;
-  }
-  const sim::RunSummary& s = run.summary;
-  std::string why;
-  if (s.collisions > 0) {
-    why = std::to_string(s.collisions) + (s.collisions == 1 ? " collision" : " collisions") + " (" +
-          std::to_string(s.obstacle_collisions) + " with obstacles)";
+  std::string why = run_verdict(run);
+  if (!run.failed() && run.summary.collisions > 0) {
     const std::string named = contacts_named(run_dir);
     if (!named.empty()) {
-      why += ": " + named;
+      why += "; contacts: " + named;
     }
-  }
-  if (s.goals_reached < s.agents_with_goal()) {
-    why += (why.empty() ? "" : "; ") + std::string("goal not reached by ") +
-           std::to_string(s.agents_with_goal() - s.goals_reached) + " of " +
-           std::to_string(s.agents_with_goal());
   }
   return why;
 }
@@ -80,7 +70,7 @@ std::vector<Cell> run_row(const SuiteRun& run, const std::filesystem::path& dir)
   Cell status = text_cell(run.failed() ? "failed" : run.clean() ? "clean" : "not clean");
   status.sort_value = run.failed() ? 2.0 : run.clean() ? 0.0 : 1.0;
   status.alert = !run.clean();
-  Cell why = text_cell(reason(run, dir / "runs" / run.folder_name()));
+  Cell why = text_cell(run.clean() ? "" : reason(run, run_dir));
   why.alert = !run.clean();
   why.prose = true;
   Cell page = text_cell("not kept");
@@ -94,7 +84,7 @@ std::vector<Cell> run_row(const SuiteRun& run, const std::filesystem::path& dir)
   goals.sort_value =
       s.agents_with_goal() > 0 ? static_cast<double>(s.goals_reached) / s.agents_with_goal() : 1.0;
   return {text_cell(run.case_name),
-          text_cell(to_string(run.configuration)),
+          text_cell(configuration_label(run.configuration)),
           status,
           why,
           goals,
@@ -111,7 +101,7 @@ report::Table configuration_totals(const std::vector<SuiteRun>& runs) {
   std::vector<std::string> order;
   std::map<std::string, std::pair<int, int>> clean_of;  // clean runs, runs
   for (const SuiteRun& run : runs) {
-    const std::string name = to_string(run.configuration);
+    const std::string name = configuration_label(run.configuration);
     if (!clean_of.contains(name)) {
       order.push_back(name);
     }

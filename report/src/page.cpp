@@ -162,9 +162,20 @@ std::string html_of(const Text& text, std::vector<std::string>&) {
 }  // namespace
 
 Rgb agent_color(std::size_t agent) {
-  static constexpr Rgb kPalette[] = {{30, 60, 200},  {40, 160, 40}, {220, 60, 30}, {180, 40, 180},
-                                     {200, 170, 20}, {20, 90, 120}, {90, 90, 90},  {140, 200, 60}};
+  static constexpr Rgb kPalette[kAgentColors] = {{30, 60, 200},  {40, 160, 40},  {220, 60, 30},
+                                                 {180, 40, 180}, {200, 170, 20}, {20, 90, 120},
+                                                 {90, 90, 90},   {140, 200, 60}};
   return kPalette[agent % std::size(kPalette)];
+}
+
+double tick_step(double at_least) {
+  const double decade = std::pow(10.0, std::floor(std::log10(at_least)));
+  for (const double mantissa : {1.0, 2.0, 5.0}) {
+    if (mantissa * decade >= at_least) {
+      return mantissa * decade;
+    }
+  }
+  return 10.0 * decade;
 }
 
 std::string render_page(Page& page) {

@@ -33,18 +33,6 @@ std::string tick_label(double value, double step) {
   return text;
 }
 
-// A step of 1, 2 or 5 times a power of ten giving about five ticks over the range.
-double tick_step(double range) {
-  const double raw = range / 5.0;
-  const double power = std::pow(10.0, std::floor(std::log10(raw)));
-  for (const double m : {1.0, 2.0, 5.0}) {
-    if (m * power >= raw) {
-      return m * power;
-    }
-  }
-  return 10.0 * power;
-}
-
 struct Range {
   double lo = std::numeric_limits<double>::infinity();
   double hi = -std::numeric_limits<double>::infinity();
@@ -147,14 +135,14 @@ Range time_range(const Plot& plot) {
 }
 
 void axes(std::string& svg, const Frame& f, const Plot& plot) {
-  const double y_step = tick_step(f.ys().hi - f.ys().lo);
+  const double y_step = tick_step((f.ys().hi - f.ys().lo) / 5.0);  // about five ticks
   for (double v = std::ceil(f.ys().lo / y_step) * y_step; v <= f.ys().hi + 1e-9; v += y_step) {
     svg += "<line class=\"grid\" x1=\"" + number(kLeft) + "\" x2=\"" + number(kWidth - kRight) +
            "\" y1=\"" + number(f.y(v)) + "\" y2=\"" + number(f.y(v)) + "\"/>";
     svg += "<text class=\"tick\" x=\"" + number(kLeft - 6) + "\" y=\"" + number(f.y(v) + 4) +
            "\" text-anchor=\"end\">" + tick_label(v, y_step) + "</text>";
   }
-  const double x_step = tick_step(f.xs().hi - f.xs().lo);
+  const double x_step = tick_step((f.xs().hi - f.xs().lo) / 5.0);
   for (double t = std::ceil(f.xs().lo / x_step) * x_step; t <= f.xs().hi + 1e-9; t += x_step) {
     svg += "<line class=\"axis\" x1=\"" + number(f.x(t)) + "\" x2=\"" + number(f.x(t)) +
            "\" y1=\"" + number(kHeight - kBottom) + "\" y2=\"" + number(kHeight - kBottom + 5) +

@@ -9,6 +9,7 @@
 
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/pipeline/overlay.hpp"
+#include "flowsteer/report/page.hpp"
 
 namespace flowsteer::sim {
 
@@ -47,20 +48,8 @@ void add_solid(fox::SceneEntity& entity, const sim_camera::Solid& s, const fox::
 }  // namespace
 
 cv::Scalar agent_color(std::size_t agent) {
-  static const cv::Scalar palette[kAgentColors] = {{200, 60, 30},  {40, 160, 40},  {30, 60, 220},
-                                                   {180, 40, 180}, {20, 170, 200}, {120, 90, 20},
-                                                   {90, 90, 90},   {60, 200, 140}};
-  return palette[agent % std::size(palette)];
-}
-
-double tick_step(double at_least) {
-  const double decade = std::pow(10.0, std::floor(std::log10(at_least)));
-  for (const double mantissa : {1.0, 2.0, 5.0}) {
-    if (mantissa * decade >= at_least) {
-      return mantissa * decade;
-    }
-  }
-  return 10.0 * decade;
+  const report::Rgb c = report::agent_color(agent);
+  return {static_cast<double>(c.b), static_cast<double>(c.g), static_cast<double>(c.r)};
 }
 
 std::vector<fox::SceneEntity> static_scene_entities(const sim_camera::World& world) {

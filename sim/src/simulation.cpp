@@ -240,6 +240,8 @@ class SimulationRun {
       loop.last_position = spec_.agents[i].start_m;
       loop.result.name = spec_.agents[i].name;
       loop.result.min_clearance_m = world_.clearance(i);
+      loop.result.closest_position_m = spec_.agents[i].start_m;
+      loop.result.closest_time_s = 0.0;
       loop.result.turn_rates.reserve(steps);
       paths_[i].reserve(steps + 1);
       loops_.push_back(std::move(loop));
@@ -284,7 +286,7 @@ class SimulationRun {
       AgentLoop& loop = loops_[i];
       const sim_camera::AgentState& s = world_.agents()[i];
       const double clearance_m = world_.clearance(i);
-      loop.result.min_clearance_m = std::min(loop.result.min_clearance_m, clearance_m);
+      note_clearance(loop.result, clearance_m, s.position_m);
       const double ttc_s = loop.steered && loop.agent ? min_ttc_s(loop.agent->brain())
                                                       : std::numeric_limits<double>::quiet_NaN();
       trajectories_.push_back({world_.time_s(), static_cast<double>(i), s.position_m.x(),
@@ -307,8 +309,7 @@ class SimulationRun {
     result.duration_s = world_.time_s();
     for (std::size_t i = 0; i < loops_.size(); ++i) {
       paths_[i].push_back(world_.agents()[i].position_m);  // where the last step left it
-      loops_[i].result.min_clearance_m =
-          std::min(loops_[i].result.min_clearance_m, world_.clearance(i));
+      note_clearance(loops_[i].result, world_.clearance(i), world_.agents()[i].position_m);
       result.agents.push_back(agent_result(i));
     }
     result.collisions = collisions_;
@@ -318,7 +319,7 @@ class SimulationRun {
       result.per_agent_step_ms = {sum_.render / n,   sum_.flow / n,    sum_.segment / n,
                                   sum_.features / n, sum_.control / n, sum_.total / n};
     }
-    result.topview = draw_topview(world_, paths_, result.collisions);
+    result.topview = draw_topview(world_, paths_, result.collisions, result.agents);
     return result;
   }
 
@@ -555,6 +556,15 @@ class SimulationRun {
         ++loops_[*c.other_agent].result.collisions;
       }
       collisions_.push_back(c);
+    }
+  }
+
+  // The agent's closest approach so far: the first moment of its least clearance.
+  void note_clearance(AgentResult& r, double clearance_m, const Eigen::Vector2d& position_m) const {
+    if (clearance_m < r.min_clearance_m) {
+      r.min_clearance_m = clearance_m;
+      r.closest_position_m = position_m;
+      r.closest_time_s = world_.time_s();
     }
   }
 

@@ -2,11 +2,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <span>
 #include <string>
 
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
 
+#include "flowsteer/report/page.hpp"
 #include "flowsteer/sim/outputs.hpp"
 
 namespace flowsteer::sim {
@@ -200,6 +202,34 @@ void draw_time_marks(cv::Mat& image, const Plot& plot,
   }
 }
 
+// A diamond in the agent's colour where each agent came closest to another body; the run's
+// closest approach, where some clearance was finite, ringed and labelled with it and its time.
+void draw_closest_approaches(cv::Mat& image, const Plot& plot,
+                             std::span<const AgentResult> agents) {
+  const AgentResult* closest = nullptr;
+  for (std::size_t i = 0; i < agents.size(); ++i) {
+    const AgentResult& a = agents[i];
+    if (!std::isfinite(a.min_clearance_m) || !a.closest_position_m.allFinite()) {
+      continue;
+    }
+    const cv::Point at = plot.px(a.closest_position_m);
+    cv::drawMarker(image, at, kPaper, cv::MARKER_DIAMOND, 15, 4, cv::LINE_AA);
+    cv::drawMarker(image, at, agent_color(i), cv::MARKER_DIAMOND, 13, 2, cv::LINE_AA);
+    if (closest == nullptr || a.min_clearance_m < closest->min_clearance_m) {
+      closest = &a;
+    }
+  }
+  if (closest == nullptr) {
+    return;
+  }
+  const cv::Point at = plot.px(closest->closest_position_m);
+  cv::circle(image, at, 14, kInk, 1, cv::LINE_AA);
+  char label[64];
+  std::snprintf(label, sizeof label, "closest: %.2f m at %.1f s", closest->min_clearance_m,
+                closest->closest_time_s);
+  put_label(image, label, at + cv::Point(16, 18), kInk);
+}
+
 // A swatch and a name per agent, in as many columns as fit, column by column; what does not
 // fit in kLegendMaxRows rows is counted in the last cell.
 struct LegendGrid {
@@ -242,13 +272,14 @@ void draw_legend(cv::Mat& image, const sim_camera::WorldSpec& spec, int top_px) 
 // What the time marks mean and, where there are more agents than colours, that they repeat.
 std::string key_text(const TimeMarks& marks, std::size_t agents) {
   char text[128];
-  std::snprintf(text, sizeof text, "time marks: a dot every %g s, numbered every %g s", marks.dot_s,
-                marks.label_s);
-  if (agents <= kAgentColors) {
+  std::snprintf(text, sizeof text,
+                "time marks: a dot every %g s, numbered every %g s; diamond: closest approach",
+                marks.dot_s, marks.label_s);
+  if (agents <= report::kAgentColors) {
     return text;
   }
   char repeat[64];
-  std::snprintf(repeat, sizeof repeat, "; colours repeat after %zu agents", kAgentColors);
+  std::snprintf(repeat, sizeof repeat, "; colours repeat after %zu agents", report::kAgentColors);
   return std::string(text) + repeat;
 }
 
@@ -306,9 +337,9 @@ Layout layout(const sim_camera::World& world,
   l.plot.hi_m = bounds.max() + Eigen::Vector2d::Constant(kWorldMarginM);
   const Eigen::Vector2d extent = l.plot.hi_m - l.plot.lo_m;
   l.plot.px_per_m = kWorldPx / extent.maxCoeff();
-  l.tick_m = tick_step(45.0 / l.plot.px_per_m);
+  l.tick_m = report::tick_step(45.0 / l.plot.px_per_m);
   l.marks.label_s = time_mark_interval_s(path_duration_s(paths, spec.step_s));
-  l.marks.dot_s = tick_step(l.marks.label_s / 5.0);
+  l.marks.dot_s = report::tick_step(l.marks.label_s / 5.0);
   l.key = key_text(l.marks, spec.agents.size());
   l.caption = caption_text(world, collisions, l.plot.px_per_m);
   const cv::Size plot_px(static_cast<int>(extent.x() * l.plot.px_per_m),
@@ -330,18 +361,20 @@ Layout layout(const sim_camera::World& world,
 }  // namespace
 
 double time_mark_interval_s(double duration_s) {
-  return tick_step(std::max(duration_s, 1.0) / 10.0);
+  return report::tick_step(std::max(duration_s, 1.0) / 10.0);
 }
 
 cv::Mat draw_topview(const sim_camera::World& world,
                      const std::vector<std::vector<Eigen::Vector2d>>& paths,
-                     const std::vector<sim_camera::Collision>& collisions) {
+                     const std::vector<sim_camera::Collision>& collisions,
+                     std::span<const AgentResult> agents) {
   const Layout l = layout(world, paths, collisions.size());
   cv::Mat image(l.size, CV_8UC3, kPaper);
   draw_axes(image, l.plot, l.tick_m);
   draw_scene(image, l.plot, world);
   draw_paths(image, l.plot, world, paths);
   draw_time_marks(image, l.plot, paths, world.spec().step_s, l.marks);
+  draw_closest_approaches(image, l.plot, agents);
   for (const auto& c : collisions) {
     cv::drawMarker(image, l.plot.px(c.position_m), cv::Scalar(0, 0, 255), cv::MARKER_TILTED_CROSS,
                    18, 3);

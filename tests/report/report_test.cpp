@@ -94,6 +94,14 @@ TEST_F(Folder, CsvFileReadsNumbersAndNamesWhatIsWrong) {
   EXPECT_THROW(CsvFile(dir_ / "none.csv"), std::runtime_error);
 }
 
+TEST(Plot, TickStepsAreOneTwoOrFiveTimesAPowerOfTen) {
+  EXPECT_DOUBLE_EQ(tick_step(0.9), 1.0);
+  EXPECT_DOUBLE_EQ(tick_step(1.2), 2.0);
+  EXPECT_DOUBLE_EQ(tick_step(3.0), 5.0);
+  EXPECT_DOUBLE_EQ(tick_step(0.04), 0.05);
+  EXPECT_DOUBLE_EQ(tick_step(10.0), 10.0);
+}
+
 TEST(Plot, EverySeriesIsALineAndAGapBreaksIt) {
   Plot plot;
   plot.y_label = "m/s";

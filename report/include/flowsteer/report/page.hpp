@@ -19,8 +19,14 @@ struct Rgb {
   std::uint8_t g = 0;
   std::uint8_t b = 0;
 };
-// The colour agent i has in every picture of a run: the top view, its legend, the plots.
+// The colour agent i has in every picture of a run: the top view, its legend, the plots, the 3D
+// scene of a recording; the palette repeats after kAgentColors agents.
+inline constexpr std::size_t kAgentColors = 8;
 Rgb agent_color(std::size_t agent);
+
+// The smallest of 1, 2 or 5 times a power of ten that is at least `at_least` (> 0): the step
+// between an axis' ticks.
+double tick_step(double at_least);
 
 // One agent's values over time in a plot; NaN leaves a gap (an agent that has left, no value).
 struct Series {

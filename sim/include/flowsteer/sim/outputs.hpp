@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -31,18 +32,15 @@ cv::Mat draw_overlay(const SimulatedAgent& agent);
 // edges, then a legend of the agents' colours, a scale bar and what the time marks mean, and a
 // caption (scenario, time, collisions, pixels per metre). paths[i][k] is where agent i was at
 // k × the world's step_s.
+// Where agents are given, each one's closest approach (AgentResult::closest_position_m) is a
+// diamond in its colour, and the run's closest is labelled with its clearance and time.
 cv::Mat draw_topview(const sim_camera::World& world,
                      const std::vector<std::vector<Eigen::Vector2d>>& paths,
-                     const std::vector<sim_camera::Collision>& collisions);
+                     const std::vector<sim_camera::Collision>& collisions,
+                     std::span<const AgentResult> agents = {});
 
-// Agent i's colour in the top view and in the 3D scene; the palette repeats after
-// kAgentColors agents.
-inline constexpr std::size_t kAgentColors = 8;
+// Agent i's colour (report::agent_color) as OpenCV draws it (BGR).
 cv::Scalar agent_color(std::size_t agent);
-
-// The smallest of 1, 2 or 5 times a power of ten that is at least `at_least` (> 0): the step
-// between an axis' ticks.
-double tick_step(double at_least);
 
 // The interval between the top view's numbered time marks for a run of duration_s: 4 to 10
 // of them.

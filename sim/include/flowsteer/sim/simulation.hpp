@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <optional>
@@ -67,6 +68,10 @@ struct AgentResult {
   double time_to_goal_s = -1.0;
   double path_length_m = 0.0;
   double min_clearance_m = 0.0;
+  // Where the agent was (world frame, m) and when at its least clearance, the first time: the
+  // top view marks it.
+  Eigen::Vector2d closest_position_m = Eigen::Vector2d::Constant(std::nan(""));
+  double closest_time_s = std::nan("");
   int collisions = 0;
   double final_distance_to_leader_m = -1.0;  // followers only
   // From its start through its goals in order to its last goal's circle, where it arrives; NaN
