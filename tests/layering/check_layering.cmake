@@ -24,7 +24,7 @@ set(allowed_sim base report recording camera_io servo sim_camera pipeline)
 set(allowed_eval base report recording camera_io servo sim_camera pipeline sim)
 set(allowed_config base ros2_dds camera_io servo sim_camera drivers calibration)
 set(allowed_robot base recording camera_io servo drivers calibration pipeline config)
-set(allowed_sil base report recording camera_io servo sim_camera drivers calibration pipeline sim config)
+set(allowed_sil base recording camera_io servo sim_camera drivers calibration pipeline sim config)
 set(allowed_launch base report recording camera_io servo sim_camera drivers calibration pipeline sim eval config
     robot sil)
 
