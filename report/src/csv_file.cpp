@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
+#include <string_view>
 
 namespace flowsteer::report {
 
@@ -24,7 +25,8 @@ std::vector<std::string> split(const std::string& line) {
 
 }  // namespace
 
-CsvFile::CsvFile(const std::filesystem::path& path) : path_(path.string()) {
+CsvFile::CsvFile(const std::filesystem::path& path, const std::vector<std::string>& text_columns)
+    : path_(path.string()) {
   std::ifstream in(path);
   if (!in) {
     throw std::runtime_error(path_ + ": missing or unreadable");
@@ -34,15 +36,45 @@ CsvFile::CsvFile(const std::filesystem::path& path) : path_(path.string()) {
     throw std::runtime_error(path_ + ": empty, no header");
   }
   header_ = split(line);
+  for (const std::string& name : header_) {
+    is_text_.push_back(std::find(text_columns.begin(), text_columns.end(), name) !=
+                       text_columns.end());
+  }
+  numbers_.resize(header_.size());
+  texts_.resize(header_.size());
   for (int line_number = 2; std::getline(in, line); ++line_number) {
-    std::vector<std::string> cells = split(line);
-    if (cells.size() != header_.size()) {
+    const auto cells = static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+    if (cells != header_.size()) {
       throw std::runtime_error(path_ + ":" + std::to_string(line_number) + ": " +
-                               std::to_string(cells.size()) + " cells under a header of " +
+                               std::to_string(cells) + " cells under a header of " +
                                std::to_string(header_.size()));
     }
-    cells_.push_back(std::move(cells));
+    std::size_t from = 0;
+    for (std::size_t c = 0; c < header_.size(); ++c) {
+      const std::size_t end = std::min(line.find(',', from), line.size());
+      const std::string_view cell(line.data() + from, end - from);
+      from = end + 1;
+      if (is_text_[c]) {
+        texts_[c].emplace_back(cell);
+      } else {
+        numbers_[c].push_back(number(cell, line_number, c));
+      }
+    }
+    ++rows_;
   }
+}
+
+double CsvFile::number(std::string_view cell, int line_number, std::size_t column) const {
+  double value = std::nan("");
+  if (cell.empty()) {
+    return value;
+  }
+  const auto [stop, error] = std::from_chars(cell.data(), cell.data() + cell.size(), value);
+  if (error != std::errc() || stop != cell.data() + cell.size()) {
+    throw std::runtime_error(path_ + ":" + std::to_string(line_number) + ": column '" +
+                             header_[column] + "': not a number: '" + std::string(cell) + "'");
+  }
+  return value;
 }
 
 bool CsvFile::has_column(const std::string& name) const {
@@ -57,27 +89,20 @@ std::size_t CsvFile::column(const std::string& name) const {
   return static_cast<std::size_t>(found - header_.begin());
 }
 
-double CsvFile::number(std::size_t row, std::size_t column) const {
-  const std::string& text = cells_[row][column];
-  if (text.empty()) {
-    return std::nan("");
+const std::vector<double>& CsvFile::numbers(const std::string& name) const {
+  const std::size_t c = column(name);
+  if (is_text_[c]) {
+    throw std::runtime_error(path_ + ": column '" + name + "' is text, not numbers");
   }
-  double value = 0.0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc() || end != text.data() + text.size()) {
-    throw std::runtime_error(path_ + ":" + std::to_string(row + 2) + ": column '" +
-                             header_[column] + "': not a number: '" + text + "'");
-  }
-  return value;
+  return numbers_[c];
 }
 
-std::vector<double> CsvFile::numbers(const std::string& name) const {
+const std::vector<std::string>& CsvFile::texts(const std::string& name) const {
   const std::size_t c = column(name);
-  std::vector<double> values(rows());
-  for (std::size_t r = 0; r < rows(); ++r) {
-    values[r] = number(r, c);
+  if (!is_text_[c]) {
+    throw std::runtime_error(path_ + ": column '" + name + "' holds numbers, not text");
   }
-  return values;
+  return texts_[c];
 }
 
 }  // namespace flowsteer::report

@@ -8,6 +8,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "csv_file.hpp"
+#include "flowsteer/base/output_files.hpp"
 #include "flowsteer/report/page.hpp"
 
 namespace flowsteer::report {
@@ -54,6 +55,16 @@ void attempt(std::vector<std::string>& problems, const std::function<void()>& re
   } catch (const std::exception& e) {
     problems.push_back(e.what());
   }
+}
+
+// A row's agent column as an index; throws std::runtime_error naming the file and line where it
+// is not one.
+std::size_t agent_index(double agent, const CsvFile& csv, std::size_t row) {
+  if (!(agent >= 0.0 && agent < 1e6) || agent != std::floor(agent)) {
+    throw std::runtime_error(csv.path() + ":" + std::to_string(row + 2) + ": agent '" +
+                             base::format_csv_number(agent) + "' is not an index");
+  }
+  return static_cast<std::size_t>(agent);
 }
 
 struct RunFacts {
@@ -109,16 +120,12 @@ void add_summary(const std::filesystem::path& dir, Page& page, RunFacts& facts) 
 // Every agent's values of one column over time, one series per agent.
 std::vector<Series> per_agent(const CsvFile& csv, const std::string& column,
                               const RunFacts& facts) {
-  const std::vector<double> t = csv.numbers("t");
-  const std::vector<double> agent = csv.numbers("agent");
-  const std::vector<double> values = csv.numbers(column);
+  const std::vector<double>& t = csv.numbers("t");
+  const std::vector<double>& agent = csv.numbers("agent");
+  const std::vector<double>& values = csv.numbers(column);
   std::vector<Series> series;
   for (std::size_t r = 0; r < csv.rows(); ++r) {
-    if (!(agent[r] >= 0.0) || agent[r] != std::floor(agent[r])) {
-      throw std::runtime_error(csv.path() + ":" + std::to_string(r + 2) + ": agent '" +
-                               csv.text(r, csv.column("agent")) + "' is not an index");
-    }
-    const auto i = static_cast<std::size_t>(agent[r]);
+    const std::size_t i = agent_index(agent[r], csv, r);
     while (series.size() <= i) {
       series.push_back({facts.name(series.size()), agent_color(series.size()), {}, {}});
     }
@@ -225,18 +232,13 @@ void add_videos(const std::filesystem::path& dir, Page& page, const RunFacts& fa
 }  // namespace
 
 std::vector<Contact> read_contacts(const std::filesystem::path& run_dir) {
-  const CsvFile csv(run_dir / "collisions.csv");
-  const std::size_t with = csv.column("with");
-  const std::size_t t = csv.column("t");
-  const std::size_t agent = csv.column("agent");
+  const CsvFile csv(run_dir / "collisions.csv", {"with"});
+  const std::vector<std::string>& with = csv.texts("with");
+  const std::vector<double>& t = csv.numbers("t");
+  const std::vector<double>& agent = csv.numbers("agent");
   std::vector<Contact> contacts;
   for (std::size_t r = 0; r < csv.rows(); ++r) {
-    const double index = csv.number(r, agent);
-    if (!(index >= 0.0) || index != std::floor(index)) {
-      throw std::runtime_error((run_dir / "collisions.csv").string() + ":" + std::to_string(r + 2) +
-                               ": agent '" + csv.text(r, agent) + "' is not an index");
-    }
-    contacts.push_back({csv.number(r, t), static_cast<std::size_t>(index), csv.text(r, with)});
+    contacts.push_back({t[r], agent_index(agent[r], csv, r), with[r]});
   }
   return contacts;
 }

@@ -15,9 +15,12 @@ constexpr double kLeft = 64.0;  // room for the y ticks' labels
 constexpr double kRight = 14.0;
 constexpr double kTop = 50.0;  // the title, and the legend under it
 constexpr double kBottom = 40.0;
-// A line of more points than this is drawn as the least and greatest value of each of
-// kMaxPoints / 2 spans of its samples: the plot stays small and keeps every spike.
+// A line of more points than its share of these is drawn as the least and greatest value of
+// each of as many spans of its samples as the share allows (at least kMinPoints / 2): the page
+// stays small for a long run or a crowd and keeps every spike.
+constexpr std::size_t kMaxPointsPerPlot = 24000;
 constexpr std::size_t kMaxPoints = 1200;
+constexpr std::size_t kMinPoints = 60;
 constexpr std::size_t kMaxLegend = 10;  // more series are named by the top view's legend
 
 std::string number(double value) {
@@ -51,16 +54,16 @@ double clipped(double value, const Plot& plot) {
 
 // The samples a series is drawn with: all of them, or each span's least and greatest in time
 // order.
-std::vector<std::size_t> drawn_samples(const Series& s) {
+std::vector<std::size_t> drawn_samples(const Series& s, std::size_t max_points) {
   const std::size_t n = std::min(s.t_s.size(), s.values.size());
   std::vector<std::size_t> kept;
-  if (n <= kMaxPoints) {
+  if (n <= max_points) {
     for (std::size_t k = 0; k < n; ++k) {
       kept.push_back(k);
     }
     return kept;
   }
-  const std::size_t spans = kMaxPoints / 2;
+  const std::size_t spans = max_points / 2;
   for (std::size_t span = 0; span < spans; ++span) {
     const std::size_t from = span * n / spans;
     const std::size_t to = (span + 1) * n / spans;
@@ -162,10 +165,12 @@ void axes(std::string& svg, const Frame& f, const Plot& plot) {
 }
 
 void lines(std::string& svg, const Frame& f, const Plot& plot) {
+  const std::size_t max_points = std::clamp(
+      kMaxPointsPerPlot / std::max<std::size_t>(plot.series.size(), 1), kMinPoints, kMaxPoints);
   for (const Series& s : plot.series) {
     std::string d;
     bool pen_down = false;
-    for (const std::size_t k : drawn_samples(s)) {
+    for (const std::size_t k : drawn_samples(s, max_points)) {
       const double v = clipped(s.values[k], plot);
       if (!std::isfinite(v) || !std::isfinite(s.t_s[k])) {
         pen_down = false;

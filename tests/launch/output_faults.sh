@@ -68,7 +68,7 @@ namespaced_cases() {
   local disk=$work/disk
   mkdir -p "$disk"
 
-  mount -t tmpfs -o size=256k tmpfs "$disk"
+  mount -t tmpfs -o size=1m tmpfs "$disk"
   good_run "$disk/out"
   local before status=0
   before=$(snapshot "$disk/out")
