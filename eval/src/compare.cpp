@@ -92,7 +92,10 @@ void draw_rate_axis(cv::Mat& image, const std::vector<double>& edges) {
                                                        (edges.back() - edges.front()) * r.width));
     cv::line(image, {col, r.br().y}, {col, r.br().y + 5}, kAxisInk, 1);
     char label[16];
-    std::snprintf(label, sizeof label, rate == 0.0 ? "0" : "%+.2f", rate);
+    std::snprintf(label, sizeof label, "%+.2f", rate);
+    if (rate == 0.0) {
+      std::snprintf(label, sizeof label, "0");
+    }
     put_axis_text(image, label, {col - axis_text_px(label) / 2, r.br().y + 22});
   }
   const std::string title = "turn rate (rad/s)";

@@ -13,23 +13,11 @@ namespace flowsteer::eval {
 namespace {
 
 using report::Cell;
+using report::number_cell;
+using report::text_cell;
 
 // A run's contacts named in its reason, at most this many, then how many more.
 constexpr std::size_t kContactsNamed = 3;
-
-Cell text_cell(std::string text) {
-  Cell cell;
-  cell.text = std::move(text);
-  return cell;
-}
-
-Cell number_cell(double value, int decimals, const char* unit = "") {
-  char text[48];
-  std::snprintf(text, sizeof text, "%.*f%s", decimals, value, unit);
-  Cell cell = text_cell(std::isfinite(value) ? text : "-");
-  cell.sort_value = value;
-  return cell;
-}
 
 // Who touched what and when, from a kept run folder's collisions.csv; empty where the folder was
 // not kept or has no such file (the counts say the rest).
@@ -74,7 +62,8 @@ std::vector<Cell> run_row(const SuiteRun& run, const std::filesystem::path& dir)
   why.alert = !run.clean();
   why.prose = true;
   Cell page = text_cell("not kept");
-  if (std::filesystem::exists(run_dir / "report.html")) {
+  std::error_code unreadable;  // a folder that cannot be looked into has no page to link
+  if (std::filesystem::exists(run_dir / "report.html", unreadable)) {
     page.text = "run page";
     page.link = "runs/" + run.folder_name() + "/report.html";
   }
@@ -120,7 +109,8 @@ report::Table configuration_totals(const std::vector<SuiteRun>& runs) {
 
 }  // namespace
 
-void write_suite_page(const SuiteResult& result, const std::filesystem::path& dir) {
+std::vector<std::string> write_suite_page(const SuiteResult& result,
+                                          const std::filesystem::path& dir) {
   report::Page page;
   page.title = "flowsteer suite " + result.suite_id;
   std::size_t clean = 0;
@@ -146,6 +136,7 @@ void write_suite_page(const SuiteResult& result, const std::filesystem::path& di
   page.sections.emplace_back(report::Picture{"Every run from above (not clean: framed in red)",
                                              dir / "contact_sheet.png"});
   report::write_page(dir / "report.html", page);
+  return page.problems;
 }
 
 void write_compare_page(const CompareResult& result, const std::vector<CompareRow>& rows,

@@ -435,7 +435,9 @@ std::vector<std::string> write_suite_reports(const std::filesystem::path& dir) {
       }
     }
   }
-  write_suite_page(result, dir);
+  for (const std::string& problem : write_suite_page(result, dir)) {
+    problems.push_back(problem);
+  }
   return problems;
 }
 

@@ -325,6 +325,11 @@ std::string run_verdict(const SuiteRun& run) {
     parts.push_back("goals " + std::to_string(s.goals_reached) + "/" +
                     std::to_string(s.agents_with_goal()));
   }
+  if (parts.empty()) {
+    // Not clean by a count no part names: more goals than agents with goals (a follower that
+    // also had goals reached them).
+    return "goals " + std::to_string(s.goals_reached) + "/" + std::to_string(s.agents_with_goal());
+  }
   return parts.size() == 1 ? parts.front() : parts.front() + ", " + parts.back();
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -147,6 +148,16 @@ const servo::ControlOutput& Brain::step(const BrainInput& input) {
   times_.control = control.elapsed_ms();
   times_.total = total.elapsed_ms();
   return output_;
+}
+
+double Brain::min_ttc_s() const {
+  double least_s = std::numeric_limits<double>::quiet_NaN();
+  for (const servo::ObjectFeatures& o : percept_.objects) {
+    if (o.status == servo::MotionStatus::approaching && o.ttc_s > 0.0 && !(o.ttc_s >= least_s)) {
+      least_s = o.ttc_s;
+    }
+  }
+  return least_s;
 }
 
 }  // namespace flowsteer::pipeline

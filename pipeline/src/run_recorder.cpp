@@ -60,14 +60,10 @@ std::string step_json(std::uint64_t t_ns, const Brain& brain) {
     out += (k > 0 ? std::string(",") : std::string()) + base::json_string(output.terms[k].name) +
            ":" + number(output.terms[k].gradient.cost);
   }
-  double min_ttc_s = std::numeric_limits<double>::infinity();
   out += "},\"objects\":[";
   const auto objects = brain.objects();
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const servo::ObjectFeatures& o = objects[i];
-    if (o.status == servo::MotionStatus::approaching && o.ttc_s > 0.0) {
-      min_ttc_s = std::min(min_ttc_s, o.ttc_s);
-    }
     out += (i > 0 ? std::string(",") : std::string()) + "{\"label\":" + std::to_string(o.label) +
            ",\"status\":" + base::json_string(servo::to_string(o.status)) +
            ",\"kind\":" + base::json_string(servo::to_string(o.kind)) +
@@ -76,7 +72,7 @@ std::string step_json(std::uint64_t t_ns, const Brain& brain) {
            ",\"foe_y\":" + number(o.foe.y()) + ",\"ttc_s\":" + number(o.ttc_s) +
            ",\"pixels\":" + std::to_string(o.pixel_count) + "}";
   }
-  return out + "],\"min_ttc_s\":" + number(min_ttc_s) + "}";
+  return out + "],\"min_ttc_s\":" + number(brain.min_ttc_s()) + "}";
 }
 
 fox::Color status_color(servo::MotionStatus status) {

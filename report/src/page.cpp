@@ -1,6 +1,9 @@
 #include "flowsteer/report/page.hpp"
 
+#include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -12,6 +15,9 @@
 namespace flowsteer::report {
 
 namespace {
+
+// A picture larger than this is linked rather than embedded.
+constexpr std::uintmax_t kMaxEmbeddedBytes = 8'000'000;
 
 // Sorts a sortable table by the column whose heading was clicked, by its cells' data-sort
 // numbers where both cells have one (an empty one is not a number and sorts last), else by text;
@@ -59,7 +65,7 @@ svg.plot { display: block; margin: 6px 0 14px; } svg.plot .title { font-size: 14
   font-weight: 600; } svg.plot .tick { font-size: 11px; fill: #444; }
 svg.plot .label { font-size: 12px; fill: #222; } svg.plot .note { font-size: 13px; fill: #777; }
 svg.plot .grid { stroke: #e6e6e6; } svg.plot .axis { stroke: #444; }
-svg.plot .series { fill: none; stroke-width: 1.5; } svg.plot line.series { stroke-width: 3; }
+svg.plot .series { fill: none; stroke-width: 1.5; stroke-linecap: round; } svg.plot line.series { stroke-width: 3; }
 svg.plot .mark { stroke: #d00000; stroke-dasharray: 4 3; stroke-width: 1.2; }
 )";
 
@@ -81,6 +87,26 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
+// A relative address with each byte that is not unreserved in a URL's path percent-encoded: a
+// case named "a b#2" still links to its folder.
+std::string percent_encoded(const std::string& address) {
+  std::string out;
+  for (const char c : address) {
+    if (std::isalnum(static_cast<unsigned char>(c)) != 0 || std::strchr("-._~/", c) != nullptr) {
+      out += c;
+    } else {
+      char code[4];
+      std::snprintf(code, sizeof code, "%%%02X", static_cast<unsigned char>(c));
+      out += code;
+    }
+  }
+  return out;
+}
+
+std::string anchor(const std::string& address, const std::string& text) {
+  return "<a href=\"" + escaped(percent_encoded(address)) + "\">" + escaped(text) + "</a>";
+}
+
 std::string heading(const std::string& text) {
   return text.empty() ? "" : "<h2>" + escaped(text) + "</h2>\n";
 }
@@ -92,16 +118,17 @@ std::string cell_html(const Cell& cell) {
             (cell.alert && cell.prose ? " " : "") + (cell.prose ? "prose" : "") + "\"";
   }
   if (cell.sort_value) {
-    html += " data-sort=\"" +
-            (std::isfinite(*cell.sort_value) ? base::json_number(*cell.sort_value) : "") + "\"";
+    html +=
+        " data-sort=\"" +
+        (std::isfinite(*cell.sort_value) ? base::json_number(*cell.sort_value, base::Digits::exact)
+                                         : "") +
+        "\"";
   }
   html += ">";
   if (cell.swatch) {
     html += "<span class=\"swatch\" style=\"background:" + css_color(*cell.swatch) + "\"></span>";
   }
-  html += cell.link.empty()
-              ? escaped(cell.text)
-              : "<a href=\"" + escaped(cell.link) + "\">" + escaped(cell.text) + "</a>";
+  html += cell.link.empty() ? escaped(cell.text) : anchor(cell.link, cell.text);
   return html + "</td>";
 }
 
@@ -124,12 +151,19 @@ std::string html_of(const Table& table, std::vector<std::string>&) {
 
 std::string html_of(const Picture& picture, std::vector<std::string>& problems) {
   const std::string name = picture.file.filename().string();
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(picture.file, error);
+  if (!error && size > kMaxEmbeddedBytes) {
+    // A contact sheet of hundreds of runs: linked, so that the page stays quick to open.
+    return heading(picture.heading) + "<p>" + anchor(name, name) + " (" +
+           std::to_string(size / 1'000'000) + " MB, not embedded)</p>\n";
+  }
   std::ifstream in(picture.file, std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const char* problem = !std::filesystem::exists(picture.file) ? "missing"
-                        : in.bad() || !in.is_open()            ? "unreadable"
-                        : bytes.empty()                        ? "empty"
-                                                               : nullptr;
+  const char* problem = error                       ? "missing or unreadable"
+                        : !in.is_open() || in.bad() ? "unreadable"
+                        : bytes.empty()             ? "empty"
+                                                    : nullptr;
   if (problem != nullptr) {
     problems.push_back(name + ": " + problem);
     return heading(picture.heading) + "<p class=\"note\">(" + escaped(name) + " " + problem +
@@ -146,7 +180,7 @@ std::string html_of(const Plot& plot, std::vector<std::string>&) {
 std::string html_of(const Links& links, std::vector<std::string>&) {
   std::string html = heading(links.heading) + "<ul>";
   for (const auto& [text, address] : links.links) {
-    html += "<li><a href=\"" + escaped(address) + "\">" + escaped(text) + "</a></li>";
+    html += "<li>" + anchor(address, text) + "</li>";
   }
   return html + "</ul>\n";
 }
@@ -160,6 +194,20 @@ std::string html_of(const Text& text, std::vector<std::string>&) {
 }
 
 }  // namespace
+
+Cell text_cell(std::string text) {
+  Cell cell;
+  cell.text = std::move(text);
+  return cell;
+}
+
+Cell number_cell(double value, int decimals, const std::string& unit) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  Cell cell = text_cell(std::isfinite(value) ? text + unit : "-");
+  cell.sort_value = value;
+  return cell;
+}
 
 Rgb agent_color(std::size_t agent) {
   static constexpr Rgb kPalette[kAgentColors] = {{30, 60, 200},  {40, 160, 40},  {220, 60, 30},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 
 #include <yaml-cpp/yaml.h>
@@ -19,27 +20,6 @@ namespace {
 // clearance of many metres, says nothing about the moments that matter.
 constexpr double kTtcCapS = 10.0;
 constexpr double kClearanceCapM = 3.0;
-
-std::string fixed(double value, int decimals) {
-  if (!std::isfinite(value)) {
-    return "-";
-  }
-  char text[32];
-  std::snprintf(text, sizeof text, "%.*f", decimals, value);
-  return text;
-}
-
-Cell text_cell(std::string text) {
-  Cell cell;
-  cell.text = std::move(text);
-  return cell;
-}
-
-Cell number_cell(double value, int decimals, const std::string& unit = "") {
-  Cell cell = text_cell(fixed(value, decimals) + (std::isfinite(value) ? unit : ""));
-  cell.sort_value = value;
-  return cell;
-}
 
 Cell agent_cell(const std::string& name, std::size_t agent) {
   Cell cell = text_cell(name);
@@ -77,7 +57,8 @@ struct RunFacts {
 // summary.json: the facts under the title and the agents' table.
 void add_summary(const std::filesystem::path& dir, Page& page, RunFacts& facts) {
   const std::string path = (dir / "summary.json").string();
-  if (!std::filesystem::exists(path)) {
+  std::error_code unreadable;
+  if (!std::filesystem::exists(path, unreadable)) {
     throw std::runtime_error(path + ": missing");
   }
   YAML::Node summary;
@@ -90,8 +71,9 @@ void add_summary(const std::filesystem::path& dir, Page& page, RunFacts& facts) 
   page.title = "flowsteer run: " + scenario;
   page.facts.push_back("rule on arrival: " + summary["arrival"].as<std::string>("?") + ", " +
                        std::to_string(summary["steps"].as<int>(0)) + " steps, " +
-                       fixed(summary["duration_s"].as<double>(NAN), 2) + " s simulated, " +
-                       std::to_string(summary["collisions_total"].as<int>(0)) + " collisions");
+                       number_cell(summary["duration_s"].as<double>(NAN), 2).text +
+                       " s simulated, " + std::to_string(summary["collisions_total"].as<int>(0)) +
+                       " collisions");
   Table table;
   table.heading = "Agents";
   table.columns = {"agent",         "reached goal", "time to goal", "path length",
@@ -135,13 +117,20 @@ std::vector<Series> per_agent(const CsvFile& csv, const std::string& column,
   return series;
 }
 
-std::vector<Contact> contacts_or_none(const std::filesystem::path& dir, Page& page) {
-  std::vector<Contact> contacts;
+// The run's contacts; none where collisions.csv cannot be read (a problem of the page).
+std::optional<std::vector<Contact>> contacts_if_read(const std::filesystem::path& dir, Page& page) {
+  std::optional<std::vector<Contact>> contacts;
   attempt(page.problems, [&] { contacts = read_contacts(dir); });
   return contacts;
 }
 
-void add_contacts(const std::vector<Contact>& contacts, Page& page, const RunFacts& facts) {
+void add_contacts(const std::optional<std::vector<Contact>>& read, Page& page,
+                  const RunFacts& facts) {
+  if (!read) {
+    page.sections.emplace_back(Text{"Contacts", {"Unknown: collisions.csv could not be read."}});
+    return;
+  }
+  const std::vector<Contact>& contacts = *read;
   Table table;
   table.heading = "Contacts";
   table.columns = {"t", "agent", "with"};
@@ -220,7 +209,8 @@ void add_videos(const std::filesystem::path& dir, Page& page, const RunFacts& fa
   videos.heading = "The agents' views (videos)";
   for (std::size_t i = 0; i < std::max<std::size_t>(facts.names.size(), 1); ++i) {
     const std::string file = "agent_" + std::to_string(i) + ".mp4";
-    if (std::filesystem::exists(dir / file)) {
+    std::error_code unreadable;  // a video that cannot be looked at is not linked
+    if (std::filesystem::exists(dir / file, unreadable)) {
       videos.links.emplace_back(facts.name(i) + ": " + file, file);
     }
   }
@@ -245,14 +235,15 @@ std::vector<Contact> read_contacts(const std::filesystem::path& run_dir) {
 
 std::vector<std::string> write_run_report(const std::filesystem::path& run_dir) {
   Page page;
+  // The folder's name until summary.json names the scenario; sim writes from a staging folder.
   page.title = "flowsteer run: " + run_dir.filename().string();
   RunFacts facts;
   attempt(page.problems, [&] { add_summary(run_dir, page, facts); });
   page.sections.emplace_back(Picture{"From above", run_dir / "topview.png"});
-  const std::vector<Contact> contacts = contacts_or_none(run_dir, page);
+  const std::optional<std::vector<Contact>> contacts = contacts_if_read(run_dir, page);
   add_contacts(contacts, page, facts);
   std::vector<double> marks_t_s;
-  for (const Contact& c : contacts) {
+  for (const Contact& c : contacts.value_or(std::vector<Contact>{})) {
     marks_t_s.push_back(c.t_s);
   }
   attempt(page.problems, [&] { add_motion_plots(run_dir, marks_t_s, page, facts); });

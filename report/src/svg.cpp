@@ -9,12 +9,12 @@ namespace flowsteer::report {
 
 namespace {
 
-constexpr double kWidth = 760.0;
-constexpr double kHeight = 270.0;
-constexpr double kLeft = 64.0;  // room for the y ticks' labels
-constexpr double kRight = 14.0;
-constexpr double kTop = 50.0;  // the title, and the legend under it
-constexpr double kBottom = 40.0;
+constexpr double kWidthPx = 760.0;
+constexpr double kHeightPx = 270.0;
+constexpr double kLeftPx = 64.0;  // room for the y ticks' labels
+constexpr double kRightPx = 14.0;
+constexpr double kTopPx = 50.0;  // the title, and the legend under it
+constexpr double kBottomPx = 40.0;
 // A line of more points than its share of these is drawn as the least and greatest value of
 // each of as many spans of its samples as the share allows (at least kMinPoints / 2): the page
 // stays small for a long run or a crowd and keeps every spike.
@@ -48,12 +48,36 @@ struct Range {
   bool empty() const { return lo > hi; }
 };
 
+// The least and greatest value of each span of the run [from, to) (no NaN in it), in time order.
+void keep_extremes(const Series& s, std::size_t from, std::size_t to, double spans_per_sample,
+                   std::vector<std::size_t>& kept) {
+  const std::size_t length = to - from;
+  const std::size_t spans = std::clamp<std::size_t>(
+      static_cast<std::size_t>(std::lround(spans_per_sample * static_cast<double>(length))), 1,
+      length);
+  for (std::size_t span = 0; span < spans; ++span) {
+    const std::size_t begin = from + span * length / spans;
+    const std::size_t end = from + (span + 1) * length / spans;
+    std::size_t least = begin;
+    std::size_t most = begin;
+    for (std::size_t k = begin; k < end; ++k) {
+      least = s.values[k] < s.values[least] ? k : least;
+      most = s.values[k] > s.values[most] ? k : most;
+    }
+    kept.push_back(std::min(least, most));
+    if (least != most) {
+      kept.push_back(std::max(least, most));
+    }
+  }
+}
+
 double clipped(double value, const Plot& plot) {
   return plot.y_max && value > *plot.y_max ? *plot.y_max : value;
 }
 
-// The samples a series is drawn with: all of them, or each span's least and greatest in time
-// order.
+// The samples a series is drawn with, in time order: all of them, or, split into runs of values
+// between its gaps (NaN), each run cut into spans by its share of the budget and each span's
+// least and greatest kept. A gap is kept as the first NaN after a run, so the line breaks there.
 std::vector<std::size_t> drawn_samples(const Series& s, std::size_t max_points) {
   const std::size_t n = std::min(s.t_s.size(), s.values.size());
   std::vector<std::size_t> kept;
@@ -63,25 +87,21 @@ std::vector<std::size_t> drawn_samples(const Series& s, std::size_t max_points) 
     }
     return kept;
   }
-  const std::size_t spans = max_points / 2;
-  for (std::size_t span = 0; span < spans; ++span) {
-    const std::size_t from = span * n / spans;
-    const std::size_t to = (span + 1) * n / spans;
-    std::size_t least = from;
-    std::size_t most = from;
-    for (std::size_t k = from; k < to; ++k) {
-      // A gap (NaN) in the span is kept, so the line breaks there too.
-      if (!std::isfinite(s.values[k])) {
-        least = most = k;
-        break;
+  const double spans_per_sample = 0.5 * static_cast<double>(max_points) / static_cast<double>(n);
+  for (std::size_t from = 0; from < n;) {
+    if (!std::isfinite(s.values[from])) {
+      kept.push_back(from);
+      while (from < n && !std::isfinite(s.values[from])) {
+        ++from;
       }
-      least = s.values[k] < s.values[least] ? k : least;
-      most = s.values[k] > s.values[most] ? k : most;
+      continue;
     }
-    kept.push_back(std::min(least, most));
-    if (least != most) {
-      kept.push_back(std::max(least, most));
+    std::size_t to = from;
+    while (to < n && std::isfinite(s.values[to])) {
+      ++to;
     }
+    keep_extremes(s, from, to, spans_per_sample, kept);
+    from = to;
   }
   return kept;
 }
@@ -90,10 +110,10 @@ class Frame {
  public:
   Frame(Range x, Range y) : x_(x), y_(y) {}
   double x(double t) const {
-    return kLeft + (t - x_.lo) / (x_.hi - x_.lo) * (kWidth - kLeft - kRight);
+    return kLeftPx + (t - x_.lo) / (x_.hi - x_.lo) * (kWidthPx - kLeftPx - kRightPx);
   }
   double y(double v) const {
-    return kHeight - kBottom - (v - y_.lo) / (y_.hi - y_.lo) * (kHeight - kTop - kBottom);
+    return kHeightPx - kBottomPx - (v - y_.lo) / (y_.hi - y_.lo) * (kHeightPx - kTopPx - kBottomPx);
   }
   const Range& xs() const { return x_; }
   const Range& ys() const { return y_; }
@@ -140,28 +160,30 @@ Range time_range(const Plot& plot) {
 void axes(std::string& svg, const Frame& f, const Plot& plot) {
   const double y_step = tick_step((f.ys().hi - f.ys().lo) / 5.0);  // about five ticks
   for (double v = std::ceil(f.ys().lo / y_step) * y_step; v <= f.ys().hi + 1e-9; v += y_step) {
-    svg += "<line class=\"grid\" x1=\"" + number(kLeft) + "\" x2=\"" + number(kWidth - kRight) +
-           "\" y1=\"" + number(f.y(v)) + "\" y2=\"" + number(f.y(v)) + "\"/>";
-    svg += "<text class=\"tick\" x=\"" + number(kLeft - 6) + "\" y=\"" + number(f.y(v) + 4) +
+    svg += "<line class=\"grid\" x1=\"" + number(kLeftPx) + "\" x2=\"" +
+           number(kWidthPx - kRightPx) + "\" y1=\"" + number(f.y(v)) + "\" y2=\"" + number(f.y(v)) +
+           "\"/>";
+    svg += "<text class=\"tick\" x=\"" + number(kLeftPx - 6) + "\" y=\"" + number(f.y(v) + 4) +
            "\" text-anchor=\"end\">" + tick_label(v, y_step) + "</text>";
   }
   const double x_step = tick_step((f.xs().hi - f.xs().lo) / 5.0);
   for (double t = std::ceil(f.xs().lo / x_step) * x_step; t <= f.xs().hi + 1e-9; t += x_step) {
     svg += "<line class=\"axis\" x1=\"" + number(f.x(t)) + "\" x2=\"" + number(f.x(t)) +
-           "\" y1=\"" + number(kHeight - kBottom) + "\" y2=\"" + number(kHeight - kBottom + 5) +
-           "\"/><text class=\"tick\" x=\"" + number(f.x(t)) + "\" y=\"" +
-           number(kHeight - kBottom + 18) + "\" text-anchor=\"middle\">" + tick_label(t, x_step) +
-           "</text>";
+           "\" y1=\"" + number(kHeightPx - kBottomPx) + "\" y2=\"" +
+           number(kHeightPx - kBottomPx + 5) + "\"/><text class=\"tick\" x=\"" + number(f.x(t)) +
+           "\" y=\"" + number(kHeightPx - kBottomPx + 18) + "\" text-anchor=\"middle\">" +
+           tick_label(t, x_step) + "</text>";
   }
-  svg += "<line class=\"axis\" x1=\"" + number(kLeft) + "\" x2=\"" + number(kWidth - kRight) +
-         "\" y1=\"" + number(kHeight - kBottom) + "\" y2=\"" + number(kHeight - kBottom) + "\"/>";
-  svg += "<line class=\"axis\" x1=\"" + number(kLeft) + "\" x2=\"" + number(kLeft) + "\" y1=\"" +
-         number(kTop) + "\" y2=\"" + number(kHeight - kBottom) + "\"/>";
-  svg += "<text class=\"label\" x=\"" + number(0.5 * (kLeft + kWidth - kRight)) + "\" y=\"" +
-         number(kHeight - 6) + "\" text-anchor=\"middle\">time (s)</text>";
+  svg += "<line class=\"axis\" x1=\"" + number(kLeftPx) + "\" x2=\"" + number(kWidthPx - kRightPx) +
+         "\" y1=\"" + number(kHeightPx - kBottomPx) + "\" y2=\"" + number(kHeightPx - kBottomPx) +
+         "\"/>";
+  svg += "<line class=\"axis\" x1=\"" + number(kLeftPx) + "\" x2=\"" + number(kLeftPx) +
+         "\" y1=\"" + number(kTopPx) + "\" y2=\"" + number(kHeightPx - kBottomPx) + "\"/>";
+  svg += "<text class=\"label\" x=\"" + number(0.5 * (kLeftPx + kWidthPx - kRightPx)) + "\" y=\"" +
+         number(kHeightPx - 6) + "\" text-anchor=\"middle\">time (s)</text>";
   svg += "<text class=\"label\" transform=\"translate(14 " +
-         number(0.5 * (kTop + kHeight - kBottom)) + ") rotate(-90)\" text-anchor=\"middle\">" +
-         escaped(plot.y_label) + "</text>";
+         number(0.5 * (kTopPx + kHeightPx - kBottomPx)) +
+         ") rotate(-90)\" text-anchor=\"middle\">" + escaped(plot.y_label) + "</text>";
 }
 
 void lines(std::string& svg, const Frame& f, const Plot& plot) {
@@ -178,6 +200,9 @@ void lines(std::string& svg, const Frame& f, const Plot& plot) {
       }
       d += pen_down ? 'L' : 'M';
       d += number(f.x(s.t_s[k])) + " " + number(f.y(v));
+      if (!pen_down) {
+        d += "l0 0";  // a value alone between gaps is drawn as a dot (round line caps)
+      }
       pen_down = true;
     }
     if (!d.empty()) {
@@ -188,15 +213,18 @@ void lines(std::string& svg, const Frame& f, const Plot& plot) {
 }
 
 void marks(std::string& svg, const Frame& f, const Plot& plot) {
-  for (const double t : plot.marks_t_s) {
+  std::vector<double> times = plot.marks_t_s;
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+  for (const double t : times) {
     svg += "<line class=\"mark\" x1=\"" + number(f.x(t)) + "\" x2=\"" + number(f.x(t)) +
-           "\" y1=\"" + number(kTop) + "\" y2=\"" + number(kHeight - kBottom) + "\"><title>" +
+           "\" y1=\"" + number(kTopPx) + "\" y2=\"" + number(kHeightPx - kBottomPx) + "\"><title>" +
            escaped(plot.marks_label) + " at t = " + tick_label(t, 0.01) + " s</title></line>";
   }
 }
 
 void legend(std::string& svg, const Plot& plot) {
-  double x = kWidth - kRight;
+  double x = kWidthPx - kRightPx;
   auto entry = [&](const std::string& name, const std::string& color, const char* kind) {
     const double width = 22.0 + 6.5 * static_cast<double>(name.size());
     x -= width;
@@ -250,17 +278,17 @@ std::string css_color(const Rgb& color) {
 std::string svg_of(const Plot& plot) {
   const Frame frame(time_range(plot), value_range(plot));
   std::string svg = "<svg class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " +
-                    number(kWidth) + " " + number(kHeight) + "\" width=\"" + number(kWidth) +
-                    "\" height=\"" + number(kHeight) + "\" role=\"img\" aria-label=\"" +
+                    number(kWidthPx) + " " + number(kHeightPx) + "\" width=\"" + number(kWidthPx) +
+                    "\" height=\"" + number(kHeightPx) + "\" role=\"img\" aria-label=\"" +
                     escaped(plot.title) + "\">";
-  svg += "<text class=\"title\" x=\"" + number(kLeft) + "\" y=\"20\">" + escaped(plot.title) +
+  svg += "<text class=\"title\" x=\"" + number(kLeftPx) + "\" y=\"20\">" + escaped(plot.title) +
          "</text>";
   axes(svg, frame, plot);
   const std::size_t before = svg.size();
   lines(svg, frame, plot);
   if (svg.size() == before && !plot.empty_note.empty()) {
-    svg += "<text class=\"note\" x=\"" + number(0.5 * (kLeft + kWidth)) + "\" y=\"" +
-           number(0.5 * kHeight) + "\" text-anchor=\"middle\">" + escaped(plot.empty_note) +
+    svg += "<text class=\"note\" x=\"" + number(0.5 * (kLeftPx + kWidthPx)) + "\" y=\"" +
+           number(0.5 * kHeightPx) + "\" text-anchor=\"middle\">" + escaped(plot.empty_note) +
            "</text>";
   }
   marks(svg, frame, plot);

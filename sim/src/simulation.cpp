@@ -165,19 +165,6 @@ void write_trajectories(const std::filesystem::path& path, const std::vector<Tra
   csv.write(path);
 }
 
-// The smallest time to contact among the objects an agent's brain saw approaching this step; NaN
-// when none approached.
-double min_ttc_s(const pipeline::Brain& brain) {
-  double least_s = std::numeric_limits<double>::quiet_NaN();
-  for (const servo::ObjectFeatures& object : brain.objects()) {
-    if (object.status == servo::MotionStatus::approaching && object.ttc_s > 0.0 &&
-        !(object.ttc_s >= least_s)) {
-      least_s = object.ttc_s;
-    }
-  }
-  return least_s;
-}
-
 // collisions.csv: each contact as it began (t, agent, with, x, y; "with" as World names it).
 void write_collisions(const std::filesystem::path& path,
                       const std::vector<sim_camera::Collision>& collisions) {
@@ -287,7 +274,7 @@ class SimulationRun {
       const sim_camera::AgentState& s = world_.agents()[i];
       const double clearance_m = world_.clearance(i);
       note_clearance(loop.result, clearance_m, s.position_m);
-      const double ttc_s = loop.steered && loop.agent ? min_ttc_s(loop.agent->brain())
+      const double ttc_s = loop.steered && loop.agent ? loop.agent->brain().min_ttc_s()
                                                       : std::numeric_limits<double>::quiet_NaN();
       trajectories_.push_back({world_.time_s(), static_cast<double>(i), s.position_m.x(),
                                s.position_m.y(), s.yaw_rad, s.speed_mps, commands_[i].accel_mps2,
@@ -323,8 +310,9 @@ class SimulationRun {
     return result;
   }
 
-  // trajectories.csv, costs.csv, the videos, topview.png and summary.json, committed together
-  // with the driver's files; nothing without an output folder.
+  // trajectories.csv, costs.csv, collisions.csv, the videos, topview.png, summary.json and the
+  // page read from them (report.html), committed together with the driver's files; nothing
+  // without an output folder.
   void write(const SimResult& result) {
     if (options_.driver != nullptr) {
       options_.driver->finish(out_ ? &*out_ : nullptr);
@@ -347,7 +335,11 @@ class SimulationRun {
     }
     write_image(out_->staging_path("topview.png"), result.topview);
     write_summary_json(out_->staging_path("summary.json"), result);
-    report::write_run_report(out_->staging_dir());
+    // The page reads the files just written: anything it cannot read is this run's failure.
+    const std::vector<std::string> problems = report::write_run_report(out_->staging_dir());
+    if (!problems.empty()) {
+      throw std::runtime_error("the run's page could not read its own " + problems.front());
+    }
     out_->commit();
   }
 

@@ -338,8 +338,12 @@ Layout layout(const sim_camera::World& world,
   const Eigen::Vector2d extent = l.plot.hi_m - l.plot.lo_m;
   l.plot.px_per_m = kWorldPx / extent.maxCoeff();
   l.tick_m = report::tick_step(45.0 / l.plot.px_per_m);
-  l.marks.label_s = time_mark_interval_s(path_duration_s(paths, spec.step_s));
-  l.marks.dot_s = report::tick_step(l.marks.label_s / 5.0);
+  // Both in whole steps, the paths' samples, so the key says where the marks are.
+  const double label_s = time_mark_interval_s(path_duration_s(paths, spec.step_s));
+  const double dot_steps =
+      std::max(1.0, std::round(report::tick_step(label_s / 5.0) / spec.step_s));
+  l.marks.dot_s = dot_steps * spec.step_s;
+  l.marks.label_s = std::max(1.0, std::round(label_s / l.marks.dot_s)) * l.marks.dot_s;
   l.key = key_text(l.marks, spec.agents.size());
   l.caption = caption_text(world, collisions, l.plot.px_per_m);
   const cv::Size plot_px(static_cast<int>(extent.x() * l.plot.px_per_m),

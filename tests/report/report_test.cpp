@@ -145,6 +145,26 @@ TEST(Plot, AThinnedSeriesKeepsItsSpike) {
   EXPECT_NE(line.find(" 50.0"), std::string::npos) << line.substr(0, 400);
 }
 
+// A long series with gaps (a time to contact only while something approaches): each stretch
+// between gaps is drawn, thinned on its own, and the spike in one of them is kept.
+TEST(Plot, AThinnedSeriesWithGapsKeepsEveryStretchAndItsSpike) {
+  Plot plot;
+  Series s{"a", agent_color(0), {}, {}};
+  for (int k = 0; k < 20000; ++k) {
+    s.t_s.push_back(0.05 * k);
+    s.values.push_back(k % 50 < 10 ? NAN : k == 12345 ? 10.0 : 1.0);
+  }
+  plot.series.push_back(s);
+  Page page;
+  page.sections = {plot};
+  const std::string html = render_page(page);
+  const std::size_t d = html.find(" d=\"");
+  const std::string line = html.substr(d, html.find('"', d + 4) - d);
+  EXPECT_EQ(std::count(line.begin(), line.end(), 'M'), 400);  // 400 stretches between gaps
+  EXPECT_LE(std::count(line.begin(), line.end(), 'L'), 1200);
+  EXPECT_NE(line.find(" 50.0"), std::string::npos) << "the spike is not at the top";
+}
+
 TEST(Plot, ACrowdsPlotStaysSmall) {
   Plot plot;
   for (std::size_t i = 0; i < 200; ++i) {
@@ -168,15 +188,15 @@ TEST_F(Folder, APictureThatCannotBeReadIsNamedOnThePage) {
   page.sections = {Picture{"From above", dir_ / "topview.png"}};
   const std::string html = render_page(page);
   ASSERT_EQ(page.problems.size(), 1u);
-  EXPECT_EQ(page.problems[0], "topview.png: missing");
-  EXPECT_NE(html.find("topview.png: missing"), std::string::npos);
+  EXPECT_EQ(page.problems[0], "topview.png: missing or unreadable");
+  EXPECT_NE(html.find("topview.png: missing or unreadable"), std::string::npos);
 }
 
 TEST_F(Folder, ARunsPageShowsItsFiles) {
   write_run();
   const std::vector<std::string> problems = write_run_report(dir_);
   ASSERT_EQ(problems.size(), 1u);  // no topview.png in this folder
-  EXPECT_EQ(problems[0], "topview.png: missing");
+  EXPECT_EQ(problems[0], "topview.png: missing or unreadable");
   const std::string html = read("report.html");
   EXPECT_NE(html.find("<title>flowsteer run: two</title>"), std::string::npos);
   // Speed, turn rate, clearance, time to contact, and heading, clearance, total from costs.csv.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 #include <tuple>
 #include <vector>
@@ -534,6 +535,10 @@ TEST(SimOutputs, AllFilesAreWrittenAndComplete) {
   }
   const cv::Mat top = cv::imread((dir / "topview.png").string());
   EXPECT_GT(top.cols, 100);
+  std::stringstream page;
+  page << std::ifstream(dir / "report.html").rdbuf();
+  EXPECT_NE(page.str().find("<svg class=\"plot\""), std::string::npos);
+  EXPECT_EQ(page.str().find("class=\"problems\""), std::string::npos) << "it named a problem";
   // The 32 px views enlarged enough for the TTC labels to be legible.
   cv::VideoCapture video((dir / "agent_0.mp4").string());
   cv::Mat frame;
@@ -653,6 +658,48 @@ TEST(SimOutputs, TopviewHasMetreTicksLeftOfTheWorld) {
   const cv::Mat top = draw_topview(world, straight_paths(spec), {});
   // The world spans 5 m in y: a labelled tick every metre at 69 px a metre.
   EXPECT_GE(ink_row_runs(top.rowRange(30, top.rows - 120), {0, 50}), 4);
+}
+
+// Two agents head on, a little offset, pass each other: each one's closest approach is where
+// it was at that moment, its clearance the least of the run, and the top view marks it.
+TEST(SimOutputs, EachAgentsClosestApproachIsWhereAndWhenItWasNearest) {
+  sim_camera::WorldSpec spec;
+  sim_camera::AgentSpec a;
+  a.start_m = {-4.0, 0.0};
+  a.goals = {{4.0, 0.0}};
+  sim_camera::AgentSpec b = a;
+  b.start_m = {4.0, 0.3};
+  b.goals = {{-4.0, 0.3}};
+  b.heading_rad = std::numbers::pi;
+  spec.agents = {a, b};
+  spec.duration_s = 12.0;
+  SimOptions options;
+  options.write_outputs = false;
+  options.resolution = 32;
+  std::ostringstream log;
+  const SimResult r = run_simulation(spec, options, log);
+  const double start_clearance_m = 8.0 - a.radius_m - b.radius_m;
+  for (const AgentResult& agent : r.agents) {
+    SCOPED_TRACE(agent.name);
+    ASSERT_TRUE(agent.closest_position_m.allFinite());
+    EXPECT_LT(agent.min_clearance_m, 0.5 * start_clearance_m);
+    EXPECT_GT(agent.closest_time_s, 0.5);
+    const auto step = static_cast<std::size_t>(std::lround(agent.closest_time_s / spec.step_s));
+    ASSERT_LT(step, agent.positions_m.size());
+    EXPECT_EQ(agent.closest_position_m, agent.positions_m[step]);
+  }
+  // The two came nearest at the same moment, as far from each other as their clearance says.
+  EXPECT_DOUBLE_EQ(r.agents[0].closest_time_s, r.agents[1].closest_time_s);
+  EXPECT_NEAR((r.agents[0].closest_position_m - r.agents[1].closest_position_m).norm() -
+                  a.radius_m - b.radius_m,
+              r.agents[0].min_clearance_m, 1e-9);
+  const sim_camera::World world(spec);
+  const cv::Mat marked = draw_topview(world, {{a.start_m}, {b.start_m}}, {}, r.agents);
+  const cv::Mat plain = draw_topview(world, {{a.start_m}, {b.start_m}}, {});
+  ASSERT_EQ(marked.size(), plain.size());
+  cv::Mat differs;
+  cv::compare(marked, plain, differs, cv::CMP_NE);
+  EXPECT_GT(cv::countNonZero(differs.reshape(1)), 200) << "no diamonds and no label";
 }
 
 TEST(SimOutputs, TopviewTimeMarksAreFourToTenAlongARun) {

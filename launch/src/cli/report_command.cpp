@@ -42,7 +42,8 @@ Subcommand add_report(CLI::App& app) {
             } else {
               throw base::ConfigError(folder.string(),
                                       "not the output folder of flowsteer sim or eval suite (it "
-                                      "has no summary.json, trajectories.csv or suite.json)");
+                                      "has no summary.json, trajectories.csv, costs.csv, "
+                                      "topview.png or suite.json)");
             }
             std::cout << "flowsteer report: wrote " << (folder / "report.html").string() << "\n";
             for (const std::string& problem : problems) {

@@ -110,6 +110,8 @@ class Brain {
   std::span<const std::uint8_t> filled_pixels() const;
   // The features the controller saw: from the flow, or from the oracle (model geometric).
   std::span<const servo::ObjectFeatures> objects() const { return percept_.objects; }
+  // The smallest time to contact among those features that approach; NaN when none does.
+  double min_ttc_s() const;
   // The goal the last step steered for, as BrainInput gave it.
   std::optional<double> goal_bearing_rad() const { return percept_.goal_bearing_rad; }
   std::optional<double> goal_distance_m() const { return percept_.goal_distance_m; }

@@ -50,13 +50,19 @@ struct Plot {
 
 struct Cell {
   std::string text;
-  // What the column sorts by; none: the text. NaN sorts after every number.
+  // What the column sorts by; none: the text. NaN sorts as a number above every other (last
+  // when ascending, first when descending).
   std::optional<double> sort_value;
   std::string link;           // a relative address, or none
   bool alert = false;         // drawn as a problem (red)
   bool prose = false;         // words that wrap in a wide column (a reason), not a value
   std::optional<Rgb> swatch;  // a colour square before the text (an agent's colour)
 };
+
+// A cell of text; a cell of a number with `decimals` decimals and its unit, sorted by the number
+// ("-" for NaN).
+Cell text_cell(std::string text);
+Cell number_cell(double value, int decimals, const std::string& unit = "");
 
 struct Table {
   std::string heading;
@@ -67,7 +73,9 @@ struct Table {
 
 struct Picture {
   std::string heading;
-  std::filesystem::path file;  // a PNG, embedded; one that cannot be read is a problem
+  // A PNG beside the page: embedded, or linked where it is over 8 MB (a contact sheet of
+  // hundreds of runs); one that cannot be read is a problem.
+  std::filesystem::path file;
 };
 
 struct Links {

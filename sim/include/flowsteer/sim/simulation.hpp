@@ -161,11 +161,11 @@ RunSummary summarize(const SimResult& result);
 void switch_off(sim_camera::WorldSpec& world, servo::LawMechanism mechanism);
 
 // Runs the world to its end: each agent renders its view, the servo core turns it into a
-// command, the world moves. Writes trajectories.csv, costs.csv, topview.png and summary.json
-// (and agent_N.mp4 with --video) into out_dir, and the recording where asked, each file
-// complete or not at all. Progress goes
-// to `log`. Throws std::runtime_error when no renderer can be created or out_dir is not
-// writable.
+// command, the world moves. Writes trajectories.csv, costs.csv, collisions.csv, topview.png,
+// summary.json and report.html (report::write_run_report, from those files) (and agent_N.mp4
+// with --video) into out_dir, and the recording where asked, each file complete or not at all.
+// Progress goes to `log`. Throws std::runtime_error when no renderer can be created or out_dir is
+// not writable.
 SimResult run_simulation(const sim_camera::WorldSpec& world, const SimOptions& options,
                          std::ostream& log);
 
