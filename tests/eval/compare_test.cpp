@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "../image_ink.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/eval/compare.hpp"
@@ -131,20 +132,6 @@ TEST_P(VisionAgainstReference, BothAvoidAndVisionStaysNearTheReference) {
 
 INSTANTIATE_TEST_SUITE_P(Papers, VisionAgainstReference, ::testing::Values("room", "crossing"));
 
-// Runs of consecutive rows of `image` that hold ink (dark pixels).
-int ink_row_runs(const cv::Mat& image) {
-  cv::Mat grey;
-  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-  int runs = 0;
-  bool in_run = false;
-  for (int row = 0; row < grey.rows; ++row) {
-    const bool ink = cv::countNonZero(grey.row(row) < 128) > 0;
-    runs += ink && !in_run ? 1 : 0;
-    in_run = ink;
-  }
-  return runs;
-}
-
 TEST(Compare, WritesTopViewsTableAndHistogramsForEveryController) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() /
                                     ("flowsteer_compare_test_" + std::to_string(::getpid()));
@@ -183,7 +170,9 @@ TEST(Compare, WritesTopViewsTableAndHistogramsForEveryController) {
   // heights left of its bars, under the title and the axis' name, above the turn rate axis.
   const cv::Mat histograms_png = cv::imread((dir / "turn_rates.png").string());
   ASSERT_GT(histograms_png.rows, 120);
-  EXPECT_GE(ink_row_runs(histograms_png(cv::Rect(0, 60, 50, histograms_png.rows - 112))), 3);
+  EXPECT_GE(
+      flowsteer::test::ink_row_runs(histograms_png(cv::Rect(0, 60, 50, histograms_png.rows - 112))),
+      3);
   // A second run replaces the folders of the controllers it runs and keeps the others.
   std::ofstream(dir / "geometric" / "stale.txt") << "from before\n";
   options.controllers = {servo::SteeringModel::geometric};

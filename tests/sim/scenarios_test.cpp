@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "../image_ink.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/pipeline/overlay.hpp"
@@ -587,20 +588,6 @@ TEST(SimOutputs, TopviewOfANarrowWorldIsWideEnoughForItsCaption) {
   EXPECT_LT(rightmost, top.cols - 4);
 }
 
-// Rows of `image` holding ink (dark pixels) within `columns`, as runs of consecutive rows.
-int ink_row_runs(const cv::Mat& image, cv::Range columns) {
-  cv::Mat grey;
-  cv::cvtColor(image.colRange(columns), grey, cv::COLOR_BGR2GRAY);
-  int runs = 0;
-  bool in_run = false;
-  for (int row = 0; row < grey.rows; ++row) {
-    const bool ink = cv::countNonZero(grey.row(row) < 128) > 0;
-    runs += ink && !in_run ? 1 : 0;
-    in_run = ink;
-  }
-  return runs;
-}
-
 // Three agents walking side by side, 1 m apart, 10 m in 10 s.
 sim_camera::WorldSpec three_walkers() {
   sim_camera::WorldSpec spec;
@@ -657,7 +644,7 @@ TEST(SimOutputs, TopviewHasMetreTicksLeftOfTheWorld) {
   const sim_camera::World world(spec);
   const cv::Mat top = draw_topview(world, straight_paths(spec), {});
   // The world spans 5 m in y: a labelled tick every metre at 69 px a metre.
-  EXPECT_GE(ink_row_runs(top.rowRange(30, top.rows - 120), {0, 50}), 4);
+  EXPECT_GE(flowsteer::test::ink_row_runs(top.rowRange(30, top.rows - 120).colRange(0, 50)), 4);
 }
 
 // Two agents head on, a little offset, pass each other: each one's closest approach is where
