@@ -11,6 +11,7 @@
 #include "csv_file.hpp"
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/report/page.hpp"
+#include "svg.hpp"
 
 namespace flowsteer::report {
 
@@ -183,6 +184,7 @@ void add_motion_plots(const std::filesystem::path& dir, const std::vector<double
     }
     Plot plot = contacts_plot(p.title, p.y_label, marks_t_s);
     plot.series = per_agent(csv, p.column, facts);
+    thin(plot);
     plot.y_max = p.cap;
     plot.empty_note = p.empty;
     page.sections.emplace_back(std::move(plot));
@@ -199,6 +201,7 @@ void add_cost_plots(const std::filesystem::path& dir, const std::vector<double>&
     }
     Plot plot = contacts_plot("Cost term: " + column, "cost", marks_t_s);
     plot.series = per_agent(csv, column, facts);
+    thin(plot);
     plot.empty_note = "no agent has this term";
     page.sections.emplace_back(std::move(plot));
   }

@@ -186,13 +186,18 @@ void axes(std::string& svg, const Frame& f, const Plot& plot) {
          ") rotate(-90)\" text-anchor=\"middle\">" + escaped(plot.y_label) + "</text>";
 }
 
+// The most points svg_of draws of each of the plot's series.
+std::size_t max_points(const Plot& plot) {
+  return std::clamp(kMaxPointsPerPlot / std::max<std::size_t>(plot.series.size(), 1), kMinPoints,
+                    kMaxPoints);
+}
+
 void lines(std::string& svg, const Frame& f, const Plot& plot) {
-  const std::size_t max_points = std::clamp(
-      kMaxPointsPerPlot / std::max<std::size_t>(plot.series.size(), 1), kMinPoints, kMaxPoints);
+  const std::size_t most = max_points(plot);
   for (const Series& s : plot.series) {
     std::string d;
     bool pen_down = false;
-    for (const std::size_t k : drawn_samples(s, max_points)) {
+    for (const std::size_t k : drawn_samples(s, most)) {
       const double v = clipped(s.values[k], plot);
       if (!std::isfinite(v) || !std::isfinite(s.t_s[k])) {
         pen_down = false;
@@ -273,6 +278,18 @@ std::string css_color(const Rgb& color) {
   char text[16];
   std::snprintf(text, sizeof text, "#%02x%02x%02x", color.r, color.g, color.b);
   return text;
+}
+
+void thin(Plot& plot) {
+  const std::size_t most = max_points(plot);
+  for (Series& s : plot.series) {
+    Series kept{s.name, s.color, {}, {}};
+    for (const std::size_t k : drawn_samples(s, most)) {
+      kept.t_s.push_back(s.t_s[k]);
+      kept.values.push_back(s.values[k]);
+    }
+    s = std::move(kept);
+  }
 }
 
 std::string svg_of(const Plot& plot) {

@@ -15,4 +15,8 @@ std::string css_color(const Rgb& color);
 // the marks as dashed vertical lines, and a legend where there are few enough series to name.
 std::string svg_of(const Plot& plot);
 
+// Each series reduced to the samples svg_of draws of it, so that a page holding the plots of a
+// long crowded run holds no more than it draws.
+void thin(Plot& plot);
+
 }  // namespace flowsteer::report

@@ -226,9 +226,8 @@ class SimulationRun {
       }
       loop.last_position = spec_.agents[i].start_m;
       loop.result.name = spec_.agents[i].name;
-      loop.result.min_clearance_m = world_.clearance(i);
-      loop.result.closest_position_m = spec_.agents[i].start_m;
-      loop.result.closest_time_s = 0.0;
+      // note_clearance takes each state's, from the first step's on.
+      loop.result.min_clearance_m = std::numeric_limits<double>::infinity();
       loop.result.turn_rates.reserve(steps);
       paths_[i].reserve(steps + 1);
       loops_.push_back(std::move(loop));

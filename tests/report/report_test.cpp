@@ -125,14 +125,19 @@ TEST(Plot, EverySeriesIsALineAndAGapBreaksIt) {
   EXPECT_NE(html.find(">contact</text>"), std::string::npos);  // the legend names the marks
 }
 
+// One agent's series of `samples` values, one every 0.05 s.
+Series series_of(int samples, double (*value)(int)) {
+  Series s{"a", agent_color(0), {}, {}};
+  for (int k = 0; k < samples; ++k) {
+    s.t_s.push_back(0.05 * k);
+    s.values.push_back(value(k));
+  }
+  return s;
+}
+
 TEST(Plot, AThinnedSeriesKeepsItsSpike) {
   Plot plot;
-  Series s{"a", agent_color(0), {}, {}};
-  for (int k = 0; k < 20000; ++k) {
-    s.t_s.push_back(0.05 * k);
-    s.values.push_back(k == 12345 ? 10.0 : 1.0);
-  }
-  plot.series.push_back(s);
+  plot.series.push_back(series_of(20000, [](int k) { return k == 12345 ? 10.0 : 1.0; }));
   Page page;
   page.sections = {plot};
   const std::string html = render_page(page);
@@ -149,12 +154,9 @@ TEST(Plot, AThinnedSeriesKeepsItsSpike) {
 // between gaps is drawn, thinned on its own, and the spike in one of them is kept.
 TEST(Plot, AThinnedSeriesWithGapsKeepsEveryStretchAndItsSpike) {
   Plot plot;
-  Series s{"a", agent_color(0), {}, {}};
-  for (int k = 0; k < 20000; ++k) {
-    s.t_s.push_back(0.05 * k);
-    s.values.push_back(k % 50 < 10 ? NAN : k == 12345 ? 10.0 : 1.0);
-  }
-  plot.series.push_back(s);
+  plot.series.push_back(series_of(20000, [](int k) {
+    return k % 50 < 10 ? NAN : k == 12345 ? 10.0 : 1.0;
+  }));
   Page page;
   page.sections = {plot};
   const std::string html = render_page(page);
