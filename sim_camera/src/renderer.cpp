@@ -159,14 +159,19 @@ struct Mesh {
   }
 };
 
+// A quad's two triangles, its corners in order: counter-clockwise seen from its front, the side
+// the face culling keeps, or clockwise.
+constexpr std::array<GLuint, 6> kCounterClockwiseQuad = {0, 1, 2, 0, 2, 3};
+constexpr std::array<GLuint, 6> kClockwiseQuad = {0, 2, 1, 0, 3, 2};
+
 void add_quad(std::vector<Vertex>& v, std::vector<GLuint>& idx, const Eigen::Vector3f corners[4],
-              const Eigen::Vector3f& normal) {
+              const Eigen::Vector3f& normal, const std::array<GLuint, 6>& triangles) {
   const auto base = static_cast<GLuint>(v.size());
   for (int k = 0; k < 4; ++k) {
     v.push_back(
         {{corners[k].x(), corners[k].y(), corners[k].z()}, {normal.x(), normal.y(), normal.z()}});
   }
-  for (GLuint k : {0U, 1U, 2U, 0U, 2U, 3U}) {
+  for (const GLuint k : triangles) {
     idx.push_back(base + k);
   }
 }
@@ -192,7 +197,9 @@ Mesh box_mesh() {
         c.z() += 0.5F;
         corners[k] = c;
       }
-      add_quad(v, idx, corners, normal);
+      // (du, dv) turn counter-clockwise about +axis: seen from outside, the face at side -1
+      // has its corners clockwise.
+      add_quad(v, idx, corners, normal, side > 0 ? kCounterClockwiseQuad : kClockwiseQuad);
     }
   }
   Mesh m;
@@ -227,7 +234,7 @@ Shape box_shape() {
       for (int k = 0; k < 4; ++k) {
         corner[k] = static_cast<GLuint>((side << axis) | (du[k] << a) | (dv[k] << b));
       }
-      for (const int k : {0, 1, 2, 0, 2, 3}) {
+      for (const GLuint k : side == 1 ? kCounterClockwiseQuad : kClockwiseQuad) {
         idx.push_back(corner[k]);
       }
     }
@@ -235,14 +242,13 @@ Shape box_shape() {
   return shape;
 }
 
-// A unit cylinder: radius 1, from z = 0 to 1, with its top cap.
-Mesh cylinder_mesh() {
-  constexpr int kSegments = 48;
+// A unit cylinder: radius 1, from z = 0 to 1, with its top cap, its circle of `segments`.
+Mesh cylinder_mesh(int segments) {
   std::vector<Vertex> v;
   std::vector<GLuint> idx;
-  for (int k = 0; k < kSegments; ++k) {
-    const double a0 = 2.0 * std::numbers::pi * k / kSegments;
-    const double a1 = 2.0 * std::numbers::pi * (k + 1) / kSegments;
+  for (int k = 0; k < segments; ++k) {
+    const double a0 = 2.0 * std::numbers::pi * k / segments;
+    const double a1 = 2.0 * std::numbers::pi * (k + 1) / segments;
     const Eigen::Vector3f p0(static_cast<float>(std::cos(a0)), static_cast<float>(std::sin(a0)),
                              0.0F);
     const Eigen::Vector3f p1(static_cast<float>(std::cos(a1)), static_cast<float>(std::sin(a1)),
@@ -273,12 +279,11 @@ Mesh cylinder_mesh() {
 // cylinder_mesh's triangles with the rings' points shared, for the geometry program (no
 // normals): a third of the vertices. The ring's last point is computed at 2π as cylinder_mesh
 // computes it, not taken as its first, so that every vertex is the same to the last bit.
-Shape cylinder_shape() {
-  constexpr int kSegments = 48;
+Shape cylinder_shape(int segments) {
   Shape shape;
   std::vector<Eigen::Vector3f>& v = shape.positions;
-  for (int k = 0; k <= kSegments; ++k) {
-    const double a = 2.0 * std::numbers::pi * k / kSegments;
+  for (int k = 0; k <= segments; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / segments;
     const auto x = static_cast<float>(std::cos(a));
     const auto y = static_cast<float>(std::sin(a));
     v.emplace_back(x, y, 0.0F);  // 2k: bottom
@@ -287,7 +292,7 @@ Shape cylinder_shape() {
   const auto centre = static_cast<GLuint>(v.size());
   v.emplace_back(0.0F, 0.0F, 1.0F);
   std::vector<GLuint>& idx = shape.indices;
-  for (GLuint k = 0; k < kSegments; ++k) {
+  for (GLuint k = 0; k < static_cast<GLuint>(segments); ++k) {
     const GLuint b0 = 2 * k;
     const GLuint t0 = b0 + 1;
     const GLuint b1 = b0 + 2;
@@ -299,6 +304,19 @@ Shape cylinder_shape() {
   return shape;
 }
 
+// A cylinder's levels of detail, finest first: the segments of its circle. A crowd's view
+// holds mostly far people, a few pixels wide; drawn with the finest level they would cost as
+// many triangles as if they filled the view.
+constexpr std::array<int, 4> kCylinderSegments = {48, 24, 12, 6};
+
+std::array<Shape, kCylinderSegments.size()> cylinder_shapes() {
+  std::array<Shape, kCylinderSegments.size()> shapes;
+  for (std::size_t level = 0; level < shapes.size(); ++level) {
+    shapes[level] = cylinder_shape(kCylinderSegments[level]);
+  }
+  return shapes;
+}
+
 // The ground: [-0.5, 0.5]² at z = 0, as one quad.
 Shape ground_shape() {
   return {{{-0.5F, -0.5F, 0}, {0.5F, -0.5F, 0}, {0.5F, 0.5F, 0}, {-0.5F, 0.5F, 0}},
@@ -308,7 +326,8 @@ Shape ground_shape() {
 Mesh ground_mesh() {
   std::vector<Vertex> v;
   std::vector<GLuint> idx;
-  add_quad(v, idx, ground_shape().positions.data(), Eigen::Vector3f(0, 0, 1));
+  add_quad(v, idx, ground_shape().positions.data(), Eigen::Vector3f(0, 0, 1),
+           kCounterClockwiseQuad);
   Mesh m;
   m.upload(v, idx);
   return m;
@@ -417,7 +436,7 @@ struct ShadowUniforms {
 
 struct GeometryUniforms {
   GLint body_count;
-  GLint first_view;
+  GLint view;
 };
 
 // The view's frustum as planes in the world frame, for leaving out bodies it cannot see: a
@@ -457,7 +476,7 @@ class Frustum {
 
 // What one draw needs: the shape, its pose and size, how it looks, who it is and how it moves.
 struct DrawItem {
-  const Mesh* mesh;
+  Solid::Shape shape;
   bool hidden;  // from this view: its own camera's body (it still casts a shadow)
   // An agent that has left the world: nothing draws it, but it keeps its place among the items,
   // whose shapes a geometry batch builds once per world.
@@ -468,23 +487,25 @@ struct DrawItem {
   Eigen::Vector3d velocity_mps;  // world frame
 };
 
-// The id that marks a body not to draw in a view (its own camera's, or out of view).
-constexpr std::int32_t kHiddenId = std::numeric_limits<std::int32_t>::min();
 // The geometry program's buffer textures' units, in GeometryBatch::Table's order, and its
 // cameras' uniform block's binding.
 constexpr GLint kFirstTableUnit = 2;
 constexpr GLuint kCameraBlockBinding = 0;
 
-// Every body of a world and the ground in one vertex and index buffer, drawn by one instanced
-// call for all the views of a submission: each vertex names its body, each instance its view.
-// The vertex shader reads the views' cameras from a uniform block, and the bodies' model
+// Every body of a world, each at every level of detail it has, and the ground in one vertex
+// buffer; per submission, one index buffer of the triangles each view draws: the bodies it may
+// see, each at its level for that view. One draw call per view. Each vertex names its body.
+// The vertex shader reads the view's camera from a uniform block, and the bodies' model
 // matrices and, per view and body, the velocity relative to the camera and the id from buffer
-// textures, all filled for the submission (shaders::kGeometryVertex). A body out of a view is
-// marked hidden in that view.
+// textures, all filled for the submission (shaders::kGeometryVertex).
 struct GeometryBatch {
   struct BatchVertex {
     float position[3];
     std::int32_t body;
+  };
+  struct IndexRange {
+    std::size_t first;
+    std::size_t count;
   };
   // A view's camera as the uniform block's std140 layout has it: world to camera, projection,
   // the ground's model, then ω.
@@ -497,7 +518,6 @@ struct GeometryBatch {
   std::array<GLuint, table_count> buffers{};
   std::array<GLuint, table_count> textures{};
   GLuint camera_buffer = 0;
-  GLsizei index_count = 0;
   std::uint64_t world_serial = 0;  // the world whose bodies the buffers hold; 0: none yet
   std::vector<std::array<float, 16>> model_texels;  // per body but the ground
   // Per view; the block has room for every view a submission may draw.
@@ -506,7 +526,11 @@ struct GeometryBatch {
   std::vector<std::array<float, 4>> velocity_texels;  // per view and body, the ground included
   std::vector<std::int32_t> id_texels;                // per view and body, the ground included
   std::vector<BatchVertex> vertices;
-  std::vector<GLuint> indices;
+  std::vector<GLuint> level_indices;     // every body's levels' triangles
+  std::vector<IndexRange> levels;        // per body and level, into level_indices
+  std::vector<std::size_t> first_level;  // per body, its first entry in levels
+  std::vector<GLuint> view_indices;      // per submission, the triangles of each view
+  std::vector<IndexRange> view_ranges;   // per view, into view_indices
 
   void create() {
     glGenVertexArrays(1, &vao);
@@ -535,27 +559,29 @@ struct GeometryBatch {
     glDeleteVertexArrays(1, &vao);
   }
 
-  // The bodies' shapes in drawing order, the ground last, once per world: bodies are added and
-  // removed only with a new world.
-  void build(std::uint64_t serial, const std::vector<const Shape*>& shapes) {
+  // The bodies' shapes, each body's levels of detail finest first, in drawing order, the ground
+  // last, once per world: bodies are added and removed only with a new world.
+  void build(std::uint64_t serial, const std::vector<std::span<const Shape>>& bodies) {
     vertices.clear();
-    indices.clear();
-    for (std::size_t body = 0; body < shapes.size(); ++body) {
-      const auto first = static_cast<GLuint>(vertices.size());
-      for (const Eigen::Vector3f& p : shapes[body]->positions) {
-        vertices.push_back({{p.x(), p.y(), p.z()}, static_cast<std::int32_t>(body)});
-      }
-      for (const GLuint index : shapes[body]->indices) {
-        indices.push_back(first + index);
+    level_indices.clear();
+    levels.clear();
+    first_level.clear();
+    for (std::size_t body = 0; body < bodies.size(); ++body) {
+      first_level.push_back(levels.size());
+      for (const Shape& shape : bodies[body]) {
+        const auto first = static_cast<GLuint>(vertices.size());
+        for (const Eigen::Vector3f& p : shape.positions) {
+          vertices.push_back({{p.x(), p.y(), p.z()}, static_cast<std::int32_t>(body)});
+        }
+        levels.push_back({level_indices.size(), shape.indices.size()});
+        for (const GLuint index : shape.indices) {
+          level_indices.push_back(first + index);
+        }
       }
     }
-    glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(BatchVertex)),
                  vertices.data(), GL_STATIC_DRAW);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLuint)),
-                 indices.data(), GL_STATIC_DRAW);
-    glBindVertexArray(0);
-    index_count = static_cast<GLsizei>(indices.size());
     world_serial = serial;
   }
 
@@ -563,6 +589,8 @@ struct GeometryBatch {
     view_count = 0;
     velocity_texels.clear();
     id_texels.clear();
+    view_indices.clear();
+    view_ranges.clear();
   }
 
   // The bodies' poses, once for all the submissions of a world state.
@@ -582,12 +610,23 @@ struct GeometryBatch {
     std::copy(ground_model.data(), ground_model.data() + 16, texels.begin() + 32);
     const Eigen::Vector3f w = omega.cast<float>();
     std::copy(w.data(), w.data() + 3, texels.begin() + 48);
+    view_ranges.push_back({view_indices.size(), 0});
   }
 
-  void add_seen(const Eigen::Vector3f& relative_velocity, std::int32_t id) {
+  // The last view's body `body`, in body order: how it moves relative to the camera, its id,
+  // and the level of detail it is drawn at, none where the view does not draw it.
+  void add_body(std::size_t body, const Eigen::Vector3f& relative_velocity, std::int32_t id,
+                std::optional<std::size_t> level) {
     velocity_texels.push_back(
         {relative_velocity.x(), relative_velocity.y(), relative_velocity.z(), 0.0F});
     id_texels.push_back(id);
+    if (level) {
+      const IndexRange& triangles = levels[first_level[body] + *level];
+      const auto from = level_indices.begin() + static_cast<std::ptrdiff_t>(triangles.first);
+      view_indices.insert(view_indices.end(), from,
+                          from + static_cast<std::ptrdiff_t>(triangles.count));
+      view_ranges.back().count += triangles.count;
+    }
   }
 
   void upload_views() const {
@@ -596,12 +635,19 @@ struct GeometryBatch {
     glBindBuffer(GL_UNIFORM_BUFFER, camera_buffer);
     glBufferData(GL_UNIFORM_BUFFER, sizeof cameras, cameras.data(), GL_STREAM_DRAW);
     glBindBufferBase(GL_UNIFORM_BUFFER, kCameraBlockBinding, camera_buffer);
+    glBindVertexArray(vao);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(view_indices.size() * sizeof(GLuint)), view_indices.data(),
+                 GL_STREAM_DRAW);
+    glBindVertexArray(0);
   }
 
-  // `views` instances from the first one, the uniform u_first_view's.
-  void draw(GLsizei views) const {
+  // The triangles of view `view`, whose camera the uniform u_view names.
+  void draw(std::size_t view) const {
+    const IndexRange& triangles = view_ranges[view];
     glBindVertexArray(vao);
-    glDrawElementsInstanced(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr, views);
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(triangles.count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(triangles.first * sizeof(GLuint)));
     glBindVertexArray(0);
   }
 
@@ -637,6 +683,92 @@ struct PointUniforms {
 
 }  // namespace
 
+// What a view draws of a body: nothing where the body is out of the view or lies between pixel
+// centres (a far person at 64² is a tenth of a pixel wide: drawn, it would cost its triangles
+// and colour nothing), else the coarsest level of detail that keeps its outline. Both the lit
+// and the geometry programs draw what it says, so that their channels stay the same.
+class BodyDetail {
+ public:
+  BodyDetail(const Eigen::Matrix4f& projection, const Eigen::Matrix4f& world_to_camera,
+             const base::CameraIntrinsics& k)
+      : frustum_(projection, world_to_camera),
+        world_to_camera_(world_to_camera.cast<double>()),
+        k_(k) {}
+
+  // An index into kCylinderSegments for a cylinder, 0 for a box; none where nothing is drawn.
+  std::optional<std::size_t> level(const DrawItem& item) const {
+    // Both unit meshes lie within [-1, 1]² × [0, 1].
+    if (!frustum_.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5})) {
+      return std::nullopt;
+    }
+    const Eigen::Matrix4d to_camera = world_to_camera_ * item.model.cast<double>();
+    if (!may_cover_a_pixel_centre(to_camera)) {
+      return std::nullopt;
+    }
+    return item.shape == Solid::Shape::box ? 0 : cylinder_level(to_camera);
+  }
+
+ private:
+  // How far a coarser level's outline may lie from the finest's in the image, in pixels: well
+  // within the half pixel by which rasterising already places any outline.
+  static constexpr double kOutlineTolerancePx = 0.25;
+  // What the float arithmetic that draws a body may move its outline by, at most.
+  static constexpr double kRoundingMarginPx = 1e-3;
+
+  // Whether the image's bounding box of the unit meshes' bound, [-1, 1]² × [0, 1] under
+  // `to_camera`, holds a pixel centre (a whole number in the projection's pixel coordinates);
+  // true where a corner is not in front of the near plane.
+  bool may_cover_a_pixel_centre(const Eigen::Matrix4d& to_camera) const {
+    Eigen::AlignedBox2d image;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d p =
+          to_camera.topRows<3>() * Eigen::Vector4d((corner & 1) != 0 ? 1.0 : -1.0,
+                                                   (corner & 2) != 0 ? 1.0 : -1.0,
+                                                   (corner & 4) != 0 ? 1.0 : 0.0, 1.0);
+      if (p.z() <= kNear) {
+        return true;
+      }
+      image.extend(Eigen::Vector2d(k_.cx_px + k_.fx_px * p.x() / p.z(),
+                                   k_.cy_px + k_.fy_px * p.y() / p.z()));
+    }
+    auto holds_a_whole_number = [](double low, double high, int size) {
+      return std::floor(std::min(high + kRoundingMarginPx, size - 1.0)) >=
+             std::ceil(std::max(low - kRoundingMarginPx, 0.0));
+    };
+    return holds_a_whole_number(image.min().x(), image.max().x(), k_.width_px) &&
+           holds_a_whole_number(image.min().y(), image.max().y(), k_.height_px);
+  }
+
+  // The coarsest level whose outline lies within kOutlineTolerancePx of the circle's. A chord
+  // of n segments lies up to r (1 − cos(π/n)) inside the circle; the projection x = f X/Z moves
+  // an image point by at most f d/Z² per metre a world point moves (d its distance, Z its
+  // depth), taken at the body's nearest depth and farthest distance.
+  std::size_t cylinder_level(const Eigen::Matrix4d& to_camera) const {
+    const Eigen::Vector3d centre = to_camera.topRows<3>() * Eigen::Vector4d(0.0, 0.0, 0.5, 1.0);
+    const double radius =
+        std::max(to_camera.col(0).head<3>().norm(), to_camera.col(1).head<3>().norm());
+    const double reach = std::hypot(radius, 0.5 * to_camera.col(2).head<3>().norm());
+    const double nearest_depth = centre.z() - reach;
+    if (nearest_depth <= kNear) {
+      return 0;
+    }
+    const double px_per_m =
+        std::max(k_.fx_px, k_.fy_px) * (centre.norm() + reach) / (nearest_depth * nearest_depth);
+    for (std::size_t level = kCylinderSegments.size() - 1; level > 0; --level) {
+      const double inside_m =
+          radius * (1.0 - std::cos(std::numbers::pi / kCylinderSegments[level]));
+      if (inside_m * px_per_m <= kOutlineTolerancePx) {
+        return level;
+      }
+    }
+    return 0;
+  }
+
+  Frustum frustum_;
+  Eigen::Matrix4d world_to_camera_;
+  base::CameraIntrinsics k_;
+};
+
 struct Renderer::Impl {
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLContext context = EGL_NO_CONTEXT;
@@ -649,13 +781,13 @@ struct Renderer::Impl {
   GeometryUniforms geometry{};
   std::optional<PointUniforms> uploaded_points;  // none before the first frame
   Mesh box;
-  Mesh cylinder;
+  std::array<Mesh, kCylinderSegments.size()> cylinders;  // per level of detail
   Mesh ground;
   Shape box_positions = box_shape();
-  Shape cylinder_positions = cylinder_shape();
+  std::array<Shape, kCylinderSegments.size()> cylinder_positions = cylinder_shapes();
   Shape ground_positions = ground_shape();
   GeometryBatch batch;
-  std::vector<const Shape*> batch_shapes;
+  std::vector<std::span<const Shape>> batch_shapes;
   GLuint fbo = 0;
   std::array<GLuint, 5> renderbuffers{};  // color, id, flow, depth, depth-stencil
   int fbo_width = 0;
@@ -682,7 +814,9 @@ struct Renderer::Impl {
     if (context != EGL_NO_CONTEXT) {
       eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context);
       box.release();
-      cylinder.release();
+      for (Mesh& cylinder : cylinders) {
+        cylinder.release();
+      }
       ground.release();
       batch.release();
       glDeleteRenderbuffers(static_cast<GLsizei>(renderbuffers.size()), renderbuffers.data());
@@ -805,7 +939,7 @@ struct Renderer::Impl {
         .model = glGetUniformLocation(shadow_program, "u_model"),
         .light_view_projection = glGetUniformLocation(shadow_program, "u_light_view_projection")};
     auto at = [this](const char* name) { return glGetUniformLocation(geometry_program, name); };
-    geometry = {.body_count = at("u_body_count"), .first_view = at("u_first_view")};
+    geometry = {.body_count = at("u_body_count"), .view = at("u_view")};
     glUseProgram(geometry_program);
     const char* tables[] = {"u_models", "u_velocities", "u_ids"};
     for (int table = 0; table < GeometryBatch::table_count; ++table) {
@@ -813,13 +947,14 @@ struct Renderer::Impl {
     }
     glUniformBlockBinding(geometry_program, glGetUniformBlockIndex(geometry_program, "Cameras"),
                           kCameraBlockBinding);
-    glUniform1i(at("u_hidden_id"), kHiddenId);
     // The samplers' texture units never change.
     glUseProgram(scene_program);
     glUniform1i(glGetUniformLocation(scene_program, "u_shadow_map"), 0);
     glUniform1i(glGetUniformLocation(scene_program, "u_noise"), 1);
     box = box_mesh();
-    cylinder = cylinder_mesh();
+    for (std::size_t level = 0; level < cylinders.size(); ++level) {
+      cylinders[level] = cylinder_mesh(kCylinderSegments[level]);
+    }
     ground = ground_mesh();
     batch.create();
     glGenTextures(1, &shadow_texture);
@@ -893,7 +1028,7 @@ struct Renderer::Impl {
       const AgentSpec& a = spec.agents[i];
       const AgentState& s = world.agents()[i];
       const Eigen::Vector2d v = s.velocity_mps();
-      items.push_back({&cylinder,
+      items.push_back({Solid::Shape::cylinder,
                        self && *self == i,
                        !world.present(i),
                        model_matrix(s.position_m, 0.0, {a.radius_m, a.radius_m, a.height_m}),
@@ -906,7 +1041,7 @@ struct Renderer::Impl {
       const Eigen::Vector3d scale = box_shape
                                         ? Eigen::Vector3d(s.size_m.x(), s.size_m.y(), s.height_m)
                                         : Eigen::Vector3d(s.radius_m, s.radius_m, s.height_m);
-      items.push_back({box_shape ? &box : &cylinder,
+      items.push_back({s.shape,
                        false,
                        false,
                        model_matrix(s.centre_m, s.yaw_rad, scale),
@@ -985,6 +1120,7 @@ struct Renderer::Impl {
 
     glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
     glViewport(0, 0, kShadowMapSize, kShadowMapSize);
+    glDisable(GL_CULL_FACE);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glClear(GL_DEPTH_BUFFER_BIT);
@@ -994,7 +1130,7 @@ struct Renderer::Impl {
     for (const DrawItem& item : items) {
       if (!item.gone) {
         glUniformMatrix4fv(shadow.model, 1, GL_FALSE, item.model.data());
-        item.mesh->draw();
+        (item.shape == Solid::Shape::box ? box : cylinders.front()).draw();
       }
     }
     check_gl("rendering the shadow map");
@@ -1193,9 +1329,14 @@ struct Renderer::Impl {
       mesh.draw();
     };
     collect_items(world, view.self);
+    const BodyDetail detail(pose.projection, pose.world_to_camera, view.intrinsics());
     for (const DrawItem& item : items) {
-      if (!item.hidden && !item.gone) {
-        draw(*item.mesh, item.model, item.material, item.id, item.velocity_mps);
+      if (item.hidden || item.gone) {
+        continue;
+      }
+      if (const std::optional<std::size_t> level = detail.level(item)) {
+        const Mesh& mesh = item.shape == Solid::Shape::box ? box : cylinders[*level];
+        draw(mesh, item.model, item.material, item.id, item.velocity_mps);
       }
     }
     // The ground last: the depth test then skips shading it behind everything else.
@@ -1206,7 +1347,12 @@ struct Renderer::Impl {
     glViewport(0, 0, k.width_px, k.height_px);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
-    glDisable(GL_CULL_FACE);
+    // Every shape is closed and convex with its triangles counter-clockwise seen from outside:
+    // a face seen from behind is hidden by the shape's own front, and drawing it is wasted. The
+    // projection keeps the optical frame's y down, a mirror image of OpenGL's window, where the
+    // front faces are therefore clockwise.
+    glEnable(GL_CULL_FACE);
+    glFrontFace(GL_CW);
   }
 
   // Draw buffers 1–3 (ids, flow, depth) and the depth buffer of the bound framebuffer, as a view
@@ -1292,15 +1438,14 @@ struct Renderer::Impl {
     if (layered) {
       glBindFramebuffer(GL_FRAMEBUFFER, layered_fbo);
       clear_geometry();
-      glUniform1i(geometry.first_view, 0);
-      batch.draw(count);
-    } else {
-      for (int v = 0; v < count; ++v) {
+    }
+    for (int v = 0; v < count; ++v) {
+      if (!layered) {
         bind_layer(v);
         clear_geometry();
-        glUniform1i(geometry.first_view, v);
-        batch.draw(1);
       }
+      glUniform1i(geometry.view, v);
+      batch.draw(static_cast<std::size_t>(v));
     }
     check_gl("rendering the views");
     for (int v = 0; v < count; ++v) {
@@ -1320,9 +1465,11 @@ struct Renderer::Impl {
     if (batch.world_serial != world.serial()) {
       batch_shapes.clear();
       for (const DrawItem& item : items) {
-        batch_shapes.push_back(item.mesh == &box ? &box_positions : &cylinder_positions);
+        batch_shapes.push_back(item.shape == Solid::Shape::box
+                                   ? std::span<const Shape>(&box_positions, 1)
+                                   : std::span<const Shape>(cylinder_positions));
       }
-      batch_shapes.push_back(&ground_positions);
+      batch_shapes.emplace_back(&ground_positions, 1);
       batch.build(world.serial(), batch_shapes);
     }
     batch.upload_bodies(items);
@@ -1335,18 +1482,17 @@ struct Renderer::Impl {
     for (const View& view : views) {
       const CameraPose pose = camera_pose(view, k);
       batch.add_view(pose.world_to_camera, pose.projection, ground_model(world, view), pose.omega);
-      const Frustum frustum(pose.projection, pose.world_to_camera);
+      const BodyDetail detail(pose.projection, pose.world_to_camera, k);
       auto relative = [&pose](const Eigen::Vector3d& velocity) {
         return (pose.rotation * (velocity - pose.velocity_mps)).cast<float>().eval();
       };
-      for (const DrawItem& item : items) {
+      for (std::size_t body = 0; body < items.size(); ++body) {
+        const DrawItem& item = items[body];
         const bool own_body = view.self && item.id == agent_render_id(*view.self);
-        // Both unit meshes lie within [-1, 1]² × [0, 1].
-        const bool seen = !own_body && !item.gone &&
-                          frustum.may_see(item.model, {0.0, 0.0, 0.5}, {1.0, 1.0, 0.5});
-        batch.add_seen(relative(item.velocity_mps), seen ? item.id : kHiddenId);
+        batch.add_body(body, relative(item.velocity_mps), item.id,
+                       own_body || item.gone ? std::nullopt : detail.level(item));
       }
-      batch.add_seen(relative(Eigen::Vector3d::Zero()), servo::kGroundId);
+      batch.add_body(items.size(), relative(Eigen::Vector3d::Zero()), servo::kGroundId, 0);
     }
     batch.upload_views();
   }

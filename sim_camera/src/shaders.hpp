@@ -128,16 +128,15 @@ void main() {
 }
 )";
 
-// Geometry only: no lights, no texture, no colour written. Every body is in one batch, and
-// every view of a submission is one instance of it, drawn into its own layer of the framebuffer:
-// each vertex names its body, each instance its view. Per view, the uniform block holds the
-// camera and the ground's model matrix (the ground follows the camera); per body, a buffer
-// texture holds its model matrix (four RGBA texels); per view and body, two more hold the body's
-// velocity relative to the camera and its id, or u_hidden_id where the view does not see it: its
-// vertices then go behind the near plane. Compiled after "#version", the definition of
-// MAX_VIEWS (the most views of a submission) and, where the views of a submission are drawn
-// by one call, that of LAYERED; without it each view is drawn on its own, into a framebuffer of
-// its layer alone, as instance 0 of u_first_view.
+// Geometry only: no lights, no texture, no colour written. Every body is in one vertex buffer,
+// each vertex naming its body; each view of a submission is one draw of the triangles it sees,
+// its index u_view. Per view, the uniform block holds the camera and the ground's model matrix
+// (the ground follows the camera); per body, a buffer texture holds its model matrix (four RGBA
+// texels); per view and body, two more hold the body's velocity relative to the camera and its
+// id. Compiled after "#version", the definition of MAX_VIEWS (the most views of a submission)
+// and, where the views of a submission are drawn into the layers of one framebuffer, that of
+// LAYERED: the view then chooses its layer; without it each view is drawn into a framebuffer of
+// its layer alone.
 inline constexpr const char* kGeometryVertex = R"(
 #ifdef LAYERED
 #extension GL_ARB_shader_viewport_layer_array : require
@@ -154,37 +153,30 @@ layout(std140) uniform Cameras { Camera u_cameras[MAX_VIEWS]; };
 uniform samplerBuffer u_models;
 uniform samplerBuffer u_velocities;
 uniform isamplerBuffer u_ids;
-uniform int u_hidden_id;
 uniform int u_body_count;  // the ground last
-uniform int u_first_view;
+uniform int u_view;
 out vec3 v_camera;
 flat out int v_id;
 flat out vec3 v_relative_velocity;
 flat out vec3 v_camera_omega;
 
 void main() {
-  int view = u_first_view + gl_InstanceID;
 #ifdef LAYERED
-  gl_Layer = gl_InstanceID;
+  gl_Layer = u_view;
 #endif
-  int seen = view * u_body_count + a_body;
+  int seen = u_view * u_body_count + a_body;
   v_id = texelFetch(u_ids, seen).r;
   v_relative_velocity = texelFetch(u_velocities, seen).xyz;
-  v_camera_omega = u_cameras[view].omega.xyz;
-  if (v_id == u_hidden_id) {
-    v_camera = vec3(0.0);
-    gl_Position = vec4(0.0, 0.0, -2.0, 1.0);
-    return;
-  }
+  v_camera_omega = u_cameras[u_view].omega.xyz;
   int texel = 4 * a_body;
   mat4 model = a_body == u_body_count - 1
-                   ? u_cameras[view].ground_model
+                   ? u_cameras[u_view].ground_model
                    : mat4(texelFetch(u_models, texel), texelFetch(u_models, texel + 1),
                           texelFetch(u_models, texel + 2), texelFetch(u_models, texel + 3));
   // As the scene program computes it, so that both give the same channels to the last bit.
   vec4 world = model * vec4(a_position, 1.0);
-  v_camera = (u_cameras[view].world_to_camera * world).xyz;
-  gl_Position = u_cameras[view].projection * vec4(v_camera, 1.0);
+  v_camera = (u_cameras[u_view].world_to_camera * world).xyz;
+  gl_Position = u_cameras[u_view].projection * vec4(v_camera, 1.0);
 }
 )";
 

@@ -185,14 +185,115 @@ TEST(Renderer, ShadowedGroundIsDarkerByTheAmbientRatio) {
   EXPECT_NEAR(luminance(shadow_row) / luminance(lit_row), expected, 0.03);
 }
 
+// A box's faces seen from every side and from above: each is drawn, at the depth of the face
+// nearest the camera (the faces are wound so that face culling keeps those seen from outside).
+TEST(Renderer, EveryFaceOfABoxIsSeenFromOutside) {
+  WorldSpec spec;
+  spec.obstacles = {box({0.0, 0.0}, {1.0, 2.0}, 1.0)};
+  struct Side {
+    Eigen::Vector2d eye;
+    double eye_height_m;
+    double pitch_rad;  // down, so that the view's centre meets the face's
+    double face_depth_m;
+  };
+  const Side sides[] = {{{4.0, 0.0}, 0.5, 0.0, 3.5},
+                        {{-4.0, 0.0}, 0.5, 0.0, 3.5},
+                        {{0.0, 5.0}, 0.5, 0.0, 4.0},
+                        {{0.0, -5.0}, 0.5, 0.0, 4.0},
+                        // the top face's centre, 1 m high, from 1.5 m beside it and 4 m above
+                        {{1.5, 0.0}, 5.0, std::atan2(4.0, 1.5), std::hypot(4.0, 1.5)}};
+  for (const Side& side : sides) {
+    AgentSpec me = observer(side.eye, std::atan2(-side.eye.y(), -side.eye.x()), 0.0);
+    me.camera.height_m = side.eye_height_m;
+    me.camera.pitch_rad = side.pitch_rad;
+    spec.agents = {me};
+    World world(spec);
+    const View view = View::of_agent(world, 0);
+    const base::CameraIntrinsics k = view.intrinsics();
+    RenderedView out;
+    renderer().render(world, view, out);
+    SCOPED_TRACE("eye at " + std::to_string(side.eye.x()) + ", " + std::to_string(side.eye.y()));
+    // The principal point lies between the four centre pixels; their depths are within a
+    // pixel's reach of the centre's.
+    const int row = static_cast<int>(k.cy_px);
+    const int col = static_cast<int>(k.cx_px);
+    EXPECT_EQ(out.object_ids.at<std::int32_t>(row, col), obstacle_render_id(0));
+    EXPECT_NEAR(out.depth_m.at<float>(row, col), side.face_depth_m, 0.02);
+  }
+}
+
+// Cylinders at 2 to 60 m, each drawn at the level of detail its distance allows, against the
+// analytic ray-caster's exact circles: the pixels whose object differs lie on the outline, and
+// are at most a third of it (a quarter-pixel band each side of it, and fewer); with the
+// coarsest level everywhere, the three nearest would differ on more than their outline.
+TEST(Renderer, CylindersAtEveryLevelOfDetailKeepTheirOutline) {
+  WorldSpec spec;
+  AgentSpec me = observer({0.0, 0.0}, 0.0, 0.0);
+  me.camera.width_px = 640;
+  me.camera.height_px = 480;
+  spec.agents = {me};
+  const double distances_m[] = {2.0, 5.0, 12.0, 30.0, 60.0};
+  for (std::size_t k = 0; k < std::size(distances_m); ++k) {
+    const double bearing = (-30.0 + 15.0 * static_cast<double>(k)) * kDeg;
+    spec.obstacles.push_back(
+        cylinder(distances_m[k] * Eigen::Vector2d(std::cos(bearing), std::sin(bearing)), 0.3, 1.7));
+  }
+  World world(spec);
+  const View view = View::of_agent(world, 0);
+  RenderedView out;
+  renderer().render(world, view, out);
+
+  servo::AnalyticScene scene;
+  scene.intrinsics = view.intrinsics();
+  scene.mount = {view.camera.height_m, view.camera.pitch_rad};
+  scene.agent_speed_mps = 0.0;
+  for (std::size_t k = 0; k < spec.obstacles.size(); ++k) {
+    servo::SceneObject o;
+    o.shape = servo::SceneObject::Shape::cylinder;
+    o.id = obstacle_render_id(k);
+    o.position_m = spec.obstacles[k].centre_m;
+    o.radius_m = spec.obstacles[k].radius_m;
+    o.height_m = spec.obstacles[k].height_m;
+    scene.objects.push_back(o);
+  }
+  const servo::SceneRender truth = servo::render_scene(scene);
+  auto truth_id = [&](int col, int row) { return truth.ids[truth.flow.index(col, row)]; };
+  std::map<std::int32_t, int> outline;
+  std::map<std::int32_t, int> differing;
+  for (int row = 1; row + 1 < out.object_ids.rows; ++row) {
+    for (int col = 1; col + 1 < out.object_ids.cols; ++col) {
+      const std::int32_t id = truth_id(col, row);
+      const std::int32_t drawn = out.object_ids.at<std::int32_t>(row, col);
+      if (id < 0 && drawn < 0) {
+        continue;  // the ground meets the sky nearer in the renderer than in the ray-caster
+      }
+      const bool on_outline = id != truth_id(col - 1, row) || id != truth_id(col + 1, row) ||
+                              id != truth_id(col, row - 1) || id != truth_id(col, row + 1);
+      outline[id] += on_outline ? 1 : 0;
+      if (drawn != id) {
+        EXPECT_TRUE(on_outline) << "row " << row << " col " << col;
+        ++differing[id];
+      }
+    }
+  }
+  for (std::size_t k = 0; k < spec.obstacles.size(); ++k) {
+    const std::int32_t id = obstacle_render_id(k);
+    SCOPED_TRACE("cylinder at " + std::to_string(distances_m[k]) + " m");
+    EXPECT_GT(outline[id], 10);
+    EXPECT_LE(differing[id], outline[id] / 3);
+  }
+}
+
 bool same_bits(const cv::Mat& a, const cv::Mat& b) {
   return a.size() == b.size() && a.type() == b.type() &&
          std::memcmp(a.data, b.data, a.total() * a.elemSize()) == 0;
 }
 
-// Agents on a circle, each looking across it past a wall. The first two cameras are so large
-// that a submission holds one of their views only, the third's is smaller than the others',
-// and the 20 others are more than a submission draws: five submissions of views of one size.
+// Agents on a circle, each looking across it past a wall, with posts from 10 to 120 m away (so
+// that the views draw cylinders at every level of detail, and leave out those between pixel
+// centres). The first two cameras are so large that a submission holds one of their views only,
+// the third's is smaller than the others', and the 20 others are more than a submission draws:
+// five submissions of views of one size.
 TEST(Renderer, ViewsRenderedTogetherAreTheViewsRenderedOneByOne) {
   WorldSpec spec;
   spec.lighting.sun = SunLight{0.5, 40.0 * kDeg, 0.6F, true};
@@ -209,6 +310,11 @@ TEST(Renderer, ViewsRenderedTogetherAreTheViewsRenderedOneByOne) {
   spec.agents[2].camera.width_px = 96;
   spec.agents[2].camera.height_px = 64;
   spec.obstacles = {box({0.0, 2.0}, {3.0, 0.3}, 2.0)};
+  for (int k = 1; k <= 12; ++k) {
+    const double angle = 0.5 * k;
+    spec.obstacles.push_back(
+        cylinder(10.0 * k * Eigen::Vector2d(std::cos(angle), std::sin(angle)), 0.3, 1.7));
+  }
   World world(spec);
   std::vector<View> views;
   for (std::size_t i = 0; i < spec.agents.size(); ++i) {

@@ -46,13 +46,13 @@ struct RenderedView {
 // Takes effect before the process's first renderer only; an LP_NUM_THREADS the user set is kept.
 void rasterize_on_calling_threads();
 
-// How Renderer::render_geometry submits views of one size: all of them by one draw call, each
-// into its own layer of one framebuffer (what suits a GPU: one submission and one stall for all
-// the views), or by one draw call per view into a framebuffer of its layer alone, sharing the
-// uploads (what suits Mesa's software rasteriser, llvmpipe, which rasterises a layered draw's
-// views about half as fast). `automatic` draws layered on a GPU whose driver lets the vertex
-// shader choose the layer (GL_ARB_shader_viewport_layer_array), per view otherwise; `layered`
-// where the driver lacks it is per view too.
+// How Renderer::render_geometry submits views of one size, a draw call each: into the layers of
+// one framebuffer, each view's vertex shader choosing its layer (what suits a GPU: one
+// framebuffer for all the views, one stall), or each into a framebuffer of its layer alone
+// (what suits Mesa's software rasteriser, llvmpipe, which rasterises layered views about half
+// as fast). `automatic` draws layered on a GPU whose driver lets the vertex shader choose the
+// layer (GL_ARB_shader_viewport_layer_array), per view otherwise; `layered` where the driver
+// lacks it is per view too.
 enum class ViewSubmission { automatic, layered, per_view };
 
 // A headless OpenGL 3.3 renderer through EGL: Mesa's surfaceless platform (llvmpipe on a
@@ -60,6 +60,10 @@ enum class ViewSubmission { automatic, layered, per_view };
 // lit, shadowed, procedurally textured worlds and, per pixel, the synthetic flow of CGF Eq. 1
 // from the depth, the object and the known relative velocities. A renderer draws on one thread
 // at a time; renderers on several threads draw at once.
+// A view draws what it can show: no body outside it or between its pixel centres, and each
+// cylinder with the fewest segments (48, 24, 12 or 6) whose outline stays within a quarter
+// pixel of the circle's at its distance, so that a crowd's view costs what it shows rather
+// than how many bodies the world holds. Faces seen from behind are culled.
 class Renderer {
  public:
   // Throws std::runtime_error saying what failed when no EGL display or OpenGL 3.3 context can
