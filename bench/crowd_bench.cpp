@@ -2,6 +2,9 @@
 // synthetic flow and semantic ids (the default perception), stepped on 1 and 2 threads. Every
 // configuration runs in a child process of its own, so that its peak resident memory is its own.
 //   crowd_bench [--steps N] [--agents 1,10,...] [--resolutions 64,128,...] [--threads 1,2,...]
+//               [--submission automatic|layered|per_view]
+// First prints the renderer the runs draw with (OpenGL's description: a GPU or llvmpipe) and how
+// its views are submitted (sim_camera::ViewSubmission; bench/gpu_render.sh compares them).
 // Prints one row per configuration: world steps per second, wall milliseconds per agent-step
 // (the step's wall time over its agents), the mean render and perception+control milliseconds
 // of one agent's step as its thread saw them (the render: its share of the submissions its
@@ -53,13 +56,15 @@ sim_camera::WorldSpec ring(int agents, int resolution) {
 }
 
 struct Row {
+  char renderer[160] = {};  // Renderer::description(), cut to fit
   double world_steps_per_s = 0.0;
   double render_ms = 0.0;
   double think_ms = 0.0;  // flow, segmentation, features and control
 };
 
 // Runs one configuration in this (child) process and writes its row to `fd`.
-[[noreturn]] void measure(int agents, int resolution, int threads, int steps, int fd) {
+[[noreturn]] void measure(int agents, int resolution, int threads, int steps,
+                          sim_camera::ViewSubmission submission, int fd) {
   int status = 0;
   try {
     if (threads != 1 && agents > 1) {
@@ -68,11 +73,14 @@ struct Row {
     sim::SimOptions options;
     options.steps = steps;
     options.threads = threads;
+    options.view_submission = submission;
     options.write_outputs = false;
     std::ostringstream log;
     const sim::SimResult result = sim::run_simulation(ring(agents, resolution), options, log);
     const pipeline::StageTimes& t = result.per_agent_step_ms;
-    const Row row{result.world_steps_per_s, t.render, t.total - t.render};
+    Row row{{}, result.world_steps_per_s, t.render, t.total - t.render};
+    const std::string renderer = sim_camera::Renderer::create(submission)->description();
+    renderer.copy(row.renderer, sizeof row.renderer - 1);
     if (write(fd, &row, sizeof row) != static_cast<ssize_t>(sizeof row)) {
       status = 2;
     }
@@ -100,6 +108,16 @@ std::vector<int> numbers(const std::string& list, const char* what) {
   return values;
 }
 
+std::string submission_name(sim_camera::ViewSubmission submission,
+                            const std::map<std::string, sim_camera::ViewSubmission>& submissions) {
+  for (const auto& [name, value] : submissions) {
+    if (value == submission) {
+      return name;
+    }
+  }
+  return "?";
+}
+
 void print_row(int agents, int resolution, int threads, const Row& row, long max_rss_kb) {
   const double per_agent_ms = 1000.0 / (row.world_steps_per_s * agents);
   const auto paper = kPaperMs.find(resolution);
@@ -118,6 +136,11 @@ int run(int argc, char** argv) {
   std::vector<int> agent_counts = {1, 10, 25, 50, 100, 200};
   std::vector<int> resolutions = {64, 128, 256};
   std::vector<int> thread_counts = {1, 2};
+  sim_camera::ViewSubmission submission = sim_camera::ViewSubmission::automatic;
+  const std::map<std::string, sim_camera::ViewSubmission> submissions = {
+      {"automatic", sim_camera::ViewSubmission::automatic},
+      {"layered", sim_camera::ViewSubmission::layered},
+      {"per_view", sim_camera::ViewSubmission::per_view}};
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
     if (k + 1 >= argc) {
@@ -132,13 +155,19 @@ int run(int argc, char** argv) {
       resolutions = numbers(value, "--resolutions");
     } else if (arg == "--threads") {
       thread_counts = numbers(value, "--threads");
+    } else if (arg == "--submission") {
+      const auto known = submissions.find(value);
+      if (known == submissions.end()) {
+        throw std::invalid_argument("--submission: unknown '" + value +
+                                    "' (automatic, layered, per_view)");
+      }
+      submission = known->second;
     } else {
       throw std::invalid_argument("unknown option " + arg +
-                                  " (--steps, --agents, --resolutions, --threads)");
+                                  " (--steps, --agents, --resolutions, --threads, --submission)");
     }
   }
-  std::printf("%6s %6s %7s %12s %14s %10s %10s %9s %11s\n", "agents", "res", "threads",
-              "world_st/s", "ms/agent-step", "render_ms", "think_ms", "rss_MB", "paper_ms");
+  bool described = false;
   int failures = 0;
   for (const int resolution : resolutions) {
     for (const int agents : agent_counts) {
@@ -153,7 +182,7 @@ int run(int argc, char** argv) {
         }
         if (child == 0) {
           close(pipe_fds[0]);
-          measure(agents, resolution, threads, steps, pipe_fds[1]);
+          measure(agents, resolution, threads, steps, submission, pipe_fds[1]);
         }
         close(pipe_fds[1]);
         Row row;
@@ -163,6 +192,14 @@ int run(int argc, char** argv) {
         rusage usage{};
         wait4(child, &status, 0, &usage);
         if (got && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+          if (!described) {
+            std::printf("renderer: %s; views submitted: %s\n", row.renderer,
+                        submission_name(submission, submissions).c_str());
+            std::printf("%6s %6s %7s %12s %14s %10s %10s %9s %11s\n", "agents", "res", "threads",
+                        "world_st/s", "ms/agent-step", "render_ms", "think_ms", "rss_MB",
+                        "paper_ms");
+            described = true;
+          }
           print_row(agents, resolution, threads, row, usage.ru_maxrss);
         } else {
           ++failures;

@@ -200,7 +200,9 @@ class SimulationRun {
         options_(options),
         world_(spec_),
         arena_(threads(options)),
-        renderers_([] { return sim_camera::Renderer::create(); }),
+        renderers_([submission = options.view_submission] {
+          return sim_camera::Renderer::create(submission);
+        }),
         total_steps_(total_steps(spec_, options)),
         paths_(spec_.agents.size()),
         commands_(spec_.agents.size()),

@@ -57,6 +57,8 @@ struct SimOptions {
   bool write_outputs = true;  // false: only the returned result (tests, benchmarks)
   // Threads the agents are stepped on; 0: one per core. The result is the same for any number.
   int threads = 1;
+  // How each thread's renderer submits its views (benchmarks compare them); the same result.
+  sim_camera::ViewSubmission view_submission = sim_camera::ViewSubmission::automatic;
   // When set, agent driven_agent is steered by `driver` (which outlives the run), not by a brain.
   AgentDriver* driver = nullptr;
   std::size_t driven_agent = 0;
