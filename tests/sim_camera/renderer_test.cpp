@@ -91,6 +91,30 @@ Solid cylinder(Eigen::Vector2d centre, double radius, double height) {
   return s;
 }
 
+// The analytic ray-caster's scene (servo/analytic_scene.hpp) seen from `view`, with no objects.
+servo::AnalyticScene analytic_scene(const View& view) {
+  servo::AnalyticScene scene;
+  scene.intrinsics = view.intrinsics();
+  scene.mount = {view.camera.height_m, view.camera.pitch_rad};
+  scene.agent_speed_mps = view.speed_mps;
+  scene.agent_turn_rate = view.turn_rate;
+  return scene;
+}
+
+// A world's cylinder as the ray-caster has it: in the axes of the body seen from.
+servo::SceneObject analytic_cylinder(const View& view, const Solid& s, std::int32_t id,
+                                     const Eigen::Vector2d& velocity_mps) {
+  const Eigen::Rotation2D<double> to_body(-view.yaw_rad);
+  servo::SceneObject o;
+  o.shape = servo::SceneObject::Shape::cylinder;
+  o.id = id;
+  o.position_m = to_body * (s.centre_m - view.position_m);
+  o.radius_m = s.radius_m;
+  o.height_m = s.height_m;
+  o.velocity_mps = to_body * velocity_mps;
+  return o;
+}
+
 // The renderer's flow against the analytic ray-caster of the servo core on the same scene:
 // a post, a moving cylinder, the ground and the sky, seen by a turning, pitched camera.
 TEST(Renderer, SyntheticFlowEqualsTheAnalyticFlow) {
@@ -110,24 +134,11 @@ TEST(Renderer, SyntheticFlowEqualsTheAnalyticFlow) {
   RenderedView out;
   renderer().render(world, view, out);
 
-  servo::AnalyticScene scene;
-  scene.intrinsics = view.intrinsics();
-  scene.mount = {view.camera.height_m, view.camera.pitch_rad};
-  scene.agent_speed_mps = view.speed_mps;
-  scene.agent_turn_rate = view.turn_rate;
-  const Eigen::Rotation2D<double> to_body(-view.yaw_rad);
-  auto add = [&](const Solid& s, std::int32_t id, const Eigen::Vector2d& velocity) {
-    servo::SceneObject o;
-    o.shape = servo::SceneObject::Shape::cylinder;
-    o.id = id;
-    o.position_m = to_body * (s.centre_m - view.position_m);
-    o.radius_m = s.radius_m;
-    o.height_m = s.height_m;
-    o.velocity_mps = to_body * velocity;
-    scene.objects.push_back(o);
-  };
-  add(spec.obstacles[0], obstacle_render_id(0), Eigen::Vector2d::Zero());
-  add(world.moving_now(0), moving_render_id(0), world.moving()[0].velocity_mps);
+  servo::AnalyticScene scene = analytic_scene(view);
+  scene.objects = {
+      analytic_cylinder(view, spec.obstacles[0], obstacle_render_id(0), Eigen::Vector2d::Zero()),
+      analytic_cylinder(view, world.moving_now(0), moving_render_id(0),
+                        world.moving()[0].velocity_mps)};
   const servo::SceneRender truth = servo::render_scene(scene);
 
   std::map<std::int32_t, int> compared;
@@ -243,18 +254,10 @@ TEST(Renderer, CylindersAtEveryLevelOfDetailKeepTheirOutline) {
   RenderedView out;
   renderer().render(world, view, out);
 
-  servo::AnalyticScene scene;
-  scene.intrinsics = view.intrinsics();
-  scene.mount = {view.camera.height_m, view.camera.pitch_rad};
-  scene.agent_speed_mps = 0.0;
+  servo::AnalyticScene scene = analytic_scene(view);
   for (std::size_t k = 0; k < spec.obstacles.size(); ++k) {
-    servo::SceneObject o;
-    o.shape = servo::SceneObject::Shape::cylinder;
-    o.id = obstacle_render_id(k);
-    o.position_m = spec.obstacles[k].centre_m;
-    o.radius_m = spec.obstacles[k].radius_m;
-    o.height_m = spec.obstacles[k].height_m;
-    scene.objects.push_back(o);
+    scene.objects.push_back(
+        analytic_cylinder(view, spec.obstacles[k], obstacle_render_id(k), Eigen::Vector2d::Zero()));
   }
   const servo::SceneRender truth = servo::render_scene(scene);
   auto truth_id = [&](int col, int row) { return truth.ids[truth.flow.index(col, row)]; };
