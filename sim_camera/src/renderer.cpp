@@ -1426,8 +1426,7 @@ struct Renderer::Impl {
   }
 
   // Ids, flow and depth of views of one size, for synthetic perception: no lights, no shadow map,
-  // no texture. One instanced draw for all of them where they are drawn layered, else one draw
-  // per view.
+  // no texture. A draw per view, into the layered framebuffer or into its layer's own.
   void draw_layers(const World& world, std::span<const View> views,
                    std::span<RenderedView* const> out) {
     const base::CameraIntrinsics k = views.front().intrinsics();
