@@ -85,6 +85,19 @@ BENCHMARK(FeaturesAndControl)->ArgName("with_depth")->Arg(0)->Arg(1)->Unit(bench
 
 // The controller alone, on the five objects' features at 256² (with depth): one step of each law.
 // Arg 0: cgf2019 (the papers'), 1: flowsteer.
+// Law 0: the papers'; 1: the flowsteer law without its turn check; 2: the flowsteer law as it
+// steers, whose turn check costs the navigation function at four predicted percepts.
+Controller control_step_controller(int law) {
+  if (law == 0) {
+    return Controller(goal_reaching({}), 1.0, {1.0, 1.0});
+  }
+  const FlowsteerOptions options = flowsteer_options({});
+  const TurnCheck check{law == 2, options.clearance.threats.depth,
+                        options.clearance.threats.static_closing_ratio};
+  return Controller(flowsteer_goal_reaching({}, options), 1.0, {1.0, 1.0},
+                    GradientStep::implicit_euler, check);
+}
+
 void ControlStep(benchmark::State& state) {
   const Prepared p = prepare(256);
   const servo::FlowField field = field_of(p, true);
@@ -92,17 +105,15 @@ void ControlStep(benchmark::State& state) {
   segment_by_ids(p.render.ids, field.width(), field.height(), p.ground, segmentation);
   FeatureExtractor extractor;
   const auto objects = extractor.extract(field, segmentation);
-  Controller controller = state.range(0) == 0
-                              ? Controller(goal_reaching({}), 1.0, {1.0, 1.0})
-                              : Controller(flowsteer_goal_reaching({}), 1.0, {1.0, 1.0});
+  Controller controller = control_step_controller(static_cast<int>(state.range(0)));
   ControlOutput out;
   for (auto _ : state) {
-    controller.step({objects, 0.1, 10.0, {}}, {1.0}, out);
+    controller.step({objects, 0.1, 10.0, {}}, {1.0, 0.05}, out);
     benchmark::DoNotOptimize(out.command);
   }
   state.counters["objects"] = static_cast<double>(objects.size());
 }
-BENCHMARK(ControlStep)->ArgName("flowsteer_law")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(ControlStep)->ArgName("law")->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 // The stage before it: semantic segmentation from the object ids, ground excluded.
 void SegmentByIds(benchmark::State& state) {

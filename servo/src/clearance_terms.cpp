@@ -279,12 +279,13 @@ class ThreatCones {
   std::vector<std::size_t> order_;
 };
 
-class ClearanceTerm final : public CostTerm {
+class ClearanceTerm final : public detail::SideRememberingTerm {
  public:
   explicit ClearanceTerm(const ClearanceOptions& options) : options_(options) {}
   std::string_view name() const override { return "clearance"; }
 
-  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
+ private:
+  TermGradient assess(const Percept& percept, const AgentState& agent) override {
     cones_.build(percept, agent, options_.threats);
     group_ends_.clear();
     for (std::size_t g = 0; g < cones_.groups().size(); ++g) {
@@ -313,11 +314,9 @@ class ClearanceTerm final : public CostTerm {
       accumulate(sum, detail::through_rate(importance * phi.value, importance * phi.slope * sign,
                                            importance * phi.curvature * sign * sign, separation));
     }
-    sides_.next_step();
     return sum;
   }
 
- private:
   // The end a group is passed by: the one with more clearance, except that the end its members
   // were passed by at the previous step keeps commit_band σ of advantage (no chatter between
   // both ways round) and the passing convention's end passing_band σ (two agents meeting
@@ -413,7 +412,6 @@ class ClearanceTerm final : public CostTerm {
   ClearanceOptions options_;
   ThreatCones cones_;
   std::vector<int> group_ends_;
-  detail::SideMemory sides_;
 };
 
 class BrakingTerm final : public CostTerm {

@@ -1,13 +1,16 @@
 #include "flowsteer/servo/control.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 
 #include "cost_term_helpers.hpp"
 #include "flowsteer/servo/dynamics.hpp"
+#include "turn_prediction.hpp"
 
 namespace flowsteer::servo {
 
@@ -53,14 +56,15 @@ class SpeedTerm final : public CostTerm {
   double preferred_;
 };
 
-class AvoidanceTerm final : public CostTerm {
+class AvoidanceTerm final : public detail::SideRememberingTerm {
  public:
   explicit AvoidanceTerm(const AvoidanceTermOptions& options) : options_(options) {}
   std::string_view name() const override { return "avoidance"; }
 
+ private:
   // CGF Eq. 9 and 10; the gradient sign follows docs/CONVENTIONS.md ("Signs"), not the printed
   // Eq. 17.
-  TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
+  TermGradient assess(const Percept& percept, const AgentState& agent) override {
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {
       if (!detail::is_threat(object, options_.horizon_s)) {
@@ -90,24 +94,22 @@ class AvoidanceTerm final : public CostTerm {
                  exp_falloff(importance, separation, side, sigma,
                              separation_rate(centre, foe, tau, tau_over_depth, agent.speed_mps)));
     }
-    sides_.next_step();
     return sum;
   }
 
- private:
   AvoidanceTermOptions options_;
-  detail::SideMemory sides_;
 };
 
-class DarkTerm final : public CostTerm {
+class DarkTerm final : public detail::SideRememberingTerm {
  public:
   explicit DarkTerm(const DarkOptions& options) : options_(options) {}
   std::string_view name() const override { return "dark"; }
 
+ private:
   // MIG Eq. 3. A dark region has no flow to fit; it is taken as static, so its FOE is straight
   // ahead and its centre moves as ġ = g/τ − (1 + g²) ω whatever its depth. MIG Eq. 7 prints
   // (1 − g²) for that factor; the sign of the g² term does not survive the derivation.
-  TermGradient evaluate(const Percept& percept, const AgentState&) override {
+  TermGradient assess(const Percept& percept, const AgentState&) override {
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {
       if (object.kind != RegionKind::dark || object.pixel_count == 0 ||
@@ -125,13 +127,10 @@ class DarkTerm final : public CostTerm {
       const double side = sides_.side(object.source_id, g, sigma, options_.commit_band);
       accumulate(sum, exp_falloff(1.0, g, side, sigma, rate));
     }
-    sides_.next_step();
     return sum;
   }
 
- private:
   DarkOptions options_;
-  detail::SideMemory sides_;
 };
 
 class AlignTerm final : public CostTerm {
@@ -349,6 +348,14 @@ TermGradient NavigationFunction::evaluate(const Percept& percept, const AgentSta
   return total;
 }
 
+double NavigationFunction::cost(const Percept& percept, const AgentState& agent) {
+  double total = 0.0;
+  for (auto& [weight, term] : terms_) {
+    total += weight * term->cost(percept, agent);
+  }
+  return total;
+}
+
 NavigationFunction goal_reaching(const GoalReachingWeights& w, const PapersOptions& options) {
   require_weight(w.alpha, "alpha");
   require_weight(w.beta, "beta");
@@ -378,11 +385,12 @@ NavigationFunction following(const FollowingWeights& w, const PapersOptions& opt
 }
 
 Controller::Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits,
-                       GradientStep gradient_step)
+                       GradientStep gradient_step, const TurnCheck& turn_check)
     : navigation_(std::move(navigation)),
       lambda_(lambda),
       limits_(limits),
-      gradient_step_(gradient_step) {
+      gradient_step_(gradient_step),
+      turn_check_(turn_check) {
   if (!std::isfinite(lambda) || lambda <= 0.0) {
     throw std::invalid_argument("controller: lambda must be positive, got " +
                                 std::to_string(lambda));
@@ -433,6 +441,28 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
   out.command = {
       std::clamp(accel_mps2, -limits_.max_accel_mps2, limits_.max_accel_mps2),
       std::clamp(out.unclamped.turn_rate, -limits_.max_turn_rate, limits_.max_turn_rate)};
+  if (turn_check_.enabled && agent.period_s > 0.0 && out.command.turn_rate != 0.0) {
+    out.command.turn_rate = checked_turn_rate(percept, agent, out.command.turn_rate);
+  }
+}
+
+double Controller::checked_turn_rate(const Percept& percept, const AgentState& agent,
+                                     double turn_rate) {
+  constexpr std::array kFractions{1.0, 0.5, 0.25, 0.125};
+  double best_rate = turn_rate;
+  double best_cost = std::numeric_limits<double>::infinity();
+  Percept turned;
+  for (const double fraction : kFractions) {
+    const double rate = fraction * turn_rate;
+    detail::percept_after_turn(percept, agent, rate * agent.period_s, turn_check_.depth,
+                               turn_check_.static_closing_ratio, turned_objects_, turned);
+    const double cost = navigation_.cost(turned, agent);
+    if (cost < best_cost) {
+      best_cost = cost;
+      best_rate = rate;
+    }
+  }
+  return best_rate;
 }
 
 ControlOutput Controller::step(const Percept& percept, const AgentState& agent) {

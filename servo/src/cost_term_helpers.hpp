@@ -166,10 +166,33 @@ class SideMemory {
     previous_.swap(current_);
     current_.clear();
   }
+  // Forgets what was remembered since next_step: a probe of a predicted percept (CostTerm::cost).
+  void discard_step() { current_.clear(); }
 
  private:
   std::vector<Taken> previous_;
   std::vector<Taken> current_;
+};
+
+// A term that remembers the side each object was passed by (SideMemory): evaluate keeps what
+// this step decided, cost (a probe of a predicted percept) forgets it.
+class SideRememberingTerm : public CostTerm {
+ public:
+  TermGradient evaluate(const Percept& percept, const AgentState& agent) final {
+    const TermGradient sum = assess(percept, agent);
+    sides_.next_step();
+    return sum;
+  }
+  double cost(const Percept& percept, const AgentState& agent) final {
+    const double cost = assess(percept, agent).cost;
+    sides_.discard_step();
+    return cost;
+  }
+
+ protected:
+  // The term's value and gradient, remembering the sides taken in sides_.
+  virtual TermGradient assess(const Percept& percept, const AgentState& agent) = 0;
+  SideMemory sides_;
 };
 
 }  // namespace flowsteer::servo::detail

@@ -33,7 +33,7 @@ constexpr std::array<std::pair<NavigationLaw, std::string_view>, 3> kLaws{{
     {NavigationLaw::mig2019, "mig2019"},
 }};
 
-constexpr std::array<std::pair<LawMechanism, std::string_view>, 11> kMechanisms{{
+constexpr std::array<std::pair<LawMechanism, std::string_view>, 12> kMechanisms{{
     {LawMechanism::none, "none"},
     {LawMechanism::braking, "braking"},
     {LawMechanism::anticipation, "anticipation"},
@@ -45,6 +45,7 @@ constexpr std::array<std::pair<LawMechanism, std::string_view>, 11> kMechanisms{
     {LawMechanism::implicit_step, "implicit_step"},
     {LawMechanism::proportional_margin, "proportional_margin"},
     {LawMechanism::static_closing, "static_closing"},
+    {LawMechanism::turn_check, "turn_check"},
 }};
 
 template <typename Enum, std::size_t N>
@@ -111,6 +112,7 @@ void disable(LawMechanism mechanism, FlowsteerOptions& o) {
     case LawMechanism::anticipation:
     case LawMechanism::speed_limit:
     case LawMechanism::implicit_step:
+    case LawMechanism::turn_check:
       break;
   }
 }
@@ -242,12 +244,17 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
     weights.preferred_speed_mps = preferred_speed_mps;
     weights.max_turn_rate = c.max_turn_rate;
     weights.follow_gap_m = c.follow_gap_m;
+    // Goal reaching only: a follower turning to keep its leader fell behind it with the check.
+    const TurnCheck turn_check{
+        c.kind == NavigationKind::goal_reaching && c.without != LawMechanism::turn_check,
+        options.clearance.threats.depth, options.clearance.threats.static_closing_ratio};
     return Controller(c.kind == NavigationKind::following
                           ? flowsteer_following(weights, options)
                           : flowsteer_goal_reaching(weights, options),
                       c.lambda, limits,
                       c.without == LawMechanism::implicit_step ? GradientStep::explicit_euler
-                                                               : GradientStep::implicit_euler);
+                                                               : GradientStep::implicit_euler,
+                      turn_check);
   }
   const PapersOptions options = papers_terms(c, agent_width_m);
   if (c.kind == NavigationKind::following) {

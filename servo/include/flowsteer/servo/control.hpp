@@ -52,6 +52,11 @@ class CostTerm {
   virtual std::string_view name() const = 0;
   // Not const: a term may remember what it decided at the previous step (see commit_band).
   virtual TermGradient evaluate(const Percept& percept, const AgentState& agent) = 0;
+  // The cost alone at a percept predicted for a candidate command (TurnCheck), after this step's
+  // evaluate: it remembers nothing, so a term that remembers must override it.
+  virtual double cost(const Percept& percept, const AgentState& agent) {
+    return evaluate(percept, agent).cost;
+  }
 };
 
 // Which way an agent turns to pass an object met head-on, when neither side is clearly shorter.
@@ -264,6 +269,8 @@ class NavigationFunction {
   // Fills `out` with one entry per term (reusing its storage) and returns the weighted sum.
   TermGradient evaluate(const Percept& percept, const AgentState& agent,
                         std::vector<TermEvaluation>& out);
+  // The weighted sum of the terms' CostTerm::cost.
+  double cost(const Percept& percept, const AgentState& agent);
 
  private:
   struct Weighted {
@@ -342,21 +349,41 @@ enum class GradientStep {
   implicit_euler,
 };
 
+// Whether the turn the gradient asks for is checked against the cost it leads to. The gradient
+// sees a term's cost change only through its features' rates, not where an object's importance
+// or its being passed clear changes with the course: a wall beside the agent costs nothing while
+// the course runs along it and its full importance once the course turns a few hundredths of a
+// radian towards it, less than one period's turn at the limit. The command then flips between
+// the limits at every step, each turn undoing the last. Checked, the turn rate is the one of
+// the gradient's, or of its half, quarter or eighth, whose predicted percept
+// (turn_prediction.hpp: the view turned, the translation left out) costs least.
+struct TurnCheck {
+  bool enabled = false;
+  // What the terms take objects' depths and motion from (ThreatOptions), for the prediction.
+  DepthGuess depth;
+  double static_closing_ratio = 1.5;
+};
+
 // The gradient update of CGF Eq. 15, a_c = −λ ∂L̇/∂a_c and ω = −λ ∂L̇/∂ω, clamped to the limits.
 class Controller {
  public:
   Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits,
-             GradientStep gradient_step = GradientStep::explicit_euler);
+             GradientStep gradient_step = GradientStep::explicit_euler,
+             const TurnCheck& turn_check = {});
 
   // Reuses `out.terms`' storage.
   void step(const Percept& percept, const AgentState& agent, ControlOutput& out);
   ControlOutput step(const Percept& percept, const AgentState& agent);
 
  private:
+  double checked_turn_rate(const Percept& percept, const AgentState& agent, double turn_rate);
+
   NavigationFunction navigation_;
   double lambda_;
   ControlLimits limits_;
   GradientStep gradient_step_;
+  TurnCheck turn_check_;
+  std::vector<ObjectFeatures> turned_objects_;  // reused by each check
 };
 
 }  // namespace flowsteer::servo

@@ -27,8 +27,9 @@ enum class NavigationLaw { flowsteer, cgf2019, mig2019 };
 // convention (no side preferred), commitment to the side taken (no band, no hold at rest),
 // static objects passed clear left out of the cost (kept in), giving way to fast crossers (never),
 // the speed limit (none), the implicit gradient step (CGF Eq. 15's explicit step), the margin
-// in proportion to speed (the full margin always) and the static FOE checked against the closing
-// speed (the fit's word taken). none: the law as it is.
+// in proportion to speed (the full margin always), the static FOE checked against the closing
+// speed (the fit's word taken) and the turn checked against the cost it leads to (TurnCheck; the
+// gradient's turn taken). none: the law as it is.
 enum class LawMechanism {
   none,
   braking,
@@ -40,7 +41,8 @@ enum class LawMechanism {
   speed_limit,
   implicit_step,
   proportional_margin,
-  static_closing
+  static_closing,
+  turn_check
 };
 // Where motion energy's "mass" and "floor" pixels come from: the renderer's object ids, or the
 // flat-ground test on the flow, as a real camera would give them.

@@ -1,0 +1,21 @@
+#pragma once
+
+// What the agent would see after turning in place: the percept a candidate turn rate leads to
+// within one control period, which Controller's turn check (control.hpp, TurnCheck) weighs.
+
+#include <vector>
+
+#include "flowsteer/servo/control.hpp"
+
+namespace flowsteer::servo::detail {
+
+// `now` as seen after the camera turns by turn_rad (positive right) about its y axis: every
+// object's image columns and depths rotated with it, its FOE and τ from its relative velocity
+// (contact_time.hpp) with its motion over the ground kept, the goal's bearing turned. The
+// translation over the period is left out: it is the same for every turn compared. `objects`
+// holds the turned objects (its storage is reused); `out` points into it.
+void percept_after_turn(const Percept& now, const AgentState& agent, double turn_rad,
+                        const DepthGuess& depth, double static_closing_ratio,
+                        std::vector<ObjectFeatures>& objects, Percept& out);
+
+}  // namespace flowsteer::servo::detail
