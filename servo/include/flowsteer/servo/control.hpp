@@ -354,9 +354,9 @@ enum class GradientStep {
 // or its being passed clear changes with the course: a wall beside the agent costs nothing while
 // the course runs along it and its full importance once the course turns a few hundredths of a
 // radian towards it, less than one period's turn at the limit. The command then flips between
-// the limits at every step, each turn undoing the last. Checked, the turn rate is the one of
-// the gradient's, or of its half, quarter or eighth, whose predicted percept
-// (turn_prediction.hpp: the view turned, the translation left out) costs least.
+// the limits at every step, each turn undoing the last. Checked, the turn rate is the
+// gradient's, or its half, quarter or eighth, whichever leads to the predicted percept
+// (turn_prediction.hpp: the view turned, the translation left out) that costs least.
 struct TurnCheck {
   bool enabled = false;
   // What the terms take objects' depths and motion from (ThreatOptions), for the prediction.
