@@ -6,6 +6,7 @@
 #include <benchmark/benchmark.h>
 
 #include "flowsteer/servo/servo.hpp"
+#include "flowsteer/servo/steering.hpp"
 #include "radial_fit.hpp"
 
 namespace {
@@ -83,19 +84,18 @@ void FeaturesAndControl(benchmark::State& state) {
 }
 BENCHMARK(FeaturesAndControl)->ArgName("with_depth")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// The controller alone, on the five objects' features at 256² (with depth): one step of each law.
-// Arg 0: cgf2019 (the papers'), 1: flowsteer.
-// Law 0: the papers'; 1: the flowsteer law without its turn check; 2: the flowsteer law as it
-// steers, whose turn check costs the navigation function at four predicted percepts.
+// The controller alone, on the five objects' features at 256² (with depth): one step of each law
+// as make_controller builds it. Law 0: cgf2019 (the papers'); 1: flowsteer without its turn
+// check; 2: flowsteer as it steers, whose turn check costs the navigation function at four
+// predicted percepts.
 Controller control_step_controller(int law) {
+  ControllerConfig config;
   if (law == 0) {
-    return Controller(goal_reaching({}), 1.0, {1.0, 1.0});
+    config.law = NavigationLaw::cgf2019;
+  } else if (law == 1) {
+    config.without = LawMechanism::turn_check;
   }
-  const FlowsteerOptions options = flowsteer_options({});
-  const TurnCheck check{law == 2, options.clearance.threats.depth,
-                        options.clearance.threats.static_closing_ratio};
-  return Controller(flowsteer_goal_reaching({}, options), 1.0, {1.0, 1.0},
-                    GradientStep::implicit_euler, check);
+  return make_controller(config, 0.5, 1.0);
 }
 
 void ControlStep(benchmark::State& state) {

@@ -1,5 +1,6 @@
 #include "turn_prediction.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
