@@ -76,7 +76,11 @@ Perception::Perception(const base::CameraIntrinsics& intrinsics, const Perceptio
 }
 
 bool Perception::reads_image() const {
-  return flow_source_->estimated() || options_.dark_regions;
+  return flow_source_->estimated() || options_.dark_regions || segments_by_grey();
+}
+
+bool Perception::segments_by_grey() const {
+  return segmenter_ && options_.flow_segmentation.grey_weight > 0.0;
 }
 
 servo::FlowStatus Perception::process(const camera_io::Frame& frame, double speed_mps,
@@ -96,9 +100,10 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   const MotionHistory::Motion measured{speed_mps, turn_rate_cy};
   motions_->remember(frame.timestamp_s, measured);
   const cv::Mat& image = frame.image;
-  // Grey for the fill and the dark regions: an estimator converts the frame into the grey image it
-  // keeps, and a grey image handed to it is copied (which costs less than converting twice).
-  const bool needs_grey = !image.empty() && (flow_source_->estimated() || options_.dark_regions);
+  // Grey for the fill, the segmentation and the dark regions: an estimator converts the frame into
+  // the grey image it keeps, and a grey image handed to it is copied (which costs less than
+  // converting twice).
+  const bool needs_grey = !image.empty() && reads_image();
   if (needs_grey) {
     if (image.channels() == 3) {
       cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);
@@ -155,7 +160,15 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
       untextured_fill_.fill(field_, grey_, flow_source_->image_noise_grey(), options_.mount,
                             speed_mps, ground_mask_, flow_source_->edge_flow());
     }
-    segmenter_->segment(field_, ground_mask_, segmentation_);
+    // The segmenter follows each region back along its flow and the turn to the previous frame.
+    servo::ViewMotion view_motion;
+    if (segmented_at_s_) {
+      view_motion = {servo::camera_angular_velocity(turn_rate_cy, options_.mount.pitch_rad),
+                     frame.timestamp_s - *segmented_at_s_};
+    }
+    segmented_at_s_ = frame.timestamp_s;
+    segmenter_->segment(field_, ground_mask_, needs_grey && segments_by_grey() ? grey_ : cv::Mat(),
+                        segmentation_, view_motion);
     if (flow_source_->estimated()) {
       ground_regions_.mark(field_, options_.mount, speed_mps, ground, segmentation_);
     }

@@ -42,8 +42,8 @@ class Perception {
   servo::FlowStatus process(const camera_io::Frame& frame, double speed_mps, double turn_rate_cy,
                             StageTimes& times);
 
-  // Whether process reads the frame's image (numerical flow, dark regions) rather than only the
-  // simulator's channels.
+  // Whether process reads the frame's image (numerical flow, dark regions, grey in the flow
+  // segmentation) rather than only the simulator's channels.
   bool reads_image() const;
   const base::CameraIntrinsics& intrinsics() const { return field_.intrinsics(); }
   servo::FlowStatus status() const { return status_; }
@@ -59,11 +59,13 @@ class Perception {
   // extracted objects with the memory's recalled ones after them.
   std::span<const servo::ObjectFeatures> with_remembered(double timestamp_s, double speed_mps,
                                                          double turn_rate_cy);
+  bool segments_by_grey() const;
 
   PerceptionOptions options_;
   servo::FlowField field_;
   std::unique_ptr<servo::FlowSource> flow_source_;
   std::optional<servo::FlowSegmenter> segmenter_;
+  std::optional<double> segmented_at_s_;  // the frame the segmenter last saw
   servo::GroundRegionMarker ground_regions_;
   servo::UntexturedFill untextured_fill_;
   servo::DarkRegionFinder dark_finder_;

@@ -59,7 +59,7 @@ std::string segmentation_method_names() {
 namespace {
 
 // Felzenszwalb–Huttenlocher segmentation (IJCV 2004) of the 4-connected grid of pixels of a
-// CV_32FC3 image: OpenCV's ximgproc GraphSegmentation with sigma 0 (its edge weights, merge test,
+// CV_32FC4 image: OpenCV's ximgproc GraphSegmentation with sigma 0 (its edge weights, merge test,
 // small-segment merge, and segments numbered in order of first appearance), with three
 // differences. Its buffers are kept from call to call (OpenCV allocates its graph and its sets,
 // and converts and copies the image, on every call). Each edge is taken once, not once from each
@@ -138,8 +138,8 @@ class GridSegmentation {
     const int width = features.cols;
     const int height = features.rows;
     for (int row = 0; row < height; ++row) {
-      const auto* f = features.ptr<cv::Vec3f>(row);
-      const auto* below = row + 1 < height ? features.ptr<cv::Vec3f>(row + 1) : nullptr;
+      const auto* f = features.ptr<cv::Vec4f>(row);
+      const auto* below = row + 1 < height ? features.ptr<cv::Vec4f>(row + 1) : nullptr;
       for (int col = 0; col < width; ++col) {
         const auto id = 2U * static_cast<std::uint32_t>(row * width + col);
         if (col + 1 < width)
@@ -149,10 +149,10 @@ class GridSegmentation {
       }
     }
   }
-  static std::uint64_t edge(const cv::Vec3f& a, const cv::Vec3f& b, std::uint32_t id) {
+  static std::uint64_t edge(const cv::Vec4f& a, const cv::Vec4f& b, std::uint32_t id) {
     // OpenCV sums the squares in double and keeps the sum in a float: the same weights here.
     float sum = 0.0F;
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 4; ++c) {
       const double d = a[c] - b[c];
       sum = static_cast<float>(sum + d * d);
     }
@@ -256,21 +256,28 @@ cv::Size graph_size(SegmentationMethod method, const FlowSegmentationOptions& op
 }
 
 // Graph features at the nearest pixel of each graph pixel: flow in pixels per reference
-// interval, and a validity channel.
+// interval, a validity channel, and the grey level times grey_weight (0 without a grey image).
 void fill_graph_features(const FlowField& derotated, std::span<const std::uint8_t> excluded,
-                         double reference_interval_s, cv::Size size, cv::Mat& features) {
-  const auto to_px_x = static_cast<float>(derotated.intrinsics().fx_px * reference_interval_s);
-  const auto to_px_y = static_cast<float>(derotated.intrinsics().fy_px * reference_interval_s);
+                         const cv::Mat& grey, const FlowSegmentationOptions& options, cv::Size size,
+                         cv::Mat& features) {
+  const auto to_px_x =
+      static_cast<float>(derotated.intrinsics().fx_px * options.reference_interval_s);
+  const auto to_px_y =
+      static_cast<float>(derotated.intrinsics().fy_px * options.reference_interval_s);
+  const auto grey_weight = static_cast<float>(grey.empty() ? 0.0 : options.grey_weight);
   const auto flow = derotated.flow();
-  features.create(size, CV_32FC3);
+  features.create(size, CV_32FC4);
   for (int row = 0; row < size.height; ++row) {
-    auto* f = features.ptr<cv::Vec3f>(row);
+    auto* f = features.ptr<cv::Vec4f>(row);
     const int source_row = row * derotated.height() / size.height;
+    const std::uint8_t* grey_row = grey.empty() ? nullptr : grey.ptr<std::uint8_t>(source_row);
     for (int col = 0; col < size.width; ++col) {
-      const std::size_t i = derotated.index(col * derotated.width() / size.width, source_row);
+      const int source_col = col * derotated.width() / size.width;
+      const std::size_t i = derotated.index(source_col, source_row);
+      const float shade = grey_row == nullptr ? 0.0F : grey_weight * grey_row[source_col];
       f[col] = has_flow(derotated, excluded, i)
-                   ? cv::Vec3f(flow[i].x() * to_px_x, flow[i].y() * to_px_y, 0.0F)
-                   : cv::Vec3f(0.0F, 0.0F, kInvalidMark);
+                   ? cv::Vec4f(flow[i].x() * to_px_x, flow[i].y() * to_px_y, 0.0F, shade)
+                   : cv::Vec4f(0.0F, 0.0F, kInvalidMark, 0.0F);
     }
   }
 }
@@ -286,7 +293,7 @@ void count_flow_balance(const cv::Mat& labels, const cv::Mat& features, std::siz
   balance.assign(segments, 0);
   for (int row = 0; row < labels.rows; ++row) {
     const auto* label = labels.ptr<std::int32_t>(row);
-    const auto* f = features.ptr<cv::Vec3f>(row);
+    const auto* f = features.ptr<cv::Vec4f>(row);
     for (int col = 0; col < labels.cols; ++col) {
       balance[static_cast<std::size_t>(label[col])] += f[col][2] == 0.0F ? 1 : -1;
     }
@@ -341,22 +348,48 @@ void compact_regions(std::span<const std::int32_t> counts, std::span<const std::
   }
 }
 
+// Where pixel (col, row) was `motion.since_previous_s` ago: back along its derotated flow and the
+// camera's rotation, to the nearest pixel; -1 when that is outside the image.
+std::int32_t pixel_before(const FlowField& derotated, const ViewMotion& motion, int col, int row) {
+  const Eigen::Vector2d rate =
+      derotated.flow()[derotated.index(col, row)].cast<double>() +
+      rotational_flow(derotated.x(col), derotated.y(row), motion.camera_omega);
+  const double was_col =
+      std::round(col - derotated.intrinsics().fx_px * motion.since_previous_s * rate.x());
+  const double was_row =
+      std::round(row - derotated.intrinsics().fy_px * motion.since_previous_s * rate.y());
+  if (!(was_col >= 0.0 && was_col < derotated.width() && was_row >= 0.0 &&
+        was_row < derotated.height())) {
+    return -1;
+  }
+  return static_cast<std::int32_t>(was_row) * derotated.width() +
+         static_cast<std::int32_t>(was_col);
+}
+
 // Turns each pixel's segment in `labels` into its region, and counts in the same pass the pixels
 // each region shares with each of the previous frame's `previous` regions (when that frame had as
-// many pixels), one row and column up in `overlaps`.
-void relabel_and_count_overlaps(std::span<const std::int32_t> region_of_label, std::size_t regions,
+// many pixels), one row and column up in `overlaps`: a pixel's previous region is the one where
+// it was then (pixel_before).
+void relabel_and_count_overlaps(const FlowField& derotated, const ViewMotion& motion,
+                                std::span<const std::int32_t> region_of_label, std::size_t regions,
                                 std::span<const std::int32_t> previous_labels, std::size_t previous,
                                 std::vector<std::int32_t>& labels,
                                 std::vector<std::int32_t>& overlaps) {
   const bool comparable = previous_labels.size() == labels.size();
   overlaps.assign((regions + 1) * (previous + 1), 0);
   RunCounter overlap(overlaps);
-  for (std::size_t i = 0; i < labels.size(); ++i) {
-    const std::int32_t region = region_of_label[static_cast<std::size_t>(labels[i] + 1)];
-    labels[i] = region;
-    if (comparable) {
+  for (int row = 0; row < derotated.height(); ++row) {
+    for (int col = 0; col < derotated.width(); ++col) {
+      const std::size_t i = derotated.index(col, row);
+      const std::int32_t region = region_of_label[static_cast<std::size_t>(labels[i] + 1)];
+      labels[i] = region;
+      if (!comparable || region == Segmentation::kNoRegion)
+        continue;
+      const std::int32_t was = pixel_before(derotated, motion, col, row);
+      const std::int32_t previous_region =
+          was < 0 ? Segmentation::kNoRegion : previous_labels[static_cast<std::size_t>(was)];
       overlap.add(static_cast<std::size_t>(region + 1) * (previous + 1) +
-                  static_cast<std::size_t>(previous_labels[i] + 1));
+                  static_cast<std::size_t>(previous_region + 1));
     }
   }
   overlap.flush();
@@ -403,14 +436,20 @@ FlowSegmenter::FlowSegmenter(FlowSegmenter&&) noexcept = default;
 FlowSegmenter& FlowSegmenter::operator=(FlowSegmenter&&) noexcept = default;
 
 void FlowSegmenter::segment(const FlowField& derotated, std::span<const std::uint8_t> excluded,
-                            Segmentation& out) {
+                            const cv::Mat& grey, Segmentation& out, const ViewMotion& motion) {
   const std::size_t pixels = derotated.size();
   if (!excluded.empty() && excluded.size() != pixels) {
     throw std::invalid_argument("FlowSegmenter: exclusion mask has " +
                                 std::to_string(excluded.size()) + " pixels, expected " +
                                 std::to_string(pixels));
   }
-  fill_graph_features(derotated, excluded, options_.reference_interval_s,
+  if (!grey.empty() && (grey.type() != CV_8UC1 || grey.cols != derotated.width() ||
+                        grey.rows != derotated.height())) {
+    throw std::invalid_argument("FlowSegmenter: the grey image must be 8-bit, one channel, " +
+                                std::to_string(derotated.width()) + "x" +
+                                std::to_string(derotated.height()));
+  }
+  fill_graph_features(derotated, excluded, grey, options_,
                       graph_size(method_, options_, derotated.width(), derotated.height()),
                       features_);
   const double area_scale = static_cast<double>(features_.total()) / pixels;
@@ -428,8 +467,8 @@ void FlowSegmenter::segment(const FlowField& derotated, std::span<const std::uin
   compact_regions(valid_counts_, flow_balance_,
                   static_cast<std::int32_t>(options_.min_region_fraction * pixels),
                   region_of_label_, region_sizes_);
-  relabel_and_count_overlaps(region_of_label_, region_sizes_.size(), previous_labels_,
-                             previous_ids_.size(), out.labels, overlaps_);
+  relabel_and_count_overlaps(derotated, motion, region_of_label_, region_sizes_.size(),
+                             previous_labels_, previous_ids_.size(), out.labels, overlaps_);
   out.kinds.assign(region_sizes_.size(), RegionKind::visible);
   assign_track_ids(out);
 }
@@ -441,7 +480,9 @@ void FlowSegmenter::assign_track_ids(Segmentation& out) {
     return overlaps_[(region + 1) * (previous + 1) + previous_region + 1];
   };
   // Each region takes the id of the previous region covering most of it, when that covers at
-  // least half of it; a previous region's id goes to one region only, the one it covers most.
+  // least half of it or at least half of that region is in it (a region that grew, as when the
+  // untextured middle of a wall gets flow, or that took in a neighbour); a previous region's id
+  // goes to one region only, the one it covers most.
   out.source_ids.assign(regions, -1);
   for (std::size_t r = 0; r < regions; ++r) {
     std::int32_t best_count = 0;
@@ -452,7 +493,8 @@ void FlowSegmenter::assign_track_ids(Segmentation& out) {
         best = p;
       }
     }
-    if (best == previous || 2 * best_count < region_sizes_[r])
+    if (best == previous ||
+        (2 * best_count < region_sizes_[r] && 2 * best_count < previous_sizes_[best]))
       continue;
     bool taken_by_larger = false;
     for (std::size_t other = 0; other < regions && !taken_by_larger; ++other) {
@@ -461,12 +503,16 @@ void FlowSegmenter::assign_track_ids(Segmentation& out) {
     if (!taken_by_larger)
       out.source_ids[r] = previous_ids_[best];
   }
-  for (std::int32_t& id : out.source_ids) {
-    if (id < 0)
-      id = next_track_id_++;
+  for (std::size_t r = 0; r < regions; ++r) {
+    if (out.source_ids[r] >= 0)
+      continue;
+    out.source_ids[r] = next_track_id_++;
+    if (options_.confirm_new_regions)
+      out.kinds[r] = RegionKind::unconfirmed;
   }
   previous_labels_.assign(out.labels.begin(), out.labels.end());
   previous_ids_.assign(out.source_ids.begin(), out.source_ids.end());
+  previous_sizes_.assign(region_sizes_.begin(), region_sizes_.end());
 }
 
 }  // namespace flowsteer::servo

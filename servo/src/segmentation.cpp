@@ -14,6 +14,8 @@ const char* to_string(RegionKind kind) {
       return "dark";
     case RegionKind::ground:
       return "ground";
+    case RegionKind::unconfirmed:
+      return "unconfirmed";
   }
   return "unknown";
 }

@@ -299,7 +299,7 @@ TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame
        {SegmentationMethod::flow_graph, SegmentationMethod::flow_graph_fast}) {
     FlowSegmenter segmenter(method);
     Segmentation out;
-    segmenter.segment(field, ground, out);
+    segmenter.segment(field, ground, {}, out);
     ASSERT_EQ(out.region_count(), 2) << to_string(method);
     const std::int32_t left = out.labels[field.index(10, 10)];
     const std::int32_t right = out.labels[field.index(50, 10)];
@@ -310,14 +310,14 @@ TEST(FlowSegmenter, SplitsByMotionDropsExcludedPixelsAndKeepsIdsFromFrameToFrame
     const std::int32_t left_id = out.source_ids[static_cast<std::size_t>(left)];
     const std::int32_t right_id = out.source_ids[static_cast<std::size_t>(right)];
     // The same motion a frame later: the regions keep their ids.
-    segmenter.segment(field, ground, out);
+    segmenter.segment(field, ground, {}, out);
     EXPECT_EQ(out.source_ids[static_cast<std::size_t>(out.labels[field.index(10, 10)])], left_id);
     EXPECT_EQ(out.source_ids[static_cast<std::size_t>(out.labels[field.index(50, 10)])], right_id);
   }
   EXPECT_THROW(FlowSegmenter{SegmentationMethod::semantic}, std::invalid_argument);
   FlowSegmenter segmenter(SegmentationMethod::flow_graph);
   Segmentation out;
-  EXPECT_THROW(segmenter.segment(field, std::vector<std::uint8_t>(3, 0), out),
+  EXPECT_THROW(segmenter.segment(field, std::vector<std::uint8_t>(3, 0), {}, out),
                std::invalid_argument);
 }
 
@@ -341,7 +341,7 @@ TEST(FlowSegmenter, PixelsThatSeeNothingAreInNoRegion) {
        {SegmentationMethod::flow_graph, SegmentationMethod::flow_graph_fast}) {
     FlowSegmenter segmenter(method);
     Segmentation out;
-    segmenter.segment(field, ground, out);
+    segmenter.segment(field, ground, {}, out);
     ASSERT_EQ(out.region_count(), 2) << to_string(method);
     EXPECT_NE(out.labels[field.index(5, 30)], out.labels[field.index(60, 30)]);
     EXPECT_EQ(out.labels[field.index(5, 10)], Segmentation::kNoRegion);
@@ -357,7 +357,7 @@ TEST(FlowSegmenter, FastGraphLabelsEveryPixelOfAReducedField) {
   const std::vector<std::uint8_t> ground = two_halves_over_ground(field, 160);
   FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast);
   Segmentation out;
-  segmenter.segment(field, ground, out);
+  segmenter.segment(field, ground, {}, out);
   ASSERT_EQ(out.region_count(), 2);
   for (int row = 0; row < field.height(); ++row) {
     for (int col = 0; col < field.width(); ++col) {
@@ -392,7 +392,7 @@ TEST(FlowSegmenter, ScatteredIslandsOfFlowAreNoRegion) {
        {SegmentationMethod::flow_graph, SegmentationMethod::flow_graph_fast}) {
     FlowSegmenter segmenter(method);
     Segmentation out;
-    segmenter.segment(field, {}, out);
+    segmenter.segment(field, {}, {}, out);
     ASSERT_EQ(out.region_count(), 1) << to_string(method);
     for (int row = 0; row < field.height(); ++row) {
       for (int col = 0; col < 36; ++col) {
@@ -402,6 +402,155 @@ TEST(FlowSegmenter, ScatteredIslandsOfFlowAreNoRegion) {
     }
     EXPECT_EQ(out.labels[field.index(50, 20)], 0);
   }
+}
+
+// One square of flow over pixels without any, its columns [left, left + side) and rows [top,
+// top + side), moving at `flow` (normalised units per second).
+void square_of_flow(FlowField& field, int left, int top, int side, const Eigen::Vector2f& flow) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int row = 0; row < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      const bool inside = col >= left && col < left + side && row >= top && row < top + side;
+      field.at(col, row) = inside ? flow : Eigen::Vector2f(nan, nan);
+    }
+  }
+}
+
+// The id of the region at pixel (col, row).
+std::int32_t track_at(const FlowField& field, const Segmentation& out, int col, int row) {
+  const std::int32_t region = out.labels[field.index(col, row)];
+  return region == Segmentation::kNoRegion ? -1 : out.source_ids[static_cast<std::size_t>(region)];
+}
+
+// A square that moves further than its own width between frames, as a person crossing close by
+// does at 320 px: it has no pixel where it was, and keeps its id only by being followed back
+// along its flow.
+TEST(FlowSegmenter, AFastRegionKeepsItsIdFollowedAlongItsFlow) {
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg);
+  constexpr double kSinceS = 0.05;
+  constexpr int kStepPx = 12;
+  const Eigen::Vector2f flow(static_cast<float>(kStepPx / (intrinsics.fx_px * kSinceS)), 0.0F);
+  for (const bool followed : {true, false}) {
+    FlowField field(intrinsics);
+    FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast);
+    Segmentation out;
+    square_of_flow(field, 10, 20, 10, flow);
+    segmenter.segment(field, {}, {}, out);
+    ASSERT_EQ(out.region_count(), 1);
+    const std::int32_t first = track_at(field, out, 15, 25);
+    square_of_flow(field, 10 + kStepPx, 20, 10, flow);
+    segmenter.segment(field, {}, {}, out,
+                      followed ? ViewMotion{{0.0, 0.0, 0.0}, kSinceS} : ViewMotion{});
+    ASSERT_EQ(out.region_count(), 1);
+    EXPECT_EQ(track_at(field, out, 15 + kStepPx, 25) == first, followed);
+  }
+}
+
+// A far wall (no derotated flow) while the camera turns: the image slides by 20 px at the wall,
+// twice its width, and the wall keeps its id when the segmenter knows the turn.
+TEST(FlowSegmenter, AStandingRegionKeepsItsIdWhileTheCameraTurns) {
+  const auto intrinsics = base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg);
+  constexpr double kSinceS = 0.05;
+  FlowField field(intrinsics);
+  // A yaw rate (about the camera's y axis) that slides column 35 by +20 px in kSinceS.
+  const double x = field.x(35);
+  const Eigen::Vector3d yaw(0.0, -20.0 / (intrinsics.fx_px * kSinceS * (1.0 + x * x)), 0.0);
+  for (const bool told : {true, false}) {
+    FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast);
+    Segmentation out;
+    square_of_flow(field, 10, 19, 10, Eigen::Vector2f::Zero());
+    segmenter.segment(field, {}, {}, out);
+    const std::int32_t first = track_at(field, out, 15, 24);
+    square_of_flow(field, 30, 19, 10, Eigen::Vector2f::Zero());
+    segmenter.segment(field, {}, {}, out, told ? ViewMotion{yaw, kSinceS} : ViewMotion{});
+    ASSERT_EQ(out.region_count(), 1);
+    EXPECT_EQ(track_at(field, out, 35, 24) == first, told);
+  }
+}
+
+// A region that grows to three times its size (an untextured part of it gets flow) keeps its id:
+// all of what it was is in it, though that is a third of it. What splits off a region keeps the
+// id only in its larger part.
+TEST(FlowSegmenter, ARegionThatGrowsOrSplitsKeepsItsId) {
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
+  FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast);
+  Segmentation out;
+  const Eigen::Vector2f flow(0.2F, 0.0F);
+  square_of_flow(field, 20, 10, 10, flow);
+  segmenter.segment(field, {}, {}, out);
+  const std::int32_t first = track_at(field, out, 25, 15);
+  square_of_flow(field, 15, 5, 18, flow);
+  segmenter.segment(field, {}, {}, out);
+  ASSERT_EQ(out.region_count(), 1);
+  EXPECT_EQ(track_at(field, out, 16, 6), first);
+  // Its left third now moves otherwise: two regions, the larger keeps the id.
+  for (int row = 5; row < 23; ++row) {
+    for (int col = 15; col < 21; ++col) {
+      field.at(col, row) = Eigen::Vector2f(-0.4F, 0.0F);
+    }
+  }
+  segmenter.segment(field, {}, {}, out);
+  ASSERT_EQ(out.region_count(), 2);
+  EXPECT_EQ(track_at(field, out, 30, 10), first);
+  EXPECT_NE(track_at(field, out, 16, 10), first);
+  EXPECT_GE(track_at(field, out, 16, 10), FlowSegmenter::kFirstTrackId);
+}
+
+// With confirm_new_regions, a region is acted on from the second frame of its track: a square
+// seen twice becomes visible, one that appears for one frame (the flow's error on the floor) stays
+// unconfirmed.
+TEST(FlowSegmenter, NewRegionsWaitForTheirSecondFrame) {
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
+  FlowSegmentationOptions options;
+  options.confirm_new_regions = true;
+  FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast, options);
+  Segmentation out;
+  const auto kind_at = [&](int col, int row) {
+    return out.kinds[static_cast<std::size_t>(out.labels[field.index(col, row)])];
+  };
+  square_of_flow(field, 10, 10, 10, Eigen::Vector2f(0.2F, 0.0F));
+  segmenter.segment(field, {}, {}, out);
+  ASSERT_EQ(out.region_count(), 1);
+  EXPECT_EQ(kind_at(15, 15), RegionKind::unconfirmed);
+  // The square again, and a second one for the first time.
+  for (int row = 30; row < 40; ++row) {
+    for (int col = 40; col < 50; ++col) {
+      field.at(col, row) = Eigen::Vector2f(-0.3F, 0.0F);
+    }
+  }
+  segmenter.segment(field, {}, {}, out);
+  ASSERT_EQ(out.region_count(), 2);
+  EXPECT_EQ(kind_at(15, 15), RegionKind::visible);
+  EXPECT_EQ(kind_at(45, 35), RegionKind::unconfirmed);
+  EXPECT_STREQ(to_string(RegionKind::unconfirmed), "unconfirmed");
+}
+
+// A person far off moves across the view as the wall behind does, but is darker: with the grey
+// level in the edge weights the two are two regions, with flow alone one.
+TEST(FlowSegmenter, GreyLevelsSeparateWhatMovesAlike) {
+  FlowField field(base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg));
+  cv::Mat grey(field.height(), field.width(), CV_8UC1, cv::Scalar(180));
+  grey(cv::Rect(24, 8, 12, 30)).setTo(60);
+  for (int row = 0; row < field.height(); ++row) {
+    for (int col = 0; col < field.width(); ++col) {
+      field.at(col, row) = Eigen::Vector2f(0.3F, 0.0F);
+    }
+  }
+  for (SegmentationMethod method :
+       {SegmentationMethod::flow_graph, SegmentationMethod::flow_graph_fast}) {
+    FlowSegmentationOptions options;
+    options.grey_weight = 0.02;
+    Segmentation alone;
+    Segmentation with_grey;
+    FlowSegmenter(method).segment(field, {}, grey, alone);
+    FlowSegmenter(method, options).segment(field, {}, grey, with_grey);
+    EXPECT_EQ(alone.region_count(), 1) << to_string(method);
+    ASSERT_EQ(with_grey.region_count(), 2) << to_string(method);
+    EXPECT_NE(with_grey.labels[field.index(30, 20)], with_grey.labels[field.index(5, 20)]);
+  }
+  FlowSegmenter segmenter(SegmentationMethod::flow_graph_fast);
+  Segmentation out;
+  EXPECT_THROW(segmenter.segment(field, {}, cv::Mat(10, 10, CV_8UC1), out), std::invalid_argument);
 }
 
 // Noisy flow over four differently moving quarters, segmented by OpenCV (flow_graph, into
@@ -424,8 +573,8 @@ void segment_four_quarters(std::uint64_t seed, bool gaps, Segmentation& opencv, 
         excluded[field.index(col, row)] = 1;
     }
   }
-  FlowSegmenter(SegmentationMethod::flow_graph).segment(field, excluded, opencv);
-  FlowSegmenter(SegmentationMethod::flow_graph_fast).segment(field, excluded, own);
+  FlowSegmenter(SegmentationMethod::flow_graph).segment(field, excluded, {}, opencv);
+  FlowSegmenter(SegmentationMethod::flow_graph_fast).segment(field, excluded, {}, own);
 }
 
 // flow_graph_fast runs its own Felzenszwalb–Huttenlocher segmentation, flow_graph OpenCV's. On a

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "flowsteer/servo/flow_field.hpp"
@@ -30,21 +31,38 @@ struct FlowSegmentationOptions {
   // Flow is compared in pixels per reference_interval_s (one frame at 20 Hz): the units the
   // graph's threshold k is set in, whatever the image size.
   double reference_interval_s = 0.05;
-  // Felzenszwalb–Huttenlocher scale: larger k, larger regions.
+  // Felzenszwalb–Huttenlocher scale: larger k, larger regions. With grey_weight, which parts what
+  // moves alike, 12 gave whole people (docs/NAVIGATION.md, "Regions and their tracks").
   double k = 4.0;
   // Regions with fewer valid pixels than this fraction of the image are merged into a
   // neighbour by the graph, or dropped.
   double min_region_fraction = 0.002;
   int fast_max_side_px = 96;
+  // Weight of the image's grey level in the graph's edge weights, in flow pixels per reference
+  // interval per grey level: a person and the wall behind move alike far off, but seldom look
+  // alike. 0 (flow alone) by default: measured, not yet better in closed loop.
+  double grey_weight = 0.0;
+  // A region whose track begins in this frame is RegionKind::unconfirmed, visible from its second
+  // frame on: numerical flow's errors on the floor come and go as one-frame regions. Off by
+  // default: it delays people too.
+  bool confirm_new_regions = false;
+};
+
+// How the view moved since the previous segmentation: each pixel was, that long ago, where its
+// derotated flow plus the camera's rotation at camera_omega (rad/s, camera frame) bring it back
+// to. Zero: where it is now.
+struct ViewMotion {
+  Eigen::Vector3d camera_omega = Eigen::Vector3d::Zero();
+  double since_previous_s = 0.0;
 };
 
 // Segmentation from the flow alone, which is what a real camera has. Regions are connected sets
 // of pixels whose derotated flow varies smoothly; pixels set in `excluded` (the ground) and
 // pixels without flow (NaN) belong to no region, as do, in a field with depth (a simulator's),
 // pixels without depth, which see nothing (the sky). Each region's source id follows it from frame
-// to frame (the previous region it overlaps most), so that what the controller remembers about
-// an object (its side, commit_band) stays with it; ids start at kFirstTrackId, clear of the
-// renderer's.
+// to frame (the previous region it overlaps most, each pixel followed back along its flow), so that
+// what the controller remembers about an object (its side, commit_band) stays with it; ids start at
+// kFirstTrackId, clear of the renderer's.
 class FlowSegmenter {
  public:
   static constexpr std::int32_t kFirstTrackId = 1 << 24;
@@ -55,9 +73,11 @@ class FlowSegmenter {
   FlowSegmenter(FlowSegmenter&&) noexcept;
   FlowSegmenter& operator=(FlowSegmenter&&) noexcept;
 
-  // `excluded` is empty or has one entry per pixel. Reuses out's storage.
+  // `excluded` is empty or has one entry per pixel; `grey` is empty or the 8-bit grey image the
+  // flow was measured on, the field's size (used when options.grey_weight > 0). Reuses out's
+  // storage.
   void segment(const FlowField& derotated, std::span<const std::uint8_t> excluded,
-               Segmentation& out);
+               const cv::Mat& grey, Segmentation& out, const ViewMotion& motion = {});
 
  private:
   struct Graph;
@@ -75,6 +95,7 @@ class FlowSegmenter {
   void assign_track_ids(Segmentation& out);
   std::vector<std::int32_t> previous_labels_;
   std::vector<std::int32_t> previous_ids_;
+  std::vector<std::int32_t> previous_sizes_;
   std::vector<std::int32_t> overlaps_;  // new region × previous region pixel counts
   std::vector<std::int32_t> region_sizes_;
   std::int32_t next_track_id_ = kFirstTrackId;

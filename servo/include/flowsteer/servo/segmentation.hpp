@@ -12,8 +12,9 @@ inline constexpr std::int32_t kSkyId = -1;
 inline constexpr std::int32_t kGroundId = -2;
 
 // What a region is to the controller: something seen moving (visible), something too dark to
-// trust (dark, MIG 2019), or the ground.
-enum class RegionKind : std::uint8_t { visible, dark, ground };
+// trust (dark, MIG 2019), the ground, or a region of flow segmentation in the first frame of its
+// track (unconfirmed: followed, not yet acted on, FlowSegmentationOptions::confirm_new_regions).
+enum class RegionKind : std::uint8_t { visible, dark, ground, unconfirmed };
 
 const char* to_string(RegionKind kind);
 
