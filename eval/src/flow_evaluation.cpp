@@ -3,14 +3,18 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
+
+#include <Eigen/Geometry>
 
 #include "flowsteer/base/output_files.hpp"
 #include "flowsteer/pipeline/brain.hpp"
 #include "flowsteer/servo/analytic_scene.hpp"
 #include "flowsteer/servo/features.hpp"
+#include "flowsteer/servo/obstacle_memory.hpp"
 #include "flowsteer/servo/segmentation.hpp"
 #include "flowsteer/sim/simulated_agent.hpp"
 
@@ -126,18 +130,19 @@ void see(pipeline::Brain& brain, const camera_io::Frame& view,
 // One run per method, each perceiving like the truth but with the method's flow, without depth.
 std::vector<MethodRun> start_runs(std::span<const servo::FlowMethod> methods,
                                   const pipeline::PerceptionOptions& truth_options,
-                                  servo::SegmentationMethod segmentation,
+                                  const FlowEvalOptions& options,
                                   const base::CameraIntrinsics& intrinsics, int resolution) {
   std::vector<MethodRun> runs;
   for (servo::FlowMethod method : methods) {
     pipeline::PerceptionOptions o = truth_options;
     o.flow = method;
     o.use_depth = false;
-    o.segmentation = segmentation;
+    o.segmentation = options.segmentation;
+    o.obstacle_memory = options.obstacle_memory;
     MethodRun run;
     run.brain = seeing_brain(intrinsics, o);
     run.row.method = method;
-    run.row.segmentation = segmentation;
+    run.row.segmentation = options.segmentation;
     run.row.resolution = resolution;
     runs.push_back(std::move(run));
   }
@@ -291,6 +296,51 @@ void score_frame(MethodRun& run, double flow_ms, const pipeline::Brain& truth,
   }
 }
 
+// How far `point` (world frame) lies from the nearest static obstacle's footprint, and from the
+// nearest other agent's disc or moving obstacle's footprint.
+std::pair<double, double> distances_to_bodies(const sim_camera::World& world,
+                                              const Eigen::Vector2d& point) {
+  double static_m = std::numeric_limits<double>::infinity();
+  double mover_m = static_m;
+  for (const sim_camera::Solid& o : world.spec().obstacles) {
+    static_m = std::min(static_m, sim_camera::footprint_distance(o, point));
+  }
+  for (std::size_t j = 1; j < world.agents().size(); ++j) {
+    if (world.present(j)) {
+      mover_m = std::min(
+          mover_m, (world.agents()[j].position_m - point).norm() - world.spec().agents[j].radius_m);
+    }
+  }
+  for (std::size_t k = 0; k < world.moving().size(); ++k) {
+    mover_m = std::min(mover_m, sim_camera::footprint_distance(world.moving_now(k), point));
+  }
+  return {static_m, mover_m};
+}
+
+// Scores the objects the memory recalled this frame by what lies at their nearest point.
+void score_recalled(MethodRun& run, const sim_camera::World& world, double tolerance_m) {
+  const sim_camera::AgentState& agent = world.agents()[0];
+  const Eigen::Rotation2Dd body_to_world(agent.yaw_rad);
+  for (const servo::ObjectFeatures& o : run.brain->objects()) {
+    if (o.source_id < servo::ObstacleMemory::kFirstId || !o.nearest_depth_m) {
+      continue;
+    }
+    // The law's ground frame: forward Z, and image x = −left / forward (CONVENTIONS.md).
+    const double forward_m = *o.nearest_depth_m;
+    const Eigen::Vector2d point =
+        agent.position_m + body_to_world * Eigen::Vector2d(forward_m, -o.nearest_x * forward_m);
+    const auto [static_m, mover_m] = distances_to_bodies(world, point);
+    ++run.row.recalled_objects;
+    if (static_m <= tolerance_m) {
+      ++run.row.recalled_on_obstacles;
+    } else if (mover_m <= tolerance_m) {
+      ++run.row.recalled_on_movers;
+    } else {
+      ++run.row.recalled_on_nothing;
+    }
+  }
+}
+
 FlowEvalRow summarise(const MethodRun& run, double step_s) {
   FlowEvalRow row = run.row;
   if (run.object_px > 0.0) {
@@ -333,8 +383,7 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
   truth_options.use_depth = true;
   const base::CameraIntrinsics& k = agents[0]->intrinsics();
   const std::unique_ptr<pipeline::Brain> truth = seeing_brain(k, truth_options);
-  std::vector<MethodRun> runs =
-      start_runs(methods, truth_options, options.segmentation, k, resolution);
+  std::vector<MethodRun> runs = start_runs(methods, truth_options, options, k, resolution);
   const double to_px = k.fx_px * spec.step_s;
   // The estimators compare images a baseline apart: until they have one, they are not measured.
   const int warmup_frames =
@@ -353,6 +402,9 @@ void evaluate_at_resolution(const sim_camera::WorldSpec& world_spec, int resolut
       if (run.brain->flow_status() == servo::FlowStatus::ok && frame >= warmup_frames) {
         score_frame(run, run.brain->times().flow, *truth, view, to_px,
                     state.speed_mps * std::cos(truth_options.mount.pitch_rad), options);
+        if (options.obstacle_memory) {
+          score_recalled(run, world, options.recall_tolerance_m);
+        }
       }
     }
     world.step(commands);
@@ -385,7 +437,8 @@ void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
       << std::setw(7) << "small" << std::setw(8) << "recall" << std::setw(8) << "purity"
       << std::setw(9) << "phantoms" << std::setw(10) << "FOE err" << std::setw(10) << "TTC err"
       << std::setw(11) << "untextured" << std::setw(9) << "filled" << std::setw(9) << "flicker"
-      << std::setw(12) << "ms/frame"
+      << std::setw(12) << "ms/frame" << std::setw(10) << "recalled" << std::setw(10) << "on obst."
+      << std::setw(10) << "on movers" << std::setw(11) << "on nothing"
       << "\n";
   for (const FlowEvalRow& r : rows) {
     out << std::left << std::setw(15) << servo::to_string(r.method) << std::setw(16)
@@ -399,27 +452,60 @@ void print_flow_table(const std::vector<FlowEvalRow>& rows, std::ostream& out) {
         << 100.0 * r.ttc_relative_error_median << "%" << std::setw(10) << std::setprecision(1)
         << 100.0 * r.untextured_fraction << "%" << std::setw(8)
         << 100.0 * r.untextured_correct_fraction << "%" << std::setw(9) << std::setprecision(2)
-        << r.flicker_per_s << std::setw(12) << r.ms_per_frame << "\n";
+        << r.flicker_per_s << std::setw(12) << r.ms_per_frame << std::setw(10) << r.recalled_objects
+        << std::setw(10) << r.recalled_on_obstacles << std::setw(10) << r.recalled_on_movers
+        << std::setw(11) << r.recalled_on_nothing << "\n";
   }
 }
 
 void write_flow_evaluation(const std::vector<FlowEvalRow>& rows,
                            const std::filesystem::path& out_dir) {
   base::OutputDir out(out_dir);
-  base::CsvTable csv({"method", "segmentation", "resolution", "frames", "endpoint_error_px",
-                      "valid_fraction", "approaching_objects", "missed_objects", "small_objects",
-                      "object_recall_mean", "region_purity_mean", "phantom_objects",
-                      "foe_error_median", "ttc_relative_error_median", "untextured_fraction",
-                      "untextured_correct_fraction", "flicker_per_s", "ms_per_frame"});
+  base::CsvTable csv({"method",
+                      "segmentation",
+                      "resolution",
+                      "frames",
+                      "endpoint_error_px",
+                      "valid_fraction",
+                      "approaching_objects",
+                      "missed_objects",
+                      "small_objects",
+                      "object_recall_mean",
+                      "region_purity_mean",
+                      "phantom_objects",
+                      "foe_error_median",
+                      "ttc_relative_error_median",
+                      "untextured_fraction",
+                      "untextured_correct_fraction",
+                      "flicker_per_s",
+                      "ms_per_frame",
+                      "recalled_objects",
+                      "recalled_on_obstacles",
+                      "recalled_on_movers",
+                      "recalled_on_nothing"});
   for (const FlowEvalRow& r : rows) {
     csv.add(
         {std::string(servo::to_string(r.method)), std::string(servo::to_string(r.segmentation))},
-        {static_cast<double>(r.resolution), static_cast<double>(r.frames), r.endpoint_error_px,
-         r.valid_fraction, static_cast<double>(r.approaching_objects),
-         static_cast<double>(r.missed_objects), static_cast<double>(r.small_objects),
-         r.object_recall_mean, r.region_purity_mean, static_cast<double>(r.phantom_objects),
-         r.foe_error_median, r.ttc_relative_error_median, r.untextured_fraction,
-         r.untextured_correct_fraction, r.flicker_per_s, r.ms_per_frame});
+        {static_cast<double>(r.resolution),
+         static_cast<double>(r.frames),
+         r.endpoint_error_px,
+         r.valid_fraction,
+         static_cast<double>(r.approaching_objects),
+         static_cast<double>(r.missed_objects),
+         static_cast<double>(r.small_objects),
+         r.object_recall_mean,
+         r.region_purity_mean,
+         static_cast<double>(r.phantom_objects),
+         r.foe_error_median,
+         r.ttc_relative_error_median,
+         r.untextured_fraction,
+         r.untextured_correct_fraction,
+         r.flicker_per_s,
+         r.ms_per_frame,
+         static_cast<double>(r.recalled_objects),
+         static_cast<double>(r.recalled_on_obstacles),
+         static_cast<double>(r.recalled_on_movers),
+         static_cast<double>(r.recalled_on_nothing)});
   }
   csv.write(out.staging_path("flow_eval.csv"));
   std::ostringstream table;

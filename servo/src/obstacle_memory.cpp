@@ -34,6 +34,8 @@ ObstacleMemory::ObstacleMemory(const base::CameraMount& mount, const ObstacleMem
   require(options.range_m > 0.0 && options.behind_m >= 0.0, "range_m and behind_m out of range");
   require(options.fade_s > 0.0 && options.confirm_s >= 0.0 && options.forget_s >= options.confirm_s,
           "fade_s, confirm_s or forget_s out of range");
+  require(options.confirm_span_s >= 0.0 && options.confirm_span_s <= options.forget_s,
+          "confirm_span_s out of range");
   require(options.ttc_tolerance >= 0.0, "ttc_tolerance must not be negative");
   require(options.evidence_height_m > 0.0, "evidence_height_m must be positive");
   require(options.min_forward_m > 0.0, "min_forward_m must be positive");
@@ -56,9 +58,13 @@ void ObstacleMemory::carry(double speed_mps, double turn_rate, double dt_s) {
       travel_m * Eigen::Vector2d(sinc(phi), std::sin(0.5 * phi) * sinc(0.5 * phi));
   const double c = std::cos(phi);
   const double s = std::sin(phi);
+  const auto carried = [&](const Eigen::Vector2d& position_m) -> Eigen::Vector2d {
+    const Eigen::Vector2d d = position_m - chord;
+    return {c * d.x() + s * d.y(), -s * d.x() + c * d.y()};
+  };
   for (Point& p : points_) {
-    const Eigen::Vector2d d = p.position_m - chord;
-    p.position_m = {c * d.x() + s * d.y(), -s * d.x() + c * d.y()};
+    p.position_m = carried(p.position_m);
+    p.first_seen_m = carried(p.first_seen_m);
   }
   std::erase_if(points_, [&](const Point& p) {
     return p.position_m.norm() > options_.range_m || p.position_m.x() < -options_.behind_m;
@@ -96,21 +102,30 @@ void ObstacleMemory::remember(const Eigen::Vector2d& position_m) {
     }
   }
   if (nearest != nullptr) {
-    if (nearest->sight != Point::Sight::observed) {
+    Point& p = *nearest;
+    if (p.sight != Point::Sight::observed) {
       // A running mean over the last few sightings: odometry drifts, and a new sighting is
       // measured where the point is now.
-      ++nearest->sightings;
-      nearest->position_m += (position_m - nearest->position_m) / std::min(nearest->sightings, 4);
-      nearest->unseen_s = 0.0;
-      nearest->contradicted_s = 0.0;
-      nearest->sight = Point::Sight::observed;
+      ++p.sightings;
+      p.position_m += (position_m - p.position_m) / std::min(p.sightings, 4);
+      p.unseen_s = 0.0;
+      p.contradicted_s = 0.0;
+      p.sight = Point::Sight::observed;
+      // A sighting further than spacing_m from the first, before the point is confirmed, follows
+      // something that moves (faster than spacing_m over confirm_span_s): it starts again here.
+      if (!confirmed(p) &&
+          (position_m - p.first_seen_m).squaredNorm() > options_.spacing_m * options_.spacing_m) {
+        p.first_seen_m = p.position_m;
+        p.sightings = 1;
+        p.age_s = 0.0;
+      }
     }
     return;
   }
   if (points_.size() == points_.capacity()) {
     return;
   }
-  points_.push_back({position_m, next_id_, 1, 0.0, 0.0, Point::Sight::observed});
+  points_.push_back({position_m, position_m, next_id_, 1, 0.0, 0.0, 0.0, Point::Sight::observed});
   next_id_ = next_id_ == std::numeric_limits<std::int32_t>::max() ? kFirstId : next_id_ + 1;
 }
 
@@ -150,6 +165,7 @@ ObstacleMemory::Point::Sight ObstacleMemory::sight_of(const View& view, const Po
 
 void ObstacleMemory::observe(const View& view, double speed_mps, double dt_s) {
   for (Point& p : points_) {
+    p.age_s += dt_s;
     p.unseen_s += dt_s;
     p.sight = Point::Sight::unknown;
   }
@@ -171,7 +187,7 @@ void ObstacleMemory::observe(const View& view, double speed_mps, double dt_s) {
   }
   std::erase_if(points_, [&](const Point& p) {
     return p.contradicted_s >= options_.fade_s || p.unseen_s > options_.forget_s ||
-           (p.sightings < 2 && p.unseen_s > options_.confirm_s);
+           (!confirmed(p) && p.unseen_s > options_.confirm_s);
   });
 }
 
@@ -187,7 +203,7 @@ std::span<const ObjectFeatures> ObstacleMemory::recall(double speed_mps) {
   recalled_.clear();
   for (std::size_t i = 0; i < points_.size(); ++i) {
     const Point& p = points_[i];
-    if (p.sightings >= 2 && p.sight == Point::Sight::out_of_view &&
+    if (confirmed(p) && p.sight == Point::Sight::out_of_view &&
         p.position_m.x() >= options_.min_forward_m) {
       recalled_.push_back(i);
     }

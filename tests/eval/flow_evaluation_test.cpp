@@ -91,5 +91,33 @@ TEST(FlowEvaluation, StaticSurfacesWithoutDepthKeepTheHeadingAsFoe) {
   EXPECT_LE(dis.ttc_relative_error_median, 0.15);
 }
 
+// The obstacle memory's recalled objects are placed in the world by the walker's pose and scored
+// by what stands there. Along the corridor's walls with exact flow every one is on a wall: the
+// scoring's frames and signs agree with the memory's.
+TEST(FlowEvaluation, RecalledObjectsAreScoredByWhatStandsWhereTheyAre) {
+  FlowEvalOptions options;
+  options.resolutions = {128};
+  options.methods = {servo::FlowMethod::dis_ultrafast};
+  options.segmentation = servo::SegmentationMethod::flow_graph_fast;
+  options.obstacle_memory = true;
+  options.frames = 100;
+  std::ostringstream log;
+  const auto rows = evaluate_flow(builtin_scenario("corridor"), options, log);
+  ASSERT_EQ(rows.size(), 2U);
+  const FlowEvalRow& exact = rows[0];
+  EXPECT_GT(exact.recalled_objects, 20);
+  EXPECT_EQ(exact.recalled_on_obstacles, exact.recalled_objects);
+  for (const FlowEvalRow& row : rows) {
+    EXPECT_EQ(row.recalled_on_obstacles + row.recalled_on_movers + row.recalled_on_nothing,
+              row.recalled_objects);
+  }
+  // Without the memory nothing is recalled.
+  options.obstacle_memory = false;
+  options.frames = 10;
+  for (const FlowEvalRow& row : evaluate_flow(builtin_scenario("corridor"), options, log)) {
+    EXPECT_EQ(row.recalled_objects, 0);
+  }
+}
+
 }  // namespace
 }  // namespace flowsteer::eval

@@ -38,26 +38,37 @@ class ObstacleMemoryTest : public ::testing::Test {
   }
 
   // One frame in which region 0 stands on the ground at `points_m` (body frame), its fitted τ
-  // `ttc_scale` times a static point's at its nearest contact.
+  // `ttc_scale` times a static point's at its contacts' mean depth.
   void observe(const std::vector<Eigen::Vector2d>& points_m, double ttc_scale = 1.0) {
     contacts_.clear();
     double nearest_depth_m = std::numeric_limits<double>::infinity();
+    double depth_sum_m = 0.0;
     for (const Eigen::Vector2d& p : points_m) {
       const auto seen = ground_.image_of(p);
       ASSERT_TRUE(seen);
       const double pixel = 1.0 / field_.intrinsics().fy_px;
       contacts_.push_back({0, seen->x(), seen->y() - pixel, seen->y(), seen->z(), false});
       nearest_depth_m = std::min(nearest_depth_m, seen->z());
+      depth_sum_m += seen->z();
     }
     ObjectFeatures region;
     region.label = 0;
     region.status = MotionStatus::approaching;
     region.fit.static_foe = true;
-    region.ttc_s = ttc_scale * nearest_depth_m / (kSpeed_mps * std::cos(mount_.pitch_rad));
+    const double mean_depth_m = depth_sum_m / static_cast<double>(points_m.size());
+    region.ttc_s = ttc_scale * mean_depth_m / (kSpeed_mps * std::cos(mount_.pitch_rad));
     region.min_x_depth_m = nearest_depth_m;  // it stands on the ground at both ends
     region.max_x_depth_m = nearest_depth_m;
     objects_ = {region};
     memory_.observe({field_, segmentation_, floor_, objects_, contacts_}, kSpeed_mps, kFrame_s);
+  }
+  // The frames over which region 0 is seen standing at `points_m` until the memory confirms it:
+  // sightings spanning confirm_span_s.
+  void observe_standing(const std::vector<Eigen::Vector2d>& points_m) {
+    const auto frames = std::lround(std::ceil(ObstacleMemoryOptions{}.confirm_span_s / kFrame_s));
+    for (long frame = 0; frame <= frames; ++frame) {
+      observe(points_m);
+    }
   }
   // One frame in which nothing stands anywhere: only floor, where the mask shows it.
   void observe_nothing() {
@@ -106,25 +117,36 @@ TEST_F(ObstacleMemoryTest, CarriesPointsExactlyAlongStraightAndArcMotion) {
 }
 
 TEST_F(ObstacleMemoryTest, DropsPointsOutOfRangeOrBehind) {
-  observe({{3.5, 0.0}, {1.0, 1.0}});
+  observe({{3.5, 0.0}});
+  observe({{1.0, 1.0}});
+  ASSERT_EQ(memory_.points().size(), 2u);
   memory_.carry(-1.0, 0.0, 1.0);  // the first is now 4.5 m away
   ASSERT_EQ(memory_.points().size(), 1u);
   memory_.carry(1.0, 0.0, 2.6);  // the second 0.6 m behind
   EXPECT_TRUE(memory_.points().empty());
 }
 
-TEST_F(ObstacleMemoryTest, KeepsAPointSeenTwiceNotOneSeenOnce) {
+TEST_F(ObstacleMemoryTest, KeepsAPointSeenStandingNotOneSeenInPassing) {
+  floor_.assign(field_.size(), 0);  // nothing says it has gone: it only lacks more looks
   observe({{2.0, 0.0}});
   for (int frame = 0; frame < 6; ++frame) {
-    floor_.assign(field_.size(), 0);  // nothing says it has gone: it only lacks a second look
     observe_nothing();
   }
   EXPECT_TRUE(memory_.points().empty());
 
+  // Two sightings a frame apart span less than confirm_span_s.
   observe({{2.0, 0.0}});
   observe({{2.02, 0.01}});
   ASSERT_EQ(memory_.points().size(), 1u);
-  EXPECT_EQ(memory_.points()[0].sightings, 2);
+  EXPECT_FALSE(memory_.confirmed(memory_.points()[0]));
+  for (int frame = 0; frame < 6; ++frame) {
+    observe_nothing();
+  }
+  EXPECT_TRUE(memory_.points().empty());
+
+  observe_standing({{2.0, 0.0}});
+  ASSERT_EQ(memory_.points().size(), 1u);
+  EXPECT_TRUE(memory_.confirmed(memory_.points()[0]));
   for (int frame = 0; frame < 25; ++frame) {
     observe_nothing();
   }
@@ -135,6 +157,25 @@ TEST_F(ObstacleMemoryTest, KeepsAPointSeenTwiceNotOneSeenOnce) {
   EXPECT_TRUE(memory_.points().empty());
 }
 
+TEST_F(ObstacleMemoryTest, DoesNotConfirmWhatWalksPastLookingStatic) {
+  // Someone crossing 1.5 m ahead whose flow looks static (a plain coat the untextured fill gave a
+  // static point's flow): at 1 m/s, then at 0.6 m/s, each frame's contact a step further on.
+  // Faster than spacing_m / confirm_span_s (0.4 m/s), no point is confirmed.
+  for (const double speed_mps : {1.0, 0.6}) {
+    memory_ = ObstacleMemory(mount_);
+    for (int frame = 0; frame < 20; ++frame) {
+      observe({{1.5, 1.0 - speed_mps * kFrame_s * frame}});
+      for (const ObstacleMemory::Point& p : memory_.points()) {
+        EXPECT_FALSE(memory_.confirmed(p)) << speed_mps << " m/s, frame " << frame;
+      }
+    }
+    // Out of view now, what it left behind is not recalled.
+    memory_.carry(kSpeed_mps, 0.0, 1.0);
+    observe_nothing();
+    EXPECT_TRUE(memory_.recall(kSpeed_mps).empty()) << speed_mps << " m/s";
+  }
+}
+
 TEST_F(ObstacleMemoryTest, DoesNotRememberWhatClosesInFasterThanAStaticObject) {
   for (int frame = 0; frame < 3; ++frame) {
     observe({{2.0, 0.0}}, 0.4);  // someone walking towards the agent faster than it walks
@@ -142,9 +183,17 @@ TEST_F(ObstacleMemoryTest, DoesNotRememberWhatClosesInFasterThanAStaticObject) {
   EXPECT_TRUE(memory_.points().empty());
 }
 
+TEST_F(ObstacleMemoryTest, RemembersAContactOnlyNearWhereItsRegionsTimeToContactPutsIt) {
+  // A region that took in the floor below a wall has its contact nearer than its τ says: at
+  // 1 / 1.4 of it, beyond ttc_tolerance (25 %); at 1 / 1.2 of it, within.
+  observe({{2.0, 0.0}}, 1.4);
+  EXPECT_TRUE(memory_.points().empty());
+  observe({{2.0, 0.0}}, 1.2);
+  EXPECT_EQ(memory_.points().size(), 1u);
+}
+
 TEST_F(ObstacleMemoryTest, DropsARemovedObstacleWithinItsFadeTime) {
-  observe({{2.0, 0.0}});
-  observe({{2.0, 0.0}});
+  observe_standing({{2.0, 0.0}});
   const auto fade_frames = std::lround(ObstacleMemoryOptions{}.fade_s / kFrame_s);
   long frames = 0;
   for (; !memory_.points().empty() && frames < 100; ++frames) {
@@ -158,8 +207,7 @@ TEST_F(ObstacleMemoryTest, DropsARemovedObstacleWithinItsFadeTime) {
 }
 
 TEST_F(ObstacleMemoryTest, KeepsAnObstacleHiddenBehindANearerOne) {
-  observe({{2.0, 0.0}});
-  observe({{2.0, 0.0}});
+  observe_standing({{2.0, 0.0}});
   // Something nearer covers the column above its foot.
   const auto foot = ground_.image_of({2.0, 0.0});
   const base::CameraIntrinsics& k = field_.intrinsics();
@@ -180,8 +228,7 @@ TEST_F(ObstacleMemoryTest, RecallsAWallBesideTheAgentAsOneStaticObject) {
   for (int k = 0; k < 4; ++k) {
     wall.push_back({1.2 + 0.12 * k, 0.8});
   }
-  observe(wall);
-  observe(wall);
+  observe_standing(wall);
   EXPECT_TRUE(memory_.recall(kSpeed_mps).empty());  // in view: the percept has it
   // One metre on, the wall's foot has left the 90° view on the left.
   memory_.carry(kSpeed_mps, 0.0, 1.0);

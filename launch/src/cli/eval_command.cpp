@@ -21,6 +21,7 @@ struct EvalFlowCommand {
   int frames = 40;
   std::vector<std::string> methods;
   std::string segmentation = "semantic";
+  bool obstacle_memory = false;
   std::string out_dir = "flowsteer_eval";
 };
 
@@ -53,6 +54,12 @@ int run_eval_flow(const EvalFlowCommand& command) {
                            servo::flow_method_names() + "; synthetic is the truth", true));
   }
   options.segmentation = segmentation_method_option("--segmentation", command.segmentation);
+  if (command.obstacle_memory && options.segmentation == servo::SegmentationMethod::semantic) {
+    throw CLI::ValidationError("--obstacle-memory",
+                               "the memory keeps the ground contacts of flow segmentation's "
+                               "regions: give a --segmentation other than semantic");
+  }
+  options.obstacle_memory = command.obstacle_memory;
   const auto rows = eval::evaluate_flow(scenario_named(command.scenario), options, std::cerr);
   eval::print_flow_table(rows, std::cout);
   eval::write_flow_evaluation(rows, command.out_dir);
@@ -96,6 +103,9 @@ Subcommand add_eval_flow(CLI::App& eval) {
                    "how objects are found: " + servo::segmentation_method_names() +
                        " (semantic measures the flow alone)")
       ->capture_default_str();
+  flow->add_flag("--obstacle-memory", command->obstacle_memory,
+                 "keep each estimator's obstacle memory and score what it recalls against the "
+                 "world (flow segmentation only)");
   flow->add_option("--out", command->out_dir, "folder for flow_eval.csv and flow_eval.txt")
       ->capture_default_str();
   return {flow, [command] { return run_eval_flow(*command); }};

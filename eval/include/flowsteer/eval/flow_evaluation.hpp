@@ -23,6 +23,12 @@ struct FlowEvalOptions {
   // Regions approaching sooner than this (the avoidance horizon) count as phantoms when most of
   // their pixels are the ground or the sky.
   double phantom_horizon_s = 5.0;
+  // Each method's perception keeps the obstacle memory (servo::ObstacleMemory; flow
+  // segmentation only), and its recalled objects are scored against the world.
+  bool obstacle_memory = false;
+  // A recalled object whose nearest point lies this near a body's footprint is on that body: the
+  // memory's link distance, within which its points are one object.
+  double recall_tolerance_m = 0.3;
 };
 
 // One estimator at one resolution, over every frame after the first.
@@ -57,6 +63,14 @@ struct FlowEvalRow {
   // frames measured (objects of at least min_object_px): what the controller remembers about an
   // object is lost with each change.
   double flicker_per_s = 0.0;
+  // With the obstacle memory: the objects it recalled, over the frames, and by where their
+  // nearest point lies in the world: on a static obstacle, on an agent or a moving obstacle
+  // (what stands there now is real, but moves), or on nothing (what stood there has gone, or
+  // never was).
+  int recalled_objects = 0;
+  int recalled_on_obstacles = 0;
+  int recalled_on_movers = 0;
+  int recalled_on_nothing = 0;
   double ms_per_frame = 0.0;  // flow computation alone
 };
 

@@ -28,13 +28,19 @@ struct ObstacleMemoryOptions {
   // A point seen once is dropped unless it is seen again within this: one frame's phantom is
   // not remembered.
   double confirm_s = 0.5;
+  // A point is confirmed (recalled, kept past confirm_s) once its sightings span this long and
+  // stay within spacing_m of its first: what walks by faster than spacing_m / confirm_span_s
+  // (0.4 m/s), such as a person whose plain clothes the untextured fill gave a static point's
+  // flow, leaves a trail of points none of which is confirmed.
+  double confirm_span_s = 0.25;
   // Any point not seen for this long is dropped: out of view nothing says that what stood there
   // still does (people stand, then walk on), and a wall passed at walking speed is behind by then.
   double forget_s = 3.0;
   // A ground contact of a region with the static FOE is taken where the region's fitted τ puts
   // a static point within this fraction of the contact's depth: someone walking towards the
-  // agent has the static FOE too, and a τ a fraction of that.
-  double ttc_tolerance = 0.5;
+  // agent has the static FOE too, and a τ a fraction of that; and a region that took in floor
+  // below what stands there has contacts nearer than its τ says.
+  double ttc_tolerance = 0.25;
   // Below this speed nothing expands, and no region can be told to stand still.
   double min_speed_mps = 0.1;
   // The floor must show over this height above a point's foot to count against the point; an
@@ -57,9 +63,11 @@ class ObstacleMemory {
   static constexpr std::int32_t kFirstId = 1 << 28;
 
   struct Point {
-    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();  // body frame
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();    // body frame
+    Eigen::Vector2d first_seen_m = Eigen::Vector2d::Zero();  // where it was first seen, carried
     std::int32_t id = kFirstId;
     int sightings = 0;            // frames it was observed in
+    double age_s = 0.0;           // since it was first observed
     double unseen_s = 0.0;        // since it was last observed
     double contradicted_s = 0.0;  // of unseen_s, the time its spot showed the floor
     enum class Sight : std::uint8_t {
@@ -100,6 +108,10 @@ class ObstacleMemory {
   std::span<const ObjectFeatures> recall(double speed_mps);
 
   std::span<const Point> points() const { return points_; }
+  // Whether a point has been seen standing still long enough to be recalled and kept.
+  bool confirmed(const Point& point) const {
+    return point.sightings >= 2 && point.age_s - point.unseen_s >= options_.confirm_span_s;
+  }
 
  private:
   // Whether the contact is where a region that stands still stands.
