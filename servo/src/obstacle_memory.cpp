@@ -169,11 +169,17 @@ void ObstacleMemory::observe(const View& view, double speed_mps, double dt_s) {
     p.unseen_s += dt_s;
     p.sight = Point::Sight::unknown;
   }
+  const double row = 1.0 / view.field.intrinsics().fy_px;
   for (const GroundContact& c : view.contacts) {
     if (!stands_still(view, c, speed_mps)) {
       continue;
     }
-    if (const auto p = ground_.point_at(c.x, c.ground_y); p && p->norm() <= options_.range_m) {
+    // Where one row of the image spans more floor than spacing_m, a foot found a few rows off (as
+    // a region's lower edge is) misplaces the point by several spacings: it is taken nearer.
+    const auto p = ground_.point_at(c.x, c.ground_y);
+    const auto row_further = ground_.point_at(c.x, c.ground_y - row);
+    if (p && row_further && (*row_further - *p).norm() <= options_.spacing_m &&
+        p->norm() <= options_.range_m) {
       remember(*p);
     }
   }

@@ -20,15 +20,21 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kSpeed_mps = 1.0;
 constexpr double kFrame_s = 0.1;
 
-// A 64×48 camera of 90° a metre above the floor, pitched down 0.1 rad, whose frames show what
+// A 320×240 camera of 90° a metre above the floor, pitched down 0.1 rad, whose frames show what
 // each test says: one visible region (label 0) standing on the ground at the points given.
 class ObstacleMemoryTest : public ::testing::Test {
  protected:
   ObstacleMemoryTest()
       : mount_{1.0, 0.1},
-        field_(base::CameraIntrinsics::from_horizontal_fov(64, 48, 90.0 * kDeg)),
+        field_(base::CameraIntrinsics::from_horizontal_fov(320, 240, 90.0 * kDeg)),
         ground_(mount_),
         memory_(mount_) {
+    use_camera(320, 240);
+  }
+
+  // A camera of 90° with width × height pixels, the floor in every pixel.
+  void use_camera(int width, int height) {
+    field_ = FlowField(base::CameraIntrinsics::from_horizontal_fov(width, height, 90.0 * kDeg));
     segmentation_.width = field_.width();
     segmentation_.height = field_.height();
     segmentation_.labels.assign(field_.size(), Segmentation::kNoRegion);
@@ -190,6 +196,20 @@ TEST_F(ObstacleMemoryTest, RemembersAContactOnlyNearWhereItsRegionsTimeToContact
   EXPECT_TRUE(memory_.points().empty());
   observe({{2.0, 0.0}}, 1.2);
   EXPECT_EQ(memory_.points().size(), 1u);
+}
+
+TEST_F(ObstacleMemoryTest, RemembersOnlyContactsWhoseRowPlacesThemWithinItsSpacing) {
+  // At 64×48 a row spans 0.07 m of floor 1.5 m ahead and 0.125 m 2 m ahead: more than spacing_m
+  // (0.1 m), so a foot found a row off would misplace the point by more than its spacing.
+  use_camera(64, 48);
+  observe({{2.0, 0.0}});
+  EXPECT_TRUE(memory_.points().empty());
+  observe({{1.5, 0.0}});
+  EXPECT_EQ(memory_.points().size(), 1u);
+  // At 320×240 a row spans 0.025 m of floor 2 m ahead.
+  use_camera(320, 240);
+  observe({{2.0, 0.0}});
+  EXPECT_EQ(memory_.points().size(), 2u);
 }
 
 TEST_F(ObstacleMemoryTest, DropsARemovedObstacleWithinItsFadeTime) {
