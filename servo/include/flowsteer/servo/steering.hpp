@@ -119,7 +119,8 @@ struct PerceptionConfig {
   DepthSource depth = DepthSource::renderer;
   // Remember what stood still and recall it once out of view (servo::ObstacleMemory;
   // docs/NAVIGATION.md, "Obstacle memory"). Used where it applies: the flowsteer law on flow
-  // segmentation with a camera's depths; off by default, since the suite's crowds lose goals to it.
+  // segmentation with a camera's depths; off by default: it holds walls and low boxes, but in the
+  // suite's crowds agents touch each other more with it.
   bool obstacle_memory = false;
 };
 
