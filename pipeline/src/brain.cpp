@@ -34,12 +34,24 @@ double goal_bearing_rad(double dx_m, double dy_m, double yaw_rad) {
   return -std::remainder(std::atan2(dy_m, dx_m) - yaw_rad, 2.0 * std::numbers::pi);
 }
 
+namespace {
+
+// The angle from the optical axis to the image's further side edge.
+double half_view_rad(const base::CameraIntrinsics& intrinsics) {
+  return std::atan(std::max(intrinsics.cx_px, intrinsics.width_px - intrinsics.cx_px) /
+                   intrinsics.fx_px);
+}
+
+}  // namespace
+
 Brain::Brain(const base::CameraIntrinsics& intrinsics, const BrainConfig& config,
              std::unique_ptr<FeatureOracle> oracle)
     : config_(config),
       perception_(std::make_unique<Perception>(intrinsics, config.perception)),
-      controller_(servo::make_controller(config.controller, config.agent_width_m,
-                                         config.preferred_speed_mps)),
+      controller_(servo::make_controller(
+          config.controller, config.agent_width_m, config.preferred_speed_mps,
+          {half_view_rad(intrinsics), per_pixel_depth(config.perception) || oracle != nullptr,
+           config.perception.obstacle_memory})),
       oracle_(std::move(oracle)) {
   if (model() == servo::SteeringModel::geometric && !oracle_) {
     throw std::invalid_argument(

@@ -167,7 +167,7 @@ class ThreatCones {
       if (beyond_goal(cone, percept, kept_width_m)) {
         continue;
       }
-      const bool clear = passed_clear(object, agent, options, kept_width_m);
+      const bool clear = passed_clear(object, agent, percept, options, kept_width_m);
       if (!clear || ends_measured(object, options.depth)) {
         entries_.push_back({&object, cone, time_to_contact(object, cone, kept_width_m), -1, clear});
       }
@@ -246,18 +246,20 @@ class ThreatCones {
 
   // A static object (stands_still) whose ends, taken as a segment on the ground, stay further than
   // half the kept width plus static_clearance_m from the agent for the whole horizon if it goes
-  // straight on: a wall along the path, people standing beside the course. Their clearance cost
-  // would still pull: its importance is that of their nearer end, small in time for anything
-  // beside the agent, so a corridor's walls pulled agents to its middle and people standing at
-  // their goals made an agent circle its own goal among them. Moving objects keep it, as they
-  // may turn into the path: circles and crossings need the early avoidance of the cost's tail.
-  // Such an object with measured ends stays in the groups, costing nothing: left out of them
+  // straight on, or until it reaches its goal, where it stops or turns to the next: a wall along
+  // the path, people standing beside the course, a wall the course meets past the goal. Their
+  // clearance cost would still pull: its importance is that of their nearer end, small in time for
+  // anything beside the agent, so a corridor's walls pulled agents to its middle and people
+  // standing at their goals made an agent circle its own goal among them. Moving objects keep it,
+  // as they may turn into the path: circles and crossings need the early avoidance of the cost's
+  // tail. Such an object with measured ends stays in the groups, costing nothing: left out of them
   // too, it no longer closed the gap between itself and a neighbour, and `bottleneck`,
   // `doorway_two_way`, `corridor_pillar` and `hallway_two_way` were clean on 20 of their 40 suite
   // runs against 38. Without depths its outline is a guess from τ, and numerical flow's static
   // regions kept in the groups took DIS flow at 128² from 15 to 11 clean cases: it is left out.
   static bool passed_clear(const ObjectFeatures& object, const AgentState& agent,
-                           const ThreatOptions& options, double kept_width_m) {
+                           const Percept& percept, const ThreatOptions& options,
+                           double kept_width_m) {
     const std::optional<Eigen::Vector2d> velocity =
         detail::relative_velocity(object, agent, options.depth, options.static_closing_ratio);
     if (!detail::stands_still(object, agent, options.depth, options.static_closing_ratio) ||
@@ -269,7 +271,9 @@ class ThreatCones {
     const double radius_m = 0.5 * kept_width_m + options.static_clearance_m;
     detail::Contact contact;
     detail::outline_contact(outline, *velocity, radius_m, contact);
-    return !(contact.time_s <= options.horizon_s) &&
+    const bool beyond_goal =
+        percept.goal_distance_m && contact.time_s * velocity->norm() > *percept.goal_distance_m;
+    return !(contact.time_s <= options.horizon_s && !beyond_goal) &&
            detail::distance_to_outline(outline) > radius_m;
   }
 

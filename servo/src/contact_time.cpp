@@ -73,10 +73,14 @@ void outline_contact(const Outline& outline, const Eigen::Vector2d& v, double ra
 }
 
 double distance_to_outline(const Outline& outline) {
+  return distance_to_outline(outline, Eigen::Vector2d::Zero());
+}
+
+double distance_to_outline(const Outline& outline, const Eigen::Vector2d& from) {
   double distance_m = std::numeric_limits<double>::infinity();
   for (int i = 0; i + 1 < outline.count; ++i) {
-    distance_m =
-        std::min(distance_m, distance_to_segment(outline.points[i], outline.points[i + 1]));
+    distance_m = std::min(
+        distance_m, distance_to_segment(outline.points[i] - from, outline.points[i + 1] - from));
   }
   return distance_m;
 }
@@ -132,13 +136,11 @@ void outline_of(const ObjectFeatures& object, const AgentState& agent, const Dep
   outline.points[outline.count++] = {object.max_x * right_m, right_m};
 }
 
-double course_room_m(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
-                     double radius_m) {
+void extended_outline_of(const ObjectFeatures& object, const AgentState& agent,
+                         const DepthGuess& depth, Outline& outline) {
   // Further than the agent stops from at any speed it walks at.
   constexpr double kHiddenLength_m = 10.0;
-  Outline outline;
   outline_of(object, agent, depth, outline);
-  // A cut end goes on along its segment's line.
   const auto extend = [&](bool cut, int end, int inner) {
     const Eigen::Vector2d out = outline.points[end] - outline.points[inner];
     if (cut && out.norm() > 1e-6) {
@@ -147,6 +149,46 @@ double course_room_m(const ObjectFeatures& object, const AgentState& agent, cons
   };
   extend(object.cut_left, 0, 1);
   extend(object.cut_right, outline.count - 1, outline.count - 2);
+}
+
+namespace {
+
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// Whether the segments [a, b] and [c, d] cross or touch.
+bool segments_cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                    const Eigen::Vector2d& d) {
+  const double ab_c = cross(b - a, c - a);
+  const double ab_d = cross(b - a, d - a);
+  const double cd_a = cross(d - c, a - c);
+  const double cd_b = cross(d - c, b - c);
+  return ab_c * ab_d <= 0.0 && cd_a * cd_b <= 0.0;
+}
+
+}  // namespace
+
+double distance_to_outline(const Outline& outline, const Eigen::Vector2d& from,
+                           const Eigen::Vector2d& to) {
+  double distance_m = std::numeric_limits<double>::infinity();
+  for (int i = 0; i + 1 < outline.count; ++i) {
+    const Eigen::Vector2d& a = outline.points[i];
+    const Eigen::Vector2d& b = outline.points[i + 1];
+    if (segments_cross(a, b, from, to)) {
+      return 0.0;
+    }
+    distance_m = std::min(
+        {distance_m, distance_to_segment(a - from, b - from), distance_to_segment(a - to, b - to),
+         distance_to_segment(from - a, to - a), distance_to_segment(from - b, to - b)});
+  }
+  return distance_m;
+}
+
+double course_room_m(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
+                     double radius_m) {
+  Outline outline;
+  extended_outline_of(object, agent, depth, outline);
   const double now_m = distance_to_outline(outline);
   Contact contact;
   // Walking at 1 m/s towards a standing object: the contact's time is its distance.

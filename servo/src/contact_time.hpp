@@ -44,6 +44,10 @@ struct Outline {
 void outline_contact(const Outline& outline, const Eigen::Vector2d& v, double radius_m,
                      Contact& first);
 double distance_to_outline(const Outline& outline);
+// The distance from the point `from` (agent frame) to the outline, and from the segment [from, to].
+double distance_to_outline(const Outline& outline, const Eigen::Vector2d& from);
+double distance_to_outline(const Outline& outline, const Eigen::Vector2d& from,
+                           const Eigen::Vector2d& to);
 
 // How far along the agent's course (its z axis) the band that the outline sweeps, moving over
 // the ground at velocity v (agent frame), begins: the nearest point where a point of the outline
@@ -64,9 +68,13 @@ std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
 void outline_of(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
                 Outline& outline);
 
-// How far the agent can walk straight on before it comes within R of the object, taken as
-// standing still; infinity if it never does. An end the image cuts is taken to go on along its
-// segment's line (a wall beside the agent, of which only the part ahead is in view). Within R
+// outline_of, with an end the image cuts taken to go on along its segment's line (a wall beside
+// the agent, of which only the part ahead is in view) further than the agent stops from.
+void extended_outline_of(const ObjectFeatures& object, const AgentState& agent,
+                         const DepthGuess& depth, Outline& outline);
+
+// How far the agent can walk straight on before it comes within R of the object's extended
+// outline, taken as standing still; infinity if it never does. Within R
 // already, the distance until it comes nearer still (R taken at 0.99 of the distance now).
 double course_room_m(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
                      double radius_m);

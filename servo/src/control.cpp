@@ -451,18 +451,58 @@ double Controller::checked_turn_rate(const Percept& percept, const AgentState& a
   constexpr std::array kFractions{1.0, 0.5, 0.25, 0.125};
   double best_rate = turn_rate;
   double best_cost = std::numeric_limits<double>::infinity();
-  Percept turned;
-  for (const double fraction : kFractions) {
-    const double rate = fraction * turn_rate;
-    detail::percept_after_turn(percept, agent, rate * agent.period_s, turn_check_.depth,
+  const auto weigh = [&](const Percept& seen, double rate) {
+    Percept turned;
+    detail::percept_after_turn(seen, agent, rate * agent.period_s, turn_check_.depth,
                                turn_check_.static_closing_ratio, turned_objects_, turned);
     const double cost = navigation_.cost(turned, agent);
     if (cost < best_cost) {
       best_cost = cost;
       best_rate = rate;
     }
+  };
+  for (const double fraction : kFractions) {
+    weigh(percept, fraction * turn_rate);
+  }
+  // Only where the check holds the turn towards the goal back, or the gradient turns away from it,
+  // and the way onto the goal is clear: then the static objects, which that way passes clear, are
+  // left out, and turns towards the goal compete with the checked one.
+  const double goal_side = percept.goal_bearing_rad && *percept.goal_bearing_rad > 0.0 ? 1.0 : -1.0;
+  if (!(goal_side * best_rate < goal_side * turn_rate || goal_side * turn_rate <= 0.0) ||
+      !leaves_static_objects_out(percept, agent)) {
+    return best_rate;
+  }
+  Percept open = percept;
+  open.objects = open_objects_;
+  const double law_rate = best_rate;
+  best_cost = std::numeric_limits<double>::infinity();
+  weigh(open, law_rate);
+  for (const double fraction : kFractions) {
+    weigh(open, fraction * goal_side * limits_.max_turn_rate);
   }
   return best_rate;
+}
+
+bool Controller::leaves_static_objects_out(const Percept& percept, const AgentState& agent) {
+  if (!turn_check_.way_onto_goal || !percept.goal_bearing_rad || !percept.goal_distance_m ||
+      std::abs(*percept.goal_bearing_rad) <= limits_.max_turn_rate * agent.period_s) {
+    return false;
+  }
+  open_objects_.clear();
+  for (const ObjectFeatures& object : percept.objects) {
+    if (!detail::stands_still(object, agent, turn_check_.depth, turn_check_.static_closing_ratio)) {
+      open_objects_.push_back(object);
+    }
+  }
+  if (open_objects_.size() == percept.objects.size()) {
+    return false;
+  }
+  const double goal_side = *percept.goal_bearing_rad > 0.0 ? 1.0 : -1.0;
+  const double clearance_m =
+      0.5 * detail::kept_width(agent, turn_check_.kept_width) + turn_check_.static_clearance_m;
+  return detail::way_onto_goal_is_clear(percept, agent, goal_side * limits_.max_turn_rate,
+                                        turn_check_.depth, turn_check_.static_closing_ratio,
+                                        clearance_m);
 }
 
 ControlOutput Controller::step(const Percept& percept, const AgentState& agent) {

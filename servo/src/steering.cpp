@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
+#include <numbers>
 #include <utility>
+
+#include "cost_term_helpers.hpp"
 
 namespace flowsteer::servo {
 
@@ -222,7 +226,7 @@ NavigationWeights navigation_weights(const ControllerConfig& c) {
 }
 
 Controller make_controller(const ControllerConfig& c, double agent_width_m,
-                           double preferred_speed_mps) {
+                           double preferred_speed_mps, const StaticPercept& statics) {
   ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};
   const NavigationWeights w = navigation_weights(c);
   if (c.law == NavigationLaw::flowsteer) {
@@ -244,10 +248,25 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
     weights.preferred_speed_mps = preferred_speed_mps;
     weights.max_turn_rate = c.max_turn_rate;
     weights.follow_gap_m = c.follow_gap_m;
+    const ThreatOptions& threats = options.clearance.threats;
+    // With exact depths, anything within the way's clearance beside the agent must have been in
+    // view until the agent's front came level with it; with a narrower view (a robot's 90°
+    // camera) a pillar just passed is out of it, and only an obstacle memory keeps it.
+    const double clearance_m = 0.5 * detail::kept_width({full_speed_mps, 0.0}, threats.kept_width) +
+                               threats.static_clearance_m;
+    const bool wide_view =
+        std::tan(std::min(statics.view_half_angle_rad, 0.49 * std::numbers::pi)) * 0.5 *
+            agent_width_m >=
+        clearance_m;
+    const bool sees_sides = statics.obstacle_memory || (statics.exact_depth && wide_view);
     // Goal reaching only: a follower turning to keep its leader fell behind it with the check.
     const TurnCheck turn_check{
         c.kind == NavigationKind::goal_reaching && c.without != LawMechanism::turn_check,
-        options.clearance.threats.depth, options.clearance.threats.static_closing_ratio};
+        threats.depth,
+        threats.static_closing_ratio,
+        sees_sides,
+        threats.kept_width,
+        threats.static_clearance_m};
     return Controller(c.kind == NavigationKind::following
                           ? flowsteer_following(weights, options)
                           : flowsteer_goal_reaching(weights, options),

@@ -14,6 +14,9 @@ namespace flowsteer::servo::detail {
 
 namespace {
 
+// The heading's step between the points where a turn's path is checked.
+constexpr double kPathStepRad = 0.05;
+
 // Beyond this bearing a column has no image coordinate worth keeping (tan grows without bound).
 constexpr double kMaxBearingRad = 0.49 * std::numbers::pi;
 
@@ -97,6 +100,48 @@ void percept_after_turn(const Percept& now, const AgentState& agent, double turn
   if (out.goal_bearing_rad) {
     *out.goal_bearing_rad -= turn_rad;
   }
+}
+
+bool way_onto_goal_is_clear(const Percept& now, const AgentState& agent, double turn_rate,
+                            const DepthGuess& depth, double static_closing_ratio,
+                            double clearance_m) {
+  if (!now.goal_bearing_rad || !now.goal_distance_m || turn_rate == 0.0) {
+    return false;
+  }
+  const double rate = std::abs(turn_rate);
+  const double turn_rad = std::abs(*now.goal_bearing_rad);
+  const double speed_mps = std::max(0.0, agent.speed_mps);
+  const double radius_m = speed_mps / rate;
+  const double side = turn_rate > 0.0 ? 1.0 : -1.0;
+  const int steps = static_cast<int>(std::ceil(turn_rad / kPathStepRad));
+  const Eigen::Vector2d goal =
+      *now.goal_distance_m *
+      Eigen::Vector2d(std::sin(*now.goal_bearing_rad), std::cos(*now.goal_bearing_rad));
+  const Eigen::Vector2d turned_at{side * radius_m * (1.0 - std::cos(turn_rad)),
+                                  radius_m * std::sin(turn_rad)};
+  const Eigen::Vector2d own{0.0, speed_mps};
+  Outline outline;
+  for (const ObjectFeatures& object : now.objects) {
+    extended_outline_of(object, agent, depth, outline);
+    if (distance_to_outline(outline) <= clearance_m ||
+        distance_to_outline(outline, turned_at, goal) <= clearance_m) {
+      return false;
+    }
+    const std::optional<Eigen::Vector2d> relative =
+        relative_velocity(object, agent, depth, static_closing_ratio);
+    const Eigen::Vector2d ground =
+        relative ? Eigen::Vector2d(*relative + own) : Eigen::Vector2d::Zero();
+    for (int k = 1; k <= steps; ++k) {
+      const double heading_rad = turn_rad * k / steps;
+      const Eigen::Vector2d at{side * radius_m * (1.0 - std::cos(heading_rad)),
+                               radius_m * std::sin(heading_rad)};
+      // Where the agent is then, in a frame that moves with the object.
+      if (distance_to_outline(outline, at - ground * (heading_rad / rate)) <= clearance_m) {
+        return false;
+      }
+    }
+  }
+  return true;
 }
 
 }  // namespace flowsteer::servo::detail

@@ -18,4 +18,14 @@ void percept_after_turn(const Percept& now, const AgentState& agent, double turn
                         const DepthGuess& depth, double static_closing_ratio,
                         std::vector<ObjectFeatures>& objects, Percept& out);
 
+// Whether the agent can turn onto its goal's bearing at turn_rate (rad/s, positive right; the
+// goal's side) at its present speed and walk straight on to the goal, keeping further than
+// clearance_m (centre to object) from every object in `now`, as it is now already: its
+// extended outline (contact_time.hpp), moving over the ground during the turn as its flow shows
+// (relative velocity plus the agent's own; standing where its flow gives none), standing after it.
+// False without the goal's bearing and distance.
+bool way_onto_goal_is_clear(const Percept& now, const AgentState& agent, double turn_rate,
+                            const DepthGuess& depth, double static_closing_ratio,
+                            double clearance_m);
+
 }  // namespace flowsteer::servo::detail

@@ -146,11 +146,21 @@ TEST(MakeRoom, OnItsWayItWaitsItsTurnAtATakenGoal) {
   EXPECT_GT(waiting.turn_rate, 0.0);   // to the goal, on the right
   EXPECT_GT(room.approach(percept_of(on_goal, 0.0, 1.5), {0.1, kStep}, law, kGoalRadius).accel_mps2,
             0.0);
-  // A wall behind the goal, someone beside the way, a goal further than wait_range_m: the law's.
+  // A wall seen aslant beside the goal, 0.45 m deep at the image's left edge and 1.9 m where the
+  // line to the goal (0.55 m) meets it.
+  ObjectFeatures aslant = body(9, -1.7, 0.45, INFINITY);
+  aslant.min_x = -3.7;
+  aslant.max_x = 0.3;
+  aslant.nearest_x = aslant.min_x;
+  aslant.min_x_depth_m = 0.45;
+  aslant.max_x_depth_m = 2.5;
+  // A wall behind the goal, someone beside the way, a goal further than wait_range_m, the wall
+  // aslant: the law's.
   for (const auto& [objects, distance_m] :
        {std::pair{std::vector<ObjectFeatures>{body(7, 0.0, 1.8, INFINITY)}, 1.5},
         {std::vector<ObjectFeatures>{body(7, 1.0, 1.1, INFINITY)}, 1.5},
-        {on_goal, 2.5}}) {
+        {on_goal, 2.5},
+        {std::vector<ObjectFeatures>{aslant}, 0.55}}) {
     const base::Command command =
         room.approach(percept_of(objects, 0.0, distance_m), {0.5, kStep}, law, kGoalRadius);
     EXPECT_EQ(command.accel_mps2, law.accel_mps2);

@@ -357,11 +357,27 @@ enum class GradientStep {
 // the limits at every step, each turn undoing the last. Checked, the turn rate is the
 // gradient's, or its half, quarter or eighth, whichever leads to the predicted percept
 // (turn_prediction.hpp: the view turned, the translation left out) that costs least.
+// A goal beyond an object's end (a corridor's mouth, a building's corner) lies past courses that
+// cross that end: each fraction's course costs more than the last, the check keeps the smallest,
+// and the agent walks along the object past its goal. So where the check holds the turn towards
+// the goal back, or the gradient turns away from it, and the way onto the goal (the turn onto its
+// bearing at the turn limit and the present speed, then straight on to it) passes every object in
+// view clear, the objects that stand still are left out of the check (the way passes them clear,
+// though the course now crosses them), and turns towards the goal, at the limit or its half,
+// quarter or eighth, compete with the checked one.
 struct TurnCheck {
   bool enabled = false;
   // What the terms take objects' depths and motion from (ThreatOptions), for the prediction.
   DepthGuess depth;
   double static_closing_ratio = 1.5;
+  // Whether the way onto the goal is judged at all: only where the percept holds what stands
+  // beside the agent, steadily (StaticPercept, steering.hpp).
+  bool way_onto_goal = false;
+  // The way onto the goal is clear where it keeps half the kept width and static_clearance_m
+  // from every object: where a static object's clearance cost ends (ThreatOptions), so that once
+  // on it the terms agree.
+  KeptWidth kept_width;
+  double static_clearance_m = 0.25;
 };
 
 // The gradient update of CGF Eq. 15, a_c = −λ ∂L̇/∂a_c and ω = −λ ∂L̇/∂ω, clamped to the limits.
@@ -377,6 +393,9 @@ class Controller {
 
  private:
   double checked_turn_rate(const Percept& percept, const AgentState& agent, double turn_rate);
+  // Whether the goal lies beyond one period's turn and the way onto it (TurnCheck) is clear of
+  // every object in view, and some of them stand still; fills open_objects_ with the others.
+  bool leaves_static_objects_out(const Percept& percept, const AgentState& agent);
 
   NavigationFunction navigation_;
   double lambda_;
@@ -384,6 +403,7 @@ class Controller {
   GradientStep gradient_step_;
   TurnCheck turn_check_;
   std::vector<ObjectFeatures> turned_objects_;  // reused by each check
+  std::vector<ObjectFeatures> open_objects_;    // the objects that do not stand still
 };
 
 }  // namespace flowsteer::servo
