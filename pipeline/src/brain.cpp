@@ -50,8 +50,7 @@ Brain::Brain(const base::CameraIntrinsics& intrinsics, const BrainConfig& config
       perception_(std::make_unique<Perception>(intrinsics, config.perception)),
       controller_(servo::make_controller(
           config.controller, config.agent_width_m, config.preferred_speed_mps,
-          {half_view_rad(intrinsics), per_pixel_depth(config.perception) || oracle != nullptr,
-           config.perception.obstacle_memory})),
+          {half_view_rad(intrinsics), per_pixel_depth(config.perception) || oracle != nullptr})),
       oracle_(std::move(oracle)) {
   if (model() == servo::SteeringModel::geometric && !oracle_) {
     throw std::invalid_argument(

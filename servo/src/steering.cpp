@@ -249,22 +249,21 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
     weights.max_turn_rate = c.max_turn_rate;
     weights.follow_gap_m = c.follow_gap_m;
     const ThreatOptions& threats = options.clearance.threats;
-    // With exact depths, anything within the way's clearance beside the agent must have been in
-    // view until the agent's front came level with it; with a narrower view (a robot's 90°
-    // camera) a pillar just passed is out of it, and only an obstacle memory keeps it.
+    // Anything within the way's clearance beside the agent must have been in view until the
+    // agent's front came level with it; with a narrower view (a robot's 90° camera) a pillar just
+    // passed is out of it.
     const double clearance_m = 0.5 * detail::kept_width({full_speed_mps, 0.0}, threats.kept_width) +
                                threats.static_clearance_m;
     const bool wide_view =
         std::tan(std::min(statics.view_half_angle_rad, 0.49 * std::numbers::pi)) * 0.5 *
             agent_width_m >=
         clearance_m;
-    const bool sees_sides = statics.obstacle_memory || (statics.exact_depth && wide_view);
     // Goal reaching only: a follower turning to keep its leader fell behind it with the check.
     const TurnCheck turn_check{
         c.kind == NavigationKind::goal_reaching && c.without != LawMechanism::turn_check,
         threats.depth,
         threats.static_closing_ratio,
-        sees_sides,
+        statics.exact_depth && wide_view,
         threats.kept_width,
         threats.static_clearance_m};
     return Controller(c.kind == NavigationKind::following

@@ -300,20 +300,19 @@ TEST(TurnCheck, TurnsIntoACorridorsMouthWhenTheWayOntoTheGoalIsClear) {
 }
 
 // The way onto the goal is judged only where the percept holds what stands beside the agent, and
-// holds it steadily: with exact depths and a view wide enough, or with an obstacle memory. Else
-// the check alone keeps the agent walking on past the corridor's mouth.
+// holds it steadily: exact depths and a view wide enough. Else the check alone keeps the agent
+// walking on past the corridor's mouth.
 TEST(TurnCheck, JudgesTheWayOntoTheGoalOnlyWhereThePerceptHoldsItsSides) {
   ControllerConfig config;
   config.max_turn_rate = 1.5;
   const std::vector<StaticSegment> corridor = {{1, {0.75, 1.7}, {20.0, 1.7}},
                                                {2, {0.75, -1.3}, {20.0, -1.3}}};
-  const double narrow_rad = 0.25 * std::numbers::pi;
-  EXPECT_GT(walk_to(config, corridor, {3.5, -0.4}, 100, {narrow_rad, true, false}).goal_distance_m,
+  const Eigen::Vector2d goal{3.5, -0.4};
+  EXPECT_GT(walk_to(config, corridor, goal, 100, {0.25 * std::numbers::pi, true}).goal_distance_m,
             1.0);
-  EXPECT_GT(walk_to(config, corridor, {3.5, -0.4}, 100, {0.5 * std::numbers::pi, false, false})
-                .goal_distance_m,
+  EXPECT_GT(walk_to(config, corridor, goal, 100, {0.5 * std::numbers::pi, false}).goal_distance_m,
             1.0);
-  EXPECT_LE(walk_to(config, corridor, {3.5, -0.4}, 100, {narrow_rad, false, true}).goal_distance_m,
+  EXPECT_LE(walk_to(config, corridor, goal, 100, {0.5 * std::numbers::pi, true}).goal_distance_m,
             0.3);
 }
 
