@@ -77,12 +77,7 @@ struct Cone {
   // are at about one depth; for a wall met at a slant this is the depth where the FOE points,
   // which the mean depth of its pixels is not.
   double depth_at(double x) const {
-    const double span = end_x[1] - end_x[0];
-    if (!(span > 0.0)) {
-      return std::min(depth[0], depth[1]);
-    }
-    const double t = std::clamp((x - end_x[0]) / span, 0.0, 1.0);
-    return 1.0 / ((1.0 - t) / depth[0] + t / depth[1]);
+    return detail::plane_depth_at(x, end_x[0], depth[0], end_x[1], depth[1]);
   }
 };
 

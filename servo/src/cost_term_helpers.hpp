@@ -52,6 +52,18 @@ inline double floored_speed(const AgentState& agent, const DepthGuess& depth) {
   return std::max(std::abs(agent.speed_mps), depth.min_speed_mps);
 }
 
+// The depth along image column x of a vertical plane seen at columns x0 and x1 with depths
+// depth0_m and depth1_m: on a plane, inverse depth is affine in the image coordinate. Taken at the
+// nearer end beyond them; the nearer depth where the two columns coincide.
+inline double plane_depth_at(double x, double x0, double depth0_m, double x1, double depth1_m) {
+  const double span = x1 - x0;
+  if (!(span > 0.0)) {
+    return std::min(depth0_m, depth1_m);
+  }
+  const double t = std::clamp((x - x0) / span, 0.0, 1.0);
+  return 1.0 / ((1.0 - t) / depth0_m + t / depth1_m);
+}
+
 // The width the flowsteer law's terms keep clear: the agent's own and its speed's share of the
 // margin, at least its standing part.
 inline double kept_width(const AgentState& agent, const KeptWidth& options) {

@@ -42,19 +42,16 @@ std::optional<double> depth_at_column(const ObjectFeatures& object, double x) {
   if (!object.min_x_depth_m || !object.max_x_depth_m) {
     return object_depth(object);
   }
-  double x0 = object.min_x;
-  double depth0_m = *object.min_x_depth_m;
-  double x1 = object.max_x;
-  double depth1_m = *object.max_x_depth_m;
-  if (object.nearest_depth_m && object.nearest_x > x0 && object.nearest_x < x1) {
-    (x < object.nearest_x ? x1 : x0) = object.nearest_x;
-    (x < object.nearest_x ? depth1_m : depth0_m) = *object.nearest_depth_m;
+  if (object.nearest_depth_m && object.nearest_x > object.min_x &&
+      object.nearest_x < object.max_x) {
+    return x < object.nearest_x
+               ? detail::plane_depth_at(x, object.min_x, *object.min_x_depth_m, object.nearest_x,
+                                        *object.nearest_depth_m)
+               : detail::plane_depth_at(x, object.nearest_x, *object.nearest_depth_m, object.max_x,
+                                        *object.max_x_depth_m);
   }
-  if (!(x1 > x0)) {
-    return std::min(depth0_m, depth1_m);
-  }
-  const double t = std::clamp((x - x0) / (x1 - x0), 0.0, 1.0);
-  return 1.0 / ((1.0 - t) / depth0_m + t / depth1_m);
+  return detail::plane_depth_at(x, object.min_x, *object.min_x_depth_m, object.max_x,
+                                *object.max_x_depth_m);
 }
 
 }  // namespace

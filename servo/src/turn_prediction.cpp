@@ -117,8 +117,12 @@ bool way_onto_goal_is_clear(const Percept& now, const AgentState& agent, double 
   const Eigen::Vector2d goal =
       *now.goal_distance_m *
       Eigen::Vector2d(std::sin(*now.goal_bearing_rad), std::cos(*now.goal_bearing_rad));
-  const Eigen::Vector2d turned_at{side * radius_m * (1.0 - std::cos(turn_rad)),
-                                  radius_m * std::sin(turn_rad)};
+  // Where the agent is once its heading has turned by heading_rad.
+  const auto on_arc = [&](double heading_rad) {
+    return Eigen::Vector2d{side * radius_m * (1.0 - std::cos(heading_rad)),
+                           radius_m * std::sin(heading_rad)};
+  };
+  const Eigen::Vector2d turned_at = on_arc(turn_rad);
   const Eigen::Vector2d own{0.0, speed_mps};
   Outline outline;
   for (const ObjectFeatures& object : now.objects) {
@@ -133,10 +137,9 @@ bool way_onto_goal_is_clear(const Percept& now, const AgentState& agent, double 
         relative ? Eigen::Vector2d(*relative + own) : Eigen::Vector2d::Zero();
     for (int k = 1; k <= steps; ++k) {
       const double heading_rad = turn_rad * k / steps;
-      const Eigen::Vector2d at{side * radius_m * (1.0 - std::cos(heading_rad)),
-                               radius_m * std::sin(heading_rad)};
       // Where the agent is then, in a frame that moves with the object.
-      if (distance_to_outline(outline, at - ground * (heading_rad / rate)) <= clearance_m) {
+      if (distance_to_outline(outline, on_arc(heading_rad) - ground * (heading_rad / rate)) <=
+          clearance_m) {
         return false;
       }
     }
