@@ -1,6 +1,7 @@
 #include "perception.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -142,23 +143,23 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     return status_;
 
   stage.restart();
+  // What the flow shows moved at the base's mean speed over the flow's interval: at the 1 m/s² an
+  // agent brakes or speeds up with, the speed at its end is 10% off that.
+  const double flow_speed_mps =
+      motions_->mean(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, measured)
+          .speed_mps;
   if (segmenter_) {
     ground_mask_.assign(field_.size(), 0);
     servo::GroundRemovalOptions ground = options_.ground;
-    // The ground's displacement flow follows the distance driven over the flow's interval: at
-    // the 1 m/s² an agent brakes or speeds up with, the speed at its end is 10% off that.
-    const double speed_mps =
-        motions_->mean(frame.timestamp_s - field_.interval_s(), frame.timestamp_s, measured)
-            .speed_mps;
     if (flow_source_->estimated()) {
       ground.flow_floor =
           std::max(ground.flow_floor, options_.numerical_flow_noise_px /
                                           (field_.intrinsics().fx_px * field_.interval_s()));
     }
-    servo::mark_ground(field_, options_.mount, speed_mps, ground, ground_mask_);
+    servo::mark_ground(field_, options_.mount, flow_speed_mps, ground, ground_mask_);
     if (flow_source_->estimated()) {
       untextured_fill_.fill(field_, grey_, flow_source_->image_noise_grey(), options_.mount,
-                            speed_mps, ground_mask_, flow_source_->edge_flow());
+                            flow_speed_mps, ground_mask_, flow_source_->edge_flow());
     }
     // The segmenter follows each region back along its flow and the turn to the previous frame.
     servo::ViewMotion view_motion;
@@ -170,7 +171,7 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
     segmenter_->segment(field_, ground_mask_, needs_grey && segments_by_grey() ? grey_ : cv::Mat(),
                         segmentation_, view_motion);
     if (flow_source_->estimated()) {
-      ground_regions_.mark(field_, options_.mount, speed_mps, ground, segmentation_);
+      ground_regions_.mark(field_, options_.mount, flow_speed_mps, ground, segmentation_);
     }
   } else {
     // The renderer's ground id already marks the ground.
@@ -183,7 +184,10 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   times.segment = stage.elapsed_ms();
 
   stage.restart();
-  objects_ = extractor_.extract(field_, segmentation_);
+  // What stands still closes in at the camera's speed along its optical axis
+  // (FeatureExtractor::extract's depths from flow).
+  objects_ = extractor_.extract(field_, segmentation_,
+                                flow_speed_mps * std::cos(options_.mount.pitch_rad));
   if (memory_) {
     objects_ = with_remembered(frame.timestamp_s, speed_mps, turn_rate_cy);
   }

@@ -1,6 +1,7 @@
 #include "flowsteer/servo/features.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <stdexcept>
@@ -341,6 +342,12 @@ void set_motion(RadialFit& fit, double inverse_ttc, const Eigen::Vector2d& foe,
 // How far (in columns) a region's leftmost or rightmost ground contact may lie inside its extent
 // and still give that end its depth: a person's silhouette is rounded at the feet.
 constexpr double kContactColumns = 2.0;
+// Ends' depths from flow (FeatureExtractor::depths_from_static_flow): the columns of an end, the
+// vectors it needs, and how far from the FOE (normalised) its pixels must be on average.
+constexpr double kFlowDepthColumns = 3.0;
+constexpr int kMinFlowDepthSamples = 4;
+constexpr double kMinFlowDepthOffset = 0.1;
+constexpr double kMaxFlowDepthHeight_m = 0.5;  // the region's top above the ground
 
 // dx/dy of the world's vertical through (x, y) in the image (normalised units): an upright edge
 // is seen along it. Its vanishing point, the nadir, is (0, cot θ) for a camera pitched by θ;
@@ -858,7 +865,8 @@ void set_motion_features(ObjectFeatures& f, const RadialFit& fit,
 }  // namespace
 
 std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field,
-                                                          const Segmentation& segmentation) {
+                                                          const Segmentation& segmentation,
+                                                          double forward_speed_mps) {
   check_sizes_match(field, segmentation);
   const auto regions = static_cast<std::size_t>(segmentation.region_count());
   accumulators_.assign(regions, Accumulator{});
@@ -923,8 +931,124 @@ std::span<const ObjectFeatures> FeatureExtractor::extract(const FlowField& field
         fit_region(region_samples, a.valid(), a.scales_by_depth(options_.use_depth), options_,
                    *fit_workspace_);
     set_motion_features(f, fit, region_samples, field.interval_s());
+    if (depth.empty() && options_.ground_mount && !f.min_x_depth_m && f.fit.static_foe) {
+      depths_from_static_flow(field, region_pixels_[r], forward_speed_mps, f);
+    }
   }
   return features_;
+}
+
+namespace {
+
+// Σ |x − f|², Σ (x − f)·u and Σ y over some of a region's vectors: a static surface's depth
+// there, T_z Σ|x − f|² / Σ(x − f)·u (FeatureExtractor::extract).
+struct FlowDepthSums {
+  double square = 0.0;
+  double along = 0.0;
+  double sum_y = 0.0;
+  int count = 0;
+
+  void add(const Eigen::Vector2d& offset, const Eigen::Vector2d& flow, double y) {
+    square += offset.squaredNorm();
+    along += offset.dot(flow);
+    sum_y += y;
+    ++count;
+  }
+  FlowDepthSums& operator+=(const FlowDepthSums& other) {
+    square += other.square;
+    along += other.along;
+    sum_y += other.sum_y;
+    count += other.count;
+    return *this;
+  }
+  // Empty where the vectors do not expand. Displacement flow over Δ is the instantaneous flow of
+  // τ + Δ (flow_field.hpp).
+  std::optional<double> depth_m(double interval_s, double forward_speed_mps) const {
+    const double ttc_s = along > 0.0 ? square / along - interval_s : 0.0;
+    return ttc_s > 0.0 ? std::optional(ttc_s * forward_speed_mps) : std::nullopt;
+  }
+};
+
+// Whether an end's upper and lower halves stand at one depth, as an upright surface does, rather
+// than at the floor's ratio of depths between their rows (a patch of floor the ground test
+// missed): nearer 1 than that ratio, in proportion. Not where a half has no depth.
+bool upright(const FlowDepthSums& upper, const FlowDepthSums& lower, const FlatGround& ground,
+             double interval_s, double forward_speed_mps) {
+  const auto upper_m = upper.depth_m(interval_s, forward_speed_mps);
+  const auto lower_m = lower.depth_m(interval_s, forward_speed_mps);
+  if (upper.count < kMinFlowDepthSamples / 2 || lower.count < kMinFlowDepthSamples / 2 ||
+      !upper_m || !lower_m) {
+    return false;
+  }
+  const auto floor_upper_m = ground.depth_at(0.0, upper.sum_y / upper.count);
+  const auto floor_lower_m = ground.depth_at(0.0, lower.sum_y / lower.count);
+  if (!floor_upper_m || !floor_lower_m) {
+    return true;  // the upper half is above the horizon: no floor there
+  }
+  return *upper_m / *lower_m < std::sqrt(*floor_upper_m / *floor_lower_m);
+}
+
+}  // namespace
+
+// FeatureExtractor::extract's ends' depths from flow, for a region without them: one lower than
+// the camera and than kMaxFlowDepthHeight_m, each of whose ends is upright. Each end's columns
+// within kFlowDepthColumns of it; an end too near the FOE (its flow there, the expansion, is too
+// small to measure) or whose flow does not expand leaves both ends without.
+void FeatureExtractor::depths_from_static_flow(const FlowField& field,
+                                               std::span<const std::uint32_t> pixels,
+                                               double forward_speed_mps, ObjectFeatures& f) const {
+  if (!(forward_speed_mps > 0.0) || f.status != MotionStatus::approaching) {
+    return;
+  }
+  const auto width = static_cast<std::uint32_t>(field.width());
+  double top_y = std::numeric_limits<double>::infinity();
+  double bottom_y = -top_y;
+  for (const std::uint32_t i : pixels) {
+    top_y = std::min(top_y, field.y(static_cast<int>(i / width)));
+    bottom_y = std::max(bottom_y, field.y(static_cast<int>(i / width)));
+  }
+  const FlatGround ground(*options_.ground_mount);
+  // Lower than the camera: not someone walking at it.
+  if (!ground.depth_at(0.0, top_y)) {
+    return;
+  }
+  const double band = kFlowDepthColumns / field.intrinsics().fx_px;
+  const double middle_y = 0.5 * (top_y + bottom_y);
+  std::array<std::array<FlowDepthSums, 2>, 2> sums{};  // [end][upper, lower half]
+  for (const std::uint32_t i : pixels) {
+    const Eigen::Vector2d x(field.x(static_cast<int>(i % width)),
+                            field.y(static_cast<int>(i / width)));
+    const int end = x.x() <= f.min_x + band ? 0 : x.x() >= f.max_x - band ? 1 : -1;
+    if (end >= 0) {
+      sums[end][x.y() > middle_y ? 1 : 0].add(x - f.foe, field.flow()[i].cast<double>(), x.y());
+    }
+  }
+  std::array<double, 2> depth_m{};
+  for (int end = 0; end < 2; ++end) {
+    FlowDepthSums whole = sums[end][0];
+    whole += sums[end][1];
+    const auto measured_m = whole.depth_m(field.interval_s(), forward_speed_mps);
+    if (whole.count < kMinFlowDepthSamples || !measured_m ||
+        whole.square / whole.count < kMinFlowDepthOffset * kMinFlowDepthOffset ||
+        !upright(sums[end][0], sums[end][1], ground, field.interval_s(), forward_speed_mps)) {
+      return;
+    }
+    depth_m[end] = *measured_m;
+  }
+  // No higher than a knee: no one walking is all below it, a box or a kerb is.
+  const base::CameraMount& mount = *options_.ground_mount;
+  const double top_height_m =
+      mount.height_m - 0.5 * (depth_m[0] + depth_m[1]) *
+                           (top_y * std::cos(mount.pitch_rad) + std::sin(mount.pitch_rad));
+  if (!(top_height_m < kMaxFlowDepthHeight_m)) {
+    return;
+  }
+  f.min_x_depth_m = depth_m[0];
+  f.max_x_depth_m = depth_m[1];
+  const bool left_nearer = depth_m[0] * depth_m[0] * (1.0 + f.min_x * f.min_x) <
+                           depth_m[1] * depth_m[1] * (1.0 + f.max_x * f.max_x);
+  f.nearest_x = left_nearer ? f.min_x : f.max_x;
+  f.nearest_depth_m = left_nearer ? depth_m[0] : depth_m[1];
 }
 
 }  // namespace flowsteer::servo

@@ -527,6 +527,73 @@ TEST(FeatureExtractor, ACameraGetsNoDepthWhereTheGroundIsNotSeenBelowAnObject) {
   EXPECT_NEAR(object_with_id(objects, 1).min_x_depth_m.value_or(0.0), 3.0, 0.15);
 }
 
+// A camera that knows its speed gets the ends' depths of what stands still, no higher than a
+// knee, from its flow where no contact shows: the box 6 m ahead, whose foot a low wall hides, at
+// its depth within 1%. Not for the panels beside it that rise higher (someone walking straight at
+// the camera has the flow of a static panel at half the depth), nor for one that crosses behind
+// the wall (an FOE of its own), nor for a patch of floor (its rows are not at one depth), nor
+// without the speed.
+TEST(FeatureExtractor, ACameraThatKnowsItsSpeedGetsTheDepthOfALowStaticObjectFromItsFlow) {
+  for (const double pitch_rad : {0.0, 8.0 * kDeg}) {
+    AnalyticScene scene = base_scene(pitch_rad);
+    scene.agent_turn_rate = 0.0;
+    SceneObject low_wall = panel(1, 3.0, 0.0, 4.0, {0.0, 0.0});
+    low_wall.height_m = 0.6;
+    SceneObject box = panel(2, 6.0, -2.0, 1.0, {0.0, 0.0});
+    box.height_m = 0.4;
+    SceneObject crossing = panel(3, 6.0, 1.0, 0.3, {0.0, -1.0});
+    crossing.height_m = 0.4;
+    const SceneObject tall = panel(4, 6.0, 2.0, 0.4, {0.0, 0.0});
+    SceneObject waist_high = panel(5, 6.0, -1.0, 0.4, {0.0, 0.0});
+    waist_high.height_m = 0.8;
+    scene.objects = {low_wall, box, crossing, tall, waist_high};
+    SceneRender render = render_scene(scene);
+    // A patch of floor on the right, below the horizon, that the ground test would have missed.
+    constexpr std::int32_t kFloorPatch = 6;
+    const base::CameraIntrinsics& k = scene.intrinsics;
+    const int horizon_row = static_cast<int>(k.cy_px - k.fy_px * std::tan(pitch_rad));
+    for (int row = horizon_row + 15; row < horizon_row + 45; ++row) {
+      for (int col = 180; col < 230; ++col) {
+        const std::size_t i = static_cast<std::size_t>(row * k.width_px + col);
+        if (render.ids[i] == kGroundId) {
+          render.ids[i] = kFloorPatch;
+        }
+      }
+    }
+    FlowField field(scene.intrinsics);
+    std::copy(render.flow.flow().begin(), render.flow.flow().end(), field.flow().begin());
+    Segmentation segmentation;
+    segment_by_ids(render.ids, field.width(), field.height(), {}, segmentation);
+    FeatureOptions options;
+    options.use_depth = false;
+    options.ground_mount = scene.mount;
+    options.static_foe = scene.mount.forward_foe();
+    FeatureExtractor extractor(options);
+    const double forward_speed_mps = scene.agent_speed_mps * std::cos(pitch_rad);
+    const auto objects = extractor.extract(field, segmentation, forward_speed_mps);
+    const ObjectFeatures& seen = object_with_id(objects, 2);
+    ASSERT_TRUE(seen.fit.static_foe) << pitch_rad;
+    ASSERT_TRUE(seen.min_x_depth_m && seen.max_x_depth_m && seen.nearest_depth_m) << pitch_rad;
+    // Seen over the low wall: the box from 0.2 m to 0.4 m up, 0.8 m to 0.6 m below the camera,
+    // whose pitched axis meets it further by that height times the pitch's sine.
+    const double depth_m = 6.0 * std::cos(pitch_rad) + 0.7 * std::sin(pitch_rad);
+    const double tolerance_m = 0.01 * depth_m;
+    EXPECT_NEAR(*seen.min_x_depth_m, depth_m, tolerance_m) << pitch_rad;
+    EXPECT_NEAR(*seen.max_x_depth_m, depth_m, tolerance_m) << pitch_rad;
+    EXPECT_FALSE(seen.depth_m.has_value()) << "the mean depth is not measured";
+    for (const std::int32_t id : {3, 4, 5, kFloorPatch}) {
+      ASSERT_GT(object_with_id(objects, id).pixel_count, 0) << id;
+      EXPECT_FALSE(object_with_id(objects, id).min_x_depth_m.has_value()) << id << " " << pitch_rad;
+    }
+    EXPECT_FALSE(object_with_id(objects, 3).fit.static_foe) << pitch_rad;
+    EXPECT_TRUE(object_with_id(objects, 4).fit.static_foe) << pitch_rad;
+    EXPECT_TRUE(object_with_id(objects, 5).fit.static_foe) << pitch_rad;
+    EXPECT_TRUE(object_with_id(objects, kFloorPatch).fit.static_foe) << pitch_rad;
+    const auto unknown_speed = extractor.extract(field, segmentation);
+    EXPECT_FALSE(object_with_id(unknown_speed, 2).min_x_depth_m.has_value()) << pitch_rad;
+  }
+}
+
 TEST(FeatureExtractor, AnObjectStandingBelowTheImageIsNoFurtherThanTheGroundAtItsLowerEdge) {
   // 1 m ahead of a camera 1 m up whose view reaches 0.75 below the axis: the ground seen at the
   // image's lower edge is 1.33 m away, the object's feet are below the image.

@@ -187,14 +187,25 @@ class FeatureExtractor {
   FeatureExtractor& operator=(FeatureExtractor&&) noexcept;
 
   // Features of every region of `segmentation`, in label order. Throws std::invalid_argument
-  // when the segmentation does not match the field's size.
+  // when the segmentation does not match the field's size. With a camera's depths (a
+  // ground_mount, no depth per pixel) and the camera's forward speed over the flow's interval
+  // (the speed along the optical axis, m/s), a region that stands still (the static FOE) but
+  // shows no ground contact under an end gets its ends' depths from its flow there: a static
+  // point at x closes in at that speed, so its flow is u = (x − f) T_z / Z (CGF Eq. 2,
+  // τ = Z / T_z) and Z = T_z |x − f|² / ((x − f)·u), over the end's columns (McCarthy, Barnes and
+  // Srinivasan, ICRA 2007): a face of a box split from the rest, a box whose foot a nearer object
+  // hides. Only what is lower than the camera and no higher than a knee: someone walking straight
+  // at the camera has the same flow at twice that depth (docs/NAVIGATION.md, "Depth").
   std::span<const ObjectFeatures> extract(const FlowField& derotated,
-                                          const Segmentation& segmentation);
+                                          const Segmentation& segmentation,
+                                          double forward_speed_mps = 0.0);
   // The ground contacts the last extract found (without depth and with a ground_mount only).
   std::span<const GroundContact> contacts() const { return contacts_; }
 
  private:
   struct Accumulator;
+  void depths_from_static_flow(const FlowField& field, std::span<const std::uint32_t> pixels,
+                               double forward_speed_mps, ObjectFeatures& f) const;
   FeatureOptions options_;
   std::vector<Accumulator> accumulators_;
   std::vector<std::vector<std::uint32_t>> region_pixels_;  // valid pixels of each region
