@@ -1035,7 +1035,7 @@ void FeatureExtractor::depths_from_static_flow(const FlowField& field,
     }
     depth_m[end] = *measured_m;
   }
-  // No higher than a knee: no one walking is all below it, a box or a kerb is.
+  // No higher than a knee: a box or a kerb is, someone walking at the camera seen whole is not.
   const base::CameraMount& mount = *options_.ground_mount;
   const double top_height_m =
       mount.height_m - 0.5 * (depth_m[0] + depth_m[1]) *

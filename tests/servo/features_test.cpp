@@ -457,10 +457,11 @@ TEST(FeatureExtractor, ABoxSeenAtItsCornerIsNearestThere) {
   EXPECT_NEAR(*e.features.max_x_depth_m, 4.0, 0.1);
 }
 
-// The features of a scene's objects as a camera sees them: the flow without its depth, the
-// ground's depth where the objects stand on it (FeatureOptions::ground_mount).
-std::vector<ObjectFeatures> seen_by_a_camera(const AnalyticScene& scene) {
-  const SceneRender render = render_scene(scene);
+// The features of a scene's objects as a camera sees them in `render`: the flow without its
+// depth, the ground's depth where the objects stand on it (FeatureOptions::ground_mount), and,
+// given the camera's forward speed, the depth from flow of what stands still.
+std::vector<ObjectFeatures> seen_by_a_camera(const AnalyticScene& scene, const SceneRender& render,
+                                             double forward_speed_mps = 0.0) {
   FlowField field(scene.intrinsics);
   std::copy(render.flow.flow().begin(), render.flow.flow().end(), field.flow().begin());
   Segmentation segmentation;
@@ -468,9 +469,14 @@ std::vector<ObjectFeatures> seen_by_a_camera(const AnalyticScene& scene) {
   FeatureOptions options;
   options.use_depth = false;
   options.ground_mount = scene.mount;
+  options.static_foe = scene.mount.forward_foe();
   FeatureExtractor extractor(options);
-  const auto objects = extractor.extract(field, segmentation);
+  const auto objects = extractor.extract(field, segmentation, forward_speed_mps);
   return {objects.begin(), objects.end()};
+}
+
+std::vector<ObjectFeatures> seen_by_a_camera(const AnalyticScene& scene) {
+  return seen_by_a_camera(scene, render_scene(scene));
 }
 
 const ObjectFeatures& object_with_id(std::span<const ObjectFeatures> objects, std::int32_t id) {
@@ -560,17 +566,8 @@ TEST(FeatureExtractor, ACameraThatKnowsItsSpeedGetsTheDepthOfALowStaticObjectFro
         }
       }
     }
-    FlowField field(scene.intrinsics);
-    std::copy(render.flow.flow().begin(), render.flow.flow().end(), field.flow().begin());
-    Segmentation segmentation;
-    segment_by_ids(render.ids, field.width(), field.height(), {}, segmentation);
-    FeatureOptions options;
-    options.use_depth = false;
-    options.ground_mount = scene.mount;
-    options.static_foe = scene.mount.forward_foe();
-    FeatureExtractor extractor(options);
-    const double forward_speed_mps = scene.agent_speed_mps * std::cos(pitch_rad);
-    const auto objects = extractor.extract(field, segmentation, forward_speed_mps);
+    const std::vector<ObjectFeatures> objects =
+        seen_by_a_camera(scene, render, scene.agent_speed_mps * std::cos(pitch_rad));
     const ObjectFeatures& seen = object_with_id(objects, 2);
     ASSERT_TRUE(seen.fit.static_foe) << pitch_rad;
     ASSERT_TRUE(seen.min_x_depth_m && seen.max_x_depth_m && seen.nearest_depth_m) << pitch_rad;
@@ -589,8 +586,8 @@ TEST(FeatureExtractor, ACameraThatKnowsItsSpeedGetsTheDepthOfALowStaticObjectFro
     EXPECT_TRUE(object_with_id(objects, 4).fit.static_foe) << pitch_rad;
     EXPECT_TRUE(object_with_id(objects, 5).fit.static_foe) << pitch_rad;
     EXPECT_TRUE(object_with_id(objects, kFloorPatch).fit.static_foe) << pitch_rad;
-    const auto unknown_speed = extractor.extract(field, segmentation);
-    EXPECT_FALSE(object_with_id(unknown_speed, 2).min_x_depth_m.has_value()) << pitch_rad;
+    EXPECT_FALSE(object_with_id(seen_by_a_camera(scene, render), 2).min_x_depth_m.has_value())
+        << pitch_rad;
   }
 }
 

@@ -194,8 +194,9 @@ class FeatureExtractor {
   // point at x closes in at that speed, so its flow is u = (x − f) T_z / Z (CGF Eq. 2,
   // τ = Z / T_z) and Z = T_z |x − f|² / ((x − f)·u), over the end's columns (McCarthy, Barnes and
   // Srinivasan, ICRA 2007): a face of a box split from the rest, a box whose foot a nearer object
-  // hides. Only what is lower than the camera and no higher than a knee: someone walking straight
-  // at the camera has the same flow at twice that depth (docs/NAVIGATION.md, "Depth").
+  // hides. Only what is upright (not a patch of floor), lower than the camera and no higher than
+  // a knee: someone walking straight at the camera has the same flow at twice that depth
+  // (docs/NAVIGATION.md, "Depth").
   std::span<const ObjectFeatures> extract(const FlowField& derotated,
                                           const Segmentation& segmentation,
                                           double forward_speed_mps = 0.0);
