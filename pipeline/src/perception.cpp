@@ -189,7 +189,7 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
   objects_ = extractor_.extract(field_, segmentation_,
                                 flow_speed_mps * std::cos(options_.mount.pitch_rad));
   if (memory_) {
-    objects_ = with_remembered(frame.timestamp_s, speed_mps, turn_rate_cy);
+    objects_ = with_remembered(frame.timestamp_s, speed_mps, turn_rate_cy, flow_speed_mps);
   }
   times.features = stage.elapsed_ms();
   return status_;
@@ -197,7 +197,8 @@ servo::FlowStatus Perception::process(const camera_io::Frame& frame, double spee
 
 std::span<const servo::ObjectFeatures> Perception::with_remembered(double timestamp_s,
                                                                    double speed_mps,
-                                                                   double turn_rate_cy) {
+                                                                   double turn_rate_cy,
+                                                                   double flow_speed_mps) {
   const MotionHistory::Motion measured{speed_mps, turn_rate_cy};
   // Carried by what the base measured since the memory last saw a frame, which a frame without
   // flow may have made longer than one frame.
@@ -205,8 +206,6 @@ std::span<const servo::ObjectFeatures> Perception::with_remembered(double timest
   const MotionHistory::Motion moved = motions_->mean(since_s, timestamp_s, measured);
   memory_->carry(moved.speed_mps, moved.turn_rate_cy, timestamp_s - since_s);
   memory_time_s_ = timestamp_s;
-  const double flow_speed_mps =
-      motions_->mean(timestamp_s - field_.interval_s(), timestamp_s, measured).speed_mps;
   memory_->observe({field_, segmentation_, ground_mask_, objects_, extractor_.contacts()},
                    flow_speed_mps, timestamp_s - since_s);
   const auto recalled = memory_->recall(speed_mps);

@@ -55,10 +55,12 @@ class Perception {
   std::span<const std::uint8_t> filled_pixels() const { return untextured_fill_.filled(); }
 
  private:
-  // Carries the memory to this frame, shows it the frame's static obstacles, and returns the
-  // extracted objects with the memory's recalled ones after them.
+  // Carries the memory to this frame, shows it the frame's static obstacles (seen moving at
+  // flow_speed_mps over the flow's interval), and returns the extracted objects with the memory's
+  // recalled ones after them.
   std::span<const servo::ObjectFeatures> with_remembered(double timestamp_s, double speed_mps,
-                                                         double turn_rate_cy);
+                                                         double turn_rate_cy,
+                                                         double flow_speed_mps);
   bool segments_by_grey() const;
 
   PerceptionOptions options_;
