@@ -342,6 +342,11 @@ void set_motion(RadialFit& fit, double inverse_ttc, const Eigen::Vector2d& foe,
 // How far (in columns) a region's leftmost or rightmost ground contact may lie inside its extent
 // and still give that end its depth: a person's silhouette is rounded at the feet.
 constexpr double kContactColumns = 2.0;
+
+// Z² + X² of the point at depth Z seen in normalised column x: what "nearest" compares.
+double squared_range(double depth_m, double x) {
+  return depth_m * depth_m * (1.0 + x * x);
+}
 // Ends' depths from flow (FeatureExtractor::depths_from_static_flow): the columns of an end, the
 // vectors it needs, and how far from the FOE (normalised) its pixels must be on average.
 constexpr double kFlowDepthColumns = 3.0;
@@ -536,8 +541,7 @@ struct FeatureExtractor::Accumulator {
     if (has_depth) {
       ++depth_count;
       sum_depth += depth;
-      if (const double range2 = column_depth * column_depth * (1.0 + x * x);
-          range2 < nearest_range2) {
+      if (const double range2 = squared_range(column_depth, x); range2 < nearest_range2) {
         nearest_range2 = range2;
         nearest_x = x;
         nearest_depth = column_depth;
@@ -571,7 +575,7 @@ struct FeatureExtractor::Accumulator {
       contact_max_x_depth = depth;
       contact_max_x_y = y;
     }
-    if (const double range2 = depth * depth * (1.0 + x * x); range2 < nearest_range2) {
+    if (const double range2 = squared_range(depth, x); range2 < nearest_range2) {
       nearest_range2 = range2;
       nearest_x = x;
       nearest_depth = depth;
@@ -1045,8 +1049,7 @@ void FeatureExtractor::depths_from_static_flow(const FlowField& field,
   }
   f.min_x_depth_m = depth_m[0];
   f.max_x_depth_m = depth_m[1];
-  const bool left_nearer = depth_m[0] * depth_m[0] * (1.0 + f.min_x * f.min_x) <
-                           depth_m[1] * depth_m[1] * (1.0 + f.max_x * f.max_x);
+  const bool left_nearer = squared_range(depth_m[0], f.min_x) < squared_range(depth_m[1], f.max_x);
   f.nearest_x = left_nearer ? f.min_x : f.max_x;
   f.nearest_depth_m = left_nearer ? depth_m[0] : depth_m[1];
 }
