@@ -85,6 +85,28 @@ double distance_to_outline(const Outline& outline, const Eigen::Vector2d& from) 
   return distance_m;
 }
 
+double contact_while_braking_s(const Outline& outline, const Eigen::Vector2d& ground_velocity,
+                               double speed_mps, double decel_mps2, double radius_m, double step_s,
+                               double until_s) {
+  if (!(step_s > 0.0)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  const double stop_s = speed_mps / decel_mps2;
+  Outline moved = outline;
+  for (double t = step_s; t <= until_s; t += step_s) {
+    const double braking_s = std::min(t, stop_s);
+    const double walked_m = speed_mps * braking_s - 0.5 * decel_mps2 * braking_s * braking_s;
+    const Eigen::Vector2d shift = ground_velocity * t - Eigen::Vector2d{0.0, walked_m};
+    for (int i = 0; i < outline.count; ++i) {
+      moved.points[i] = outline.points[i] + shift;
+    }
+    if (distance_to_outline(moved) < radius_m) {
+      return t;
+    }
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
 double distance_to_path_m(const Outline& outline, const Eigen::Vector2d& v, double half_width_m) {
   if (v.x() == 0.0) {
     return std::numeric_limits<double>::infinity();

@@ -3,7 +3,8 @@
 // When an object will touch the agent if both go straight on, from the object's visual features:
 // its outline on the ground and the relative velocity its flow shows. The anticipation term
 // (anticipation_term.cpp) weighs what will touch the agent by this; the clearance term
-// (clearance_terms.cpp) leaves out what will not come near.
+// (clearance_terms.cpp) leaves out what will not come near; the controller's stop check
+// (control.hpp, StopCheck) brakes for what it could not otherwise stop for.
 
 #include <array>
 #include <limits>
@@ -48,6 +49,14 @@ double distance_to_outline(const Outline& outline);
 double distance_to_outline(const Outline& outline, const Eigen::Vector2d& from);
 double distance_to_outline(const Outline& outline, const Eigen::Vector2d& from,
                            const Eigen::Vector2d& to);
+
+// When the outline, moving over the ground at `ground_velocity` (agent frame, m/s), first comes
+// within R of an agent that brakes at decel_mps2 from speed_mps to a stop along its course: the
+// gap checked every step_s up to until_s; infinity if it stays wider until then (or step_s is not
+// positive).
+double contact_while_braking_s(const Outline& outline, const Eigen::Vector2d& ground_velocity,
+                               double speed_mps, double decel_mps2, double radius_m, double step_s,
+                               double until_s);
 
 // How far along the agent's course (its z axis) the band that the outline sweeps, moving over
 // the ground at velocity v (agent frame), begins: the nearest point where a point of the outline

@@ -5,9 +5,11 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "contact_time.hpp"
 #include "cost_term_helpers.hpp"
 #include "flowsteer/servo/dynamics.hpp"
 #include "turn_prediction.hpp"
@@ -385,12 +387,14 @@ NavigationFunction following(const FollowingWeights& w, const PapersOptions& opt
 }
 
 Controller::Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits,
-                       GradientStep gradient_step, const TurnCheck& turn_check)
+                       GradientStep gradient_step, const TurnCheck& turn_check,
+                       const StopCheck& stop_check)
     : navigation_(std::move(navigation)),
       lambda_(lambda),
       limits_(limits),
       gradient_step_(gradient_step),
-      turn_check_(turn_check) {
+      turn_check_(turn_check),
+      stop_check_(stop_check) {
   if (!std::isfinite(lambda) || lambda <= 0.0) {
     throw std::invalid_argument("controller: lambda must be positive, got " +
                                 std::to_string(lambda));
@@ -444,6 +448,115 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
   if (turn_check_.enabled && agent.period_s > 0.0 && out.command.turn_rate != 0.0) {
     out.command.turn_rate = checked_turn_rate(percept, agent, out.command.turn_rate);
   }
+  if (stop_check_.enabled && agent.period_s > 0.0) {
+    check_stop(percept, agent, out.command);
+  }
+}
+
+namespace {
+
+// A moving object's contact with the agent, both going straight on (StopCheck).
+struct StraightContact {
+  detail::Outline outline;
+  Eigen::Vector2d over_ground;  // the object's velocity over the ground, agent frame
+  double radius_m;
+  double time_s;
+};
+
+std::optional<StraightContact> moving_contact(const ObjectFeatures& object, const AgentState& agent,
+                                              const StopCheck& check) {
+  if (object.kind != RegionKind::visible || !object.centre.allFinite() ||
+      detail::stands_still(object, agent, check.depth, check.static_closing_ratio)) {
+    return std::nullopt;
+  }
+  const std::optional<Eigen::Vector2d> velocity =
+      detail::relative_velocity(object, agent, check.depth, check.static_closing_ratio);
+  if (!velocity) {
+    return std::nullopt;
+  }
+  StraightContact c;
+  detail::outline_of(object, agent, check.depth, c.outline);
+  c.over_ground = *velocity + Eigen::Vector2d{0.0, agent.speed_mps};
+  // Already nearer than R (which holds a margin): the contact is its coming nearer still.
+  c.radius_m = std::min(0.5 * detail::kept_width(agent, check.kept_width),
+                        0.99 * detail::distance_to_outline(c.outline));
+  detail::Contact contact;
+  detail::outline_contact(c.outline, *velocity, c.radius_m, contact);
+  c.time_s = contact.time_s;
+  return c;
+}
+
+// The contact's time once the agent has turned by angle_rad (positive: right): the outline and
+// the object's velocity over the ground turn the other way in the agent's frame.
+double contact_after_turn_s(const StraightContact& c, double speed_mps, double angle_rad) {
+  const double cos_a = std::cos(angle_rad);
+  const double sin_a = std::sin(angle_rad);
+  const auto turned = [&](const Eigen::Vector2d& p) {
+    return Eigen::Vector2d{p.x() * cos_a - p.y() * sin_a, p.x() * sin_a + p.y() * cos_a};
+  };
+  detail::Outline outline = c.outline;
+  for (int i = 0; i < outline.count; ++i) {
+    outline.points[i] = turned(c.outline.points[i]);
+  }
+  detail::Contact contact;
+  detail::outline_contact(outline, turned(c.over_ground) - Eigen::Vector2d{0.0, speed_mps},
+                          c.radius_m, contact);
+  return contact.time_s;
+}
+
+}  // namespace
+
+void Controller::check_stop(const Percept& percept, const AgentState& agent,
+                            base::Command& command) const {
+  const double decel_mps2 = limits_.max_accel_mps2;
+  const double stop_s = std::abs(agent.speed_mps) / decel_mps2 + agent.period_s;
+  bool brake = false;
+  bool sooner_than_stop = false;
+  for (const ObjectFeatures& object : percept.objects) {
+    const std::optional<StraightContact> c = moving_contact(object, agent, stop_check_);
+    if (!c || !(c->time_s < stop_s)) {
+      continue;
+    }
+    sooner_than_stop = true;
+    const double braking_s = detail::contact_while_braking_s(
+        c->outline, c->over_ground, std::max(0.0, agent.speed_mps), decel_mps2, c->radius_m,
+        agent.period_s, c->time_s + stop_s);
+    brake = brake || braking_s > c->time_s + agent.period_s;
+  }
+  if (brake) {
+    command.accel_mps2 = -decel_mps2;
+  }
+  if (sooner_than_stop && command.turn_rate != 0.0) {
+    command.turn_rate = turn_putting_contact_off(percept, agent, command.turn_rate, stop_s);
+  }
+}
+
+double Controller::turn_putting_contact_off(const Percept& percept, const AgentState& agent,
+                                            double turn_rate, double stop_s) const {
+  const auto earliest_s = [&](double rate) {
+    double first_s = std::numeric_limits<double>::infinity();
+    for (const ObjectFeatures& object : percept.objects) {
+      const std::optional<StraightContact> c = moving_contact(object, agent, stop_check_);
+      if (c && c->time_s < stop_s) {
+        first_s =
+            std::min(first_s, contact_after_turn_s(*c, agent.speed_mps, rate * agent.period_s));
+      }
+    }
+    return first_s;
+  };
+  double best_rate = turn_rate;
+  double best_s = earliest_s(turn_rate);
+  if (!std::isfinite(best_s)) {
+    return turn_rate;
+  }
+  for (const double rate : {0.0, -turn_rate}) {
+    const double first_s = earliest_s(rate);
+    if (first_s > best_s) {
+      best_s = first_s;
+      best_rate = rate;
+    }
+  }
+  return best_rate;
 }
 
 double Controller::checked_turn_rate(const Percept& percept, const AgentState& agent,

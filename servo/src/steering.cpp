@@ -37,7 +37,7 @@ constexpr std::array<std::pair<NavigationLaw, std::string_view>, 3> kLaws{{
     {NavigationLaw::mig2019, "mig2019"},
 }};
 
-constexpr std::array<std::pair<LawMechanism, std::string_view>, 12> kMechanisms{{
+constexpr std::array<std::pair<LawMechanism, std::string_view>, 13> kMechanisms{{
     {LawMechanism::none, "none"},
     {LawMechanism::braking, "braking"},
     {LawMechanism::anticipation, "anticipation"},
@@ -50,6 +50,7 @@ constexpr std::array<std::pair<LawMechanism, std::string_view>, 12> kMechanisms{
     {LawMechanism::proportional_margin, "proportional_margin"},
     {LawMechanism::static_closing, "static_closing"},
     {LawMechanism::turn_check, "turn_check"},
+    {LawMechanism::stop_check, "stop_check"},
 }};
 
 template <typename Enum, std::size_t N>
@@ -117,6 +118,7 @@ void disable(LawMechanism mechanism, FlowsteerOptions& o) {
     case LawMechanism::speed_limit:
     case LawMechanism::implicit_step:
     case LawMechanism::turn_check:
+    case LawMechanism::stop_check:
       break;
   }
 }
@@ -266,13 +268,20 @@ Controller make_controller(const ControllerConfig& c, double agent_width_m,
         statics.exact_depth && wide_view,
         threats.kept_width,
         threats.static_clearance_m};
+    // Goal reaching only, as the speed limit: a follower keeps its leader's pace.
+    StopCheck stop_check;
+    stop_check.enabled = c.kind == NavigationKind::goal_reaching &&
+                         c.without != LawMechanism::stop_check && statics.exact_depth;
+    stop_check.depth = threats.depth;
+    stop_check.static_closing_ratio = threats.static_closing_ratio;
+    stop_check.kept_width = threats.kept_width;
     return Controller(c.kind == NavigationKind::following
                           ? flowsteer_following(weights, options)
                           : flowsteer_goal_reaching(weights, options),
                       c.lambda, limits,
                       c.without == LawMechanism::implicit_step ? GradientStep::explicit_euler
                                                                : GradientStep::implicit_euler,
-                      turn_check);
+                      turn_check, stop_check);
   }
   const PapersOptions options = papers_terms(c, agent_width_m);
   if (c.kind == NavigationKind::following) {

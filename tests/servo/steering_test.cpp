@@ -59,7 +59,7 @@ TEST(LawMechanism, EveryNameReadsBack) {
     EXPECT_EQ(to_string(*mechanism), name);
     ++count;
   }
-  EXPECT_EQ(count, 12);
+  EXPECT_EQ(count, 13);
   EXPECT_FALSE(parse_law_mechanism("brake"));
 }
 
@@ -115,6 +115,91 @@ TEST(LawMechanism, WithoutTheClosingCheckAnObjectWalkingStraightAtTheAgentIsTake
   EXPECT_EQ(step(without, {person}).turn_rate, step(without, {}).turn_rate);
   EXPECT_EQ(step(without, {person}).accel_mps2, step(without, {}).accel_mps2);
   EXPECT_NE(step({}, {person}).turn_rate, step({}, {}).turn_rate);
+}
+
+// A person 0.4 m wide, its middle `x_m` right of the course and `z_m` ahead, facing the agent,
+// walking over the ground at `ground_velocity` (x right, z forward, m/s), seen by an agent walking
+// at `speed_mps`: the features exact flow and depths give it (CGF Eq. 2–3).
+ObjectFeatures walking_person(double x_m, double z_m, const Eigen::Vector2d& ground_velocity,
+                              double speed_mps) {
+  const Eigen::Vector2d relative = ground_velocity - Eigen::Vector2d{0.0, speed_mps};
+  ObjectFeatures o;
+  o.source_id = 9;
+  o.pixel_count = 100;
+  o.min_x = (x_m - 0.2) / z_m;
+  o.max_x = (x_m + 0.2) / z_m;
+  o.width = o.max_x - o.min_x;
+  o.centre = {x_m / z_m, 0.0};
+  o.min_x_depth_m = z_m;
+  o.max_x_depth_m = z_m;
+  o.depth_m = z_m;
+  o.nearest_x = x_m / z_m;
+  o.nearest_depth_m = z_m;
+  o.status = MotionStatus::approaching;
+  o.foe = {relative.x() / relative.y(), 0.0};
+  o.ttc_s = -z_m / relative.y();
+  return o;
+}
+
+// One step of an agent walking at 1.3 m/s to a goal 20 m straight ahead, with and without the
+// stop check.
+struct StopCheckStep {
+  double checked_mps2;
+  double unchecked_mps2;
+};
+StopCheckStep step_with_person(const ObjectFeatures& person) {
+  const std::vector<ObjectFeatures> objects = {person};
+  const auto accel = [&](LawMechanism mechanism) {
+    Controller controller = make_controller(flowsteer_without(mechanism), 0.6, 1.3);
+    return controller.step({objects, 0.0, 20.0, {}}, {1.3, 0.05}).command.accel_mps2;
+  };
+  return {accel(LawMechanism::none), accel(LawMechanism::stop_check)};
+}
+
+// Someone crossing from the right, 2 m right and 1.5 m ahead, at 1 m/s: going straight on, the
+// agent touches them in about 1.3 s, sooner than it stops from 1.3 m/s (1.35 s with the period);
+// braking, it stops short of their way. The law alone speeds up to pass in front.
+TEST(StopCheck, BrakesAtTheLimitForACrosserItCouldNotOtherwiseStopFor) {
+  const ObjectFeatures crosser = walking_person(2.0, 1.5, {-1.0, 0.0}, 1.3);
+  const StopCheckStep step = step_with_person(crosser);
+  EXPECT_GT(step.unchecked_mps2, 0.0);
+  EXPECT_DOUBLE_EQ(step.checked_mps2, -1.0);
+  // Not where depths are a camera's (numerical flow): there the command is the law's.
+  const std::vector<ObjectFeatures> objects = {crosser};
+  Controller camera = make_controller({}, 0.6, 1.3, {0.5 * std::numbers::pi, false});
+  EXPECT_EQ(camera.step({objects, 0.0, 20.0, {}}, {1.3, 0.05}).command.accel_mps2,
+            step.unchecked_mps2);
+}
+
+// What braking does not put off is left to the terms: someone walking beside the agent, 0.1 m
+// ahead, as fast and 1 m/s towards it, within half the kept width in 0.16 s whether the agent
+// brakes or not; and a crosser whose contact is later than the agent's stop.
+TEST(StopCheck, LeavesContactsThatBrakingDoesNotPutOffToTheTerms) {
+  const StopCheckStep beside = step_with_person(walking_person(0.9, 0.1, {-1.0, 1.35}, 1.3));
+  EXPECT_GT(beside.unchecked_mps2, -1.0);
+  EXPECT_EQ(beside.checked_mps2, beside.unchecked_mps2);
+  const StopCheckStep far = step_with_person(walking_person(4.0, 4.0, {-1.3, 0.0}, 1.3));
+  EXPECT_EQ(far.checked_mps2, far.unchecked_mps2);
+}
+
+// A neighbour 0.8 m right of the course and 0.4 m ahead, drifting in at 0.4 m/s, within half the
+// kept width in about 0.5 s, sooner than the agent stops; and a person standing 3 m ahead. Passed
+// on the right, the person turns the agent towards the neighbour: checked, it turns the other way,
+// which puts the contact off. Passed on the left, the turn already does, and stays.
+TEST(StopCheck, DoesNotTurnTowardsANeighbourItWillTouchSoonerThanItStops) {
+  const ObjectFeatures neighbour = walking_person(0.8, 0.4, {-0.4, 1.25}, 1.3);
+  const auto turn = [&](double left_m, double right_m, LawMechanism mechanism) {
+    const std::vector<ObjectFeatures> objects = {object_3m_ahead(left_m, right_m, 3.0 / 1.3),
+                                                 neighbour};
+    Controller controller = make_controller(flowsteer_without(mechanism), 0.6, 1.3);
+    return controller.step({objects, 0.0, 20.0, {}}, {1.3, 0.05}).command.turn_rate;
+  };
+  const double towards = turn(-0.6, 0.1, LawMechanism::stop_check);
+  EXPECT_GT(towards, 0.0);
+  EXPECT_DOUBLE_EQ(turn(-0.6, 0.1, LawMechanism::none), -towards);
+  const double away = turn(-0.1, 0.6, LawMechanism::stop_check);
+  EXPECT_LT(away, 0.0);
+  EXPECT_DOUBLE_EQ(turn(-0.1, 0.6, LawMechanism::none), away);
 }
 
 // A corridor's wall along the path 0.9 m to the right and a person standing 4 m ahead just left of

@@ -110,10 +110,12 @@ INSTANTIATE_TEST_SUITE_P(Papers, NumericalFlowScenario,
 
 TEST(Scenarios, StreetCarsHitAgentsThatDoNotAvoid) {
   sim_camera::WorldSpec street = builtin_scenario("street");
-  for (auto& a : street.agents) {  // no term that avoids: clearance, braking, anticipation
+  // Nothing that avoids: no clearance, braking or anticipation term, no stop check.
+  for (auto& a : street.agents) {
     a.controller.gamma = 0.0;
     a.controller.braking = 0.0;
     a.controller.anticipation = 0.0;
+    a.controller.without = servo::LawMechanism::stop_check;
   }
   SimOptions options;
   options.resolution = 48;

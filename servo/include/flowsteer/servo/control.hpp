@@ -380,12 +380,32 @@ struct TurnCheck {
   double static_clearance_m = 0.25;
 };
 
+// Whether the command is checked against the contacts it leads to. The gradient weighs a
+// crosser's cost against every other term's: the clearance term's gradient in a_c ("speed up to
+// pass in front") took agents into a crossroads at the speed limit, where they met crossers they
+// could no longer stop for, and the terms turned a walker into the neighbour beside it, out of
+// view until it came within reach (four_way_intersection). Checked (where the percept's depths
+// are exact, StaticPercept in steering.hpp), a moving object (not standing still, stands_still)
+// that would come within half the kept width of the agent, both going straight on
+// (contact_time.hpp), sooner than the agent stops at max_accel_mps2 (one period included):
+// - makes it brake at the limit, where braking puts that contact off;
+// - has the turn checked: of the command's turn, none and the opposite turn, the one after which
+//   the earliest such contact comes latest (the view turned by one period's turn, the objects'
+//   velocities over the ground kept), the command's where none is later.
+struct StopCheck {
+  bool enabled = false;
+  // What the terms take objects' depths and motion from (ThreatOptions).
+  DepthGuess depth;
+  double static_closing_ratio = 1.5;
+  KeptWidth kept_width;
+};
+
 // The gradient update of CGF Eq. 15, a_c = −λ ∂L̇/∂a_c and ω = −λ ∂L̇/∂ω, clamped to the limits.
 class Controller {
  public:
   Controller(NavigationFunction navigation, double lambda, const ControlLimits& limits,
              GradientStep gradient_step = GradientStep::explicit_euler,
-             const TurnCheck& turn_check = {});
+             const TurnCheck& turn_check = {}, const StopCheck& stop_check = {});
 
   // Reuses `out.terms`' storage.
   void step(const Percept& percept, const AgentState& agent, ControlOutput& out);
@@ -393,6 +413,12 @@ class Controller {
 
  private:
   double checked_turn_rate(const Percept& percept, const AgentState& agent, double turn_rate);
+  // The command checked against the contacts it leads to (StopCheck).
+  void check_stop(const Percept& percept, const AgentState& agent, base::Command& command) const;
+  // Of the turn, none and the opposite turn, the one after which the earliest contact sooner
+  // than the stop comes latest; the turn where none is later.
+  double turn_putting_contact_off(const Percept& percept, const AgentState& agent, double turn_rate,
+                                  double stop_s) const;
   // Whether the goal lies beyond one period's turn and the way onto it (TurnCheck) is clear of
   // every object in view, and some of them stand still; fills open_objects_ with the others.
   bool leaves_static_objects_out(const Percept& percept, const AgentState& agent);
@@ -402,6 +428,7 @@ class Controller {
   ControlLimits limits_;
   GradientStep gradient_step_;
   TurnCheck turn_check_;
+  StopCheck stop_check_;
   std::vector<ObjectFeatures> turned_objects_;  // reused by each check
   std::vector<ObjectFeatures> open_objects_;    // the objects that do not stand still
 };
