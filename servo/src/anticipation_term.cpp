@@ -44,26 +44,14 @@ class AnticipationTerm final : public CostTerm {
   std::string_view name() const override { return "anticipation"; }
 
   TermGradient evaluate(const Percept& percept, const AgentState& agent) override {
-    using detail::Contact;
     const double radius_m = 0.5 * detail::kept_width(agent, options_.kept_width);
     TermGradient sum;
     for (const ObjectFeatures& object : percept.objects) {
-      if (object.kind != RegionKind::visible || !object.centre.allFinite()) {
-        continue;
-      }
-      const std::optional<Eigen::Vector2d> velocity =
-          detail::relative_velocity(object, agent, options_.depth, options_.static_closing_ratio);
-      if (!velocity) {
-        continue;
-      }
-      detail::Outline outline;
-      detail::outline_of(object, agent, options_.depth, outline);
-      const double now_m = detail::distance_to_outline(outline);
-      // Already nearer than R (which holds a margin): the contact is its coming nearer still.
-      Contact contact;
-      detail::outline_contact(outline, *velocity, std::min(radius_m, 0.99 * now_m), contact);
-      if (contact.time_s <= options_.horizon_s && !beyond_goal(percept, agent, contact)) {
-        detail::accumulate(sum, gradient(contact, *velocity, agent));
+      const std::optional<detail::StraightOn> s = detail::straight_on(
+          object, agent, options_.depth, options_.static_closing_ratio, radius_m);
+      if (s && s->contact.time_s <= options_.horizon_s &&
+          !beyond_goal(percept, agent, s->contact)) {
+        detail::accumulate(sum, gradient(s->contact, s->velocity, agent));
       }
     }
     return sum;

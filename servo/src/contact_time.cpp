@@ -158,6 +158,25 @@ void outline_of(const ObjectFeatures& object, const AgentState& agent, const Dep
   outline.points[outline.count++] = {object.max_x * right_m, right_m};
 }
 
+std::optional<StraightOn> straight_on(const ObjectFeatures& object, const AgentState& agent,
+                                      const DepthGuess& depth, double static_closing_ratio,
+                                      double radius_m) {
+  if (object.kind != RegionKind::visible || !object.centre.allFinite()) {
+    return std::nullopt;
+  }
+  const std::optional<Eigen::Vector2d> velocity =
+      relative_velocity(object, agent, depth, static_closing_ratio);
+  if (!velocity) {
+    return std::nullopt;
+  }
+  StraightOn s;
+  outline_of(object, agent, depth, s.outline);
+  s.velocity = *velocity;
+  s.radius_m = std::min(radius_m, 0.99 * distance_to_outline(s.outline));
+  outline_contact(s.outline, s.velocity, s.radius_m, s.contact);
+  return s;
+}
+
 void extended_outline_of(const ObjectFeatures& object, const AgentState& agent,
                          const DepthGuess& depth, Outline& outline) {
   // Further than the agent stops from at any speed it walks at.

@@ -77,6 +77,20 @@ std::optional<Eigen::Vector2d> relative_velocity(const ObjectFeatures& object,
 void outline_of(const ObjectFeatures& object, const AgentState& agent, const DepthGuess& depth,
                 Outline& outline);
 
+// What going straight on leads to, for the agent and a visible object: the object's outline, its
+// velocity relative to the agent, R (radius_m, or 0.99 of the distance now where the object is
+// nearer already: the contact is then its coming nearer still, R holding a margin) and the
+// contact. Nothing for an object out of view or without a usable fit.
+struct StraightOn {
+  Outline outline;
+  Eigen::Vector2d velocity;
+  double radius_m;
+  Contact contact;
+};
+std::optional<StraightOn> straight_on(const ObjectFeatures& object, const AgentState& agent,
+                                      const DepthGuess& depth, double static_closing_ratio,
+                                      double radius_m);
+
 // outline_of, with an end the image cuts taken to go on along its segment's line (a wall beside
 // the agent, of which only the part ahead is in view) further than the agent stops from.
 void extended_outline_of(const ObjectFeatures& object, const AgentState& agent,

@@ -455,52 +455,23 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
 
 namespace {
 
-// A moving object's contact with the agent, both going straight on (StopCheck).
-struct StraightContact {
-  detail::Outline outline;
-  Eigen::Vector2d over_ground;  // the object's velocity over the ground, agent frame
-  double radius_m;
-  double time_s;
-};
-
-std::optional<StraightContact> moving_contact(const ObjectFeatures& object, const AgentState& agent,
-                                              const StopCheck& check) {
-  if (object.kind != RegionKind::visible || !object.centre.allFinite() ||
-      detail::stands_still(object, agent, check.depth, check.static_closing_ratio)) {
-    return std::nullopt;
-  }
-  const std::optional<Eigen::Vector2d> velocity =
-      detail::relative_velocity(object, agent, check.depth, check.static_closing_ratio);
-  if (!velocity) {
-    return std::nullopt;
-  }
-  StraightContact c;
-  detail::outline_of(object, agent, check.depth, c.outline);
-  c.over_ground = *velocity + Eigen::Vector2d{0.0, agent.speed_mps};
-  // Already nearer than R (which holds a margin): the contact is its coming nearer still.
-  c.radius_m = std::min(0.5 * detail::kept_width(agent, check.kept_width),
-                        0.99 * detail::distance_to_outline(c.outline));
-  detail::Contact contact;
-  detail::outline_contact(c.outline, *velocity, c.radius_m, contact);
-  c.time_s = contact.time_s;
-  return c;
-}
-
-// The contact's time once the agent has turned by angle_rad (positive: right): the outline and
-// the object's velocity over the ground turn the other way in the agent's frame.
-double contact_after_turn_s(const StraightContact& c, double speed_mps, double angle_rad) {
+// The contact's time once the agent has turned by angle_rad (positive: right) from going straight
+// on towards `s`: the outline and the object's velocity over the ground turn the other way in the
+// agent's frame.
+double contact_after_turn_s(const detail::StraightOn& s, double speed_mps, double angle_rad) {
   const double cos_a = std::cos(angle_rad);
   const double sin_a = std::sin(angle_rad);
   const auto turned = [&](const Eigen::Vector2d& p) {
     return Eigen::Vector2d{p.x() * cos_a - p.y() * sin_a, p.x() * sin_a + p.y() * cos_a};
   };
-  detail::Outline outline = c.outline;
+  detail::Outline outline = s.outline;
   for (int i = 0; i < outline.count; ++i) {
-    outline.points[i] = turned(c.outline.points[i]);
+    outline.points[i] = turned(s.outline.points[i]);
   }
+  const Eigen::Vector2d over_ground = s.velocity + Eigen::Vector2d{0.0, speed_mps};
   detail::Contact contact;
-  detail::outline_contact(outline, turned(c.over_ground) - Eigen::Vector2d{0.0, speed_mps},
-                          c.radius_m, contact);
+  detail::outline_contact(outline, turned(over_ground) - Eigen::Vector2d{0.0, speed_mps},
+                          s.radius_m, contact);
   return contact.time_s;
 }
 
@@ -510,53 +481,45 @@ void Controller::check_stop(const Percept& percept, const AgentState& agent,
                             base::Command& command) const {
   const double decel_mps2 = limits_.max_accel_mps2;
   const double stop_s = std::abs(agent.speed_mps) / decel_mps2 + agent.period_s;
+  const double radius_m = 0.5 * detail::kept_width(agent, stop_check_.kept_width);
+  // The command's turn, none and the opposite turn, and the earliest contact after each.
+  const std::array<double, 3> turn_rates{command.turn_rate, 0.0, -command.turn_rate};
+  std::array<double, 3> earliest_s;
+  earliest_s.fill(std::numeric_limits<double>::infinity());
   bool brake = false;
-  bool sooner_than_stop = false;
   for (const ObjectFeatures& object : percept.objects) {
-    const std::optional<StraightContact> c = moving_contact(object, agent, stop_check_);
-    if (!c || !(c->time_s < stop_s)) {
+    if (detail::stands_still(object, agent, stop_check_.depth, stop_check_.static_closing_ratio)) {
       continue;
     }
-    sooner_than_stop = true;
+    const std::optional<detail::StraightOn> s = detail::straight_on(
+        object, agent, stop_check_.depth, stop_check_.static_closing_ratio, radius_m);
+    if (!s || !(s->contact.time_s < stop_s)) {
+      continue;
+    }
     const double braking_s = detail::contact_while_braking_s(
-        c->outline, c->over_ground, std::max(0.0, agent.speed_mps), decel_mps2, c->radius_m,
-        agent.period_s, c->time_s + stop_s);
-    brake = brake || braking_s > c->time_s + agent.period_s;
+        s->outline, s->velocity + Eigen::Vector2d{0.0, agent.speed_mps},
+        std::max(0.0, agent.speed_mps), decel_mps2, s->radius_m, agent.period_s,
+        s->contact.time_s + stop_s);
+    brake = brake || braking_s > s->contact.time_s + agent.period_s;
+    for (std::size_t k = 0; k < turn_rates.size(); ++k) {
+      earliest_s[k] = std::min(
+          earliest_s[k], contact_after_turn_s(*s, agent.speed_mps, turn_rates[k] * agent.period_s));
+    }
   }
   if (brake) {
     command.accel_mps2 = -decel_mps2;
   }
-  if (sooner_than_stop && command.turn_rate != 0.0) {
-    command.turn_rate = turn_putting_contact_off(percept, agent, command.turn_rate, stop_s);
+  // The command's turn where none is later, or no such contact comes after it.
+  if (command.turn_rate == 0.0 || !std::isfinite(earliest_s[0])) {
+    return;
   }
-}
-
-double Controller::turn_putting_contact_off(const Percept& percept, const AgentState& agent,
-                                            double turn_rate, double stop_s) const {
-  const auto earliest_s = [&](double rate) {
-    double first_s = std::numeric_limits<double>::infinity();
-    for (const ObjectFeatures& object : percept.objects) {
-      const std::optional<StraightContact> c = moving_contact(object, agent, stop_check_);
-      if (c && c->time_s < stop_s) {
-        first_s =
-            std::min(first_s, contact_after_turn_s(*c, agent.speed_mps, rate * agent.period_s));
-      }
-    }
-    return first_s;
-  };
-  double best_rate = turn_rate;
-  double best_s = earliest_s(turn_rate);
-  if (!std::isfinite(best_s)) {
-    return turn_rate;
-  }
-  for (const double rate : {0.0, -turn_rate}) {
-    const double first_s = earliest_s(rate);
-    if (first_s > best_s) {
-      best_s = first_s;
-      best_rate = rate;
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < turn_rates.size(); ++k) {
+    if (earliest_s[k] > earliest_s[best]) {
+      best = k;
     }
   }
-  return best_rate;
+  command.turn_rate = turn_rates[best];
 }
 
 double Controller::checked_turn_rate(const Percept& percept, const AgentState& agent,

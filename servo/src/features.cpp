@@ -347,6 +347,7 @@ constexpr double kContactColumns = 2.0;
 double squared_range(double depth_m, double x) {
   return depth_m * depth_m * (1.0 + x * x);
 }
+
 // Ends' depths from flow (FeatureExtractor::depths_from_static_flow): the columns of an end, the
 // vectors it needs, and how far from the FOE (normalised) its pixels must be on average.
 constexpr double kFlowDepthColumns = 3.0;

@@ -415,10 +415,6 @@ class Controller {
   double checked_turn_rate(const Percept& percept, const AgentState& agent, double turn_rate);
   // The command checked against the contacts it leads to (StopCheck).
   void check_stop(const Percept& percept, const AgentState& agent, base::Command& command) const;
-  // Of the turn, none and the opposite turn, the one after which the earliest contact sooner
-  // than the stop comes latest; the turn where none is later.
-  double turn_putting_contact_off(const Percept& percept, const AgentState& agent, double turn_rate,
-                                  double stop_s) const;
   // Whether the goal lies beyond one period's turn and the way onto it (TurnCheck) is clear of
   // every object in view, and some of them stand still; fills open_objects_ with the others.
   bool leaves_static_objects_out(const Percept& percept, const AgentState& agent);
