@@ -440,7 +440,9 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
   }
   double accel_mps2 = out.unclamped.accel_mps2;
   if (agent.period_s > 0.0) {
-    accel_mps2 = std::min(accel_mps2, (limits_.max_speed_mps - agent.speed_mps) / agent.period_s);
+    const double max_speed_mps =
+        std::min(limits_.max_speed_mps, speed_to_turn_round_mps(percept, agent));
+    accel_mps2 = std::min(accel_mps2, (max_speed_mps - agent.speed_mps) / agent.period_s);
   }
   out.command = {
       std::clamp(accel_mps2, -limits_.max_accel_mps2, limits_.max_accel_mps2),
@@ -524,6 +526,10 @@ void Controller::check_stop(const Percept& percept, const AgentState& agent,
 
 double Controller::checked_turn_rate(const Percept& percept, const AgentState& agent,
                                      double turn_rate) {
+  if (goal_is_behind(percept) && !way_round_blocked_ &&
+      way_onto_goal_behind_is_clear(percept, agent, agent.speed_mps)) {
+    return (*percept.goal_bearing_rad > 0.0 ? 1.0 : -1.0) * limits_.max_turn_rate;
+  }
   constexpr std::array kFractions{1.0, 0.5, 0.25, 0.125};
   double best_rate = turn_rate;
   double best_cost = std::numeric_limits<double>::infinity();
@@ -557,6 +563,42 @@ double Controller::checked_turn_rate(const Percept& percept, const AgentState& a
     weigh(open, fraction * goal_side * limits_.max_turn_rate);
   }
   return best_rate;
+}
+
+bool Controller::goal_is_behind(const Percept& percept) const {
+  return turn_check_.enabled && turn_check_.way_onto_goal && percept.goal_bearing_rad &&
+         percept.goal_distance_m && std::abs(*percept.goal_bearing_rad) > 0.5 * std::numbers::pi;
+}
+
+bool Controller::way_onto_goal_behind_is_clear(const Percept& percept, const AgentState& agent,
+                                               double speed_mps) const {
+  AgentState at = agent;
+  at.speed_mps = speed_mps;
+  const double goal_side = *percept.goal_bearing_rad > 0.0 ? 1.0 : -1.0;
+  return detail::way_onto_goal_is_clear(percept, at, goal_side * limits_.max_turn_rate,
+                                        turn_check_.depth, turn_check_.static_closing_ratio,
+                                        0.5 * detail::kept_width(agent, turn_check_.kept_width));
+}
+
+double Controller::speed_to_turn_round_mps(const Percept& percept, const AgentState& agent) {
+  constexpr double kAny = std::numeric_limits<double>::infinity();
+  if (!goal_is_behind(percept)) {
+    way_round_blocked_ = false;
+    return kAny;
+  }
+  const double speed_mps = std::max(0.0, agent.speed_mps);
+  if (way_round_blocked_ ||
+      way_onto_goal_behind_is_clear(percept, agent,
+                                    speed_mps + limits_.max_accel_mps2 * agent.period_s)) {
+    return kAny;
+  }
+  for (const double fraction : {1.0, 0.5, 0.25, 0.125, 0.0}) {
+    if (way_onto_goal_behind_is_clear(percept, agent, fraction * speed_mps)) {
+      return fraction * speed_mps;
+    }
+  }
+  way_round_blocked_ = true;
+  return kAny;
 }
 
 bool Controller::leaves_static_objects_out(const Percept& percept, const AgentState& agent) {

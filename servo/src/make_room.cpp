@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "contact_time.hpp"
 #include "cost_term_helpers.hpp"
 
 namespace flowsteer::servo {
@@ -20,6 +21,8 @@ constexpr double kAsideReachedM = 0.3;
 constexpr double kGoalInViewRad = 1.4;
 // How many comers it remembers; the oldest is forgotten first.
 constexpr std::size_t kComers = 16;
+// As ThreatOptions::static_closing_ratio: what the law takes for standing still.
+constexpr double kStaticClosingRatio = 1.5;
 
 // Bearing (positive right) and distance of `point` from a pose (x forward, y left, yaw
 // counter-clockwise).
@@ -129,8 +132,9 @@ void MakeRoom::set_mode(Mode mode) {
 
 base::Command MakeRoom::approach(const Percept& percept, const AgentState& agent,
                                  const base::Command& command, double goal_radius_m) const {
-  if (!percept.goal_distance_m || *percept.goal_distance_m > options_.wait_range_m ||
-      !goal_taken(percept, goal_radius_m)) {
+  if (!percept.goal_distance_m || !percept.goal_bearing_rad ||
+      *percept.goal_distance_m > options_.wait_range_m ||
+      !(goal_taken(percept, goal_radius_m) || goal_contested(percept, agent))) {
     return command;
   }
   const bool crowded =
@@ -210,6 +214,32 @@ bool MakeRoom::goal_taken(const Percept& percept, double goal_radius_m) const {
     const std::optional<double> depth_m = depth_at_column(o, goal_x);
     if (depth_m && *depth_m < goal_m &&
         *depth_m >= goal_m - goal_radius_m - options_.agent_width_m) {
+      return true;
+    }
+  }
+  return false;
+}
+
+bool MakeRoom::goal_contested(const Percept& percept, const AgentState& agent) const {
+  const double goal_m = *percept.goal_distance_m;
+  const Eigen::Vector2d goal = goal_m * Eigen::Vector2d(std::sin(*percept.goal_bearing_rad),
+                                                        std::cos(*percept.goal_bearing_rad));
+  for (const ObjectFeatures& o : percept.objects) {
+    const std::optional<double> depth_m = object_depth(o);
+    if (o.kind != RegionKind::visible || !depth_m || !o.centre.allFinite()) {
+      continue;
+    }
+    // Its near side where the image shows it; its centre half a body further on.
+    const Eigen::Vector2d near = *depth_m * Eigen::Vector2d(o.centre.x(), 1.0);
+    const Eigen::Vector2d centre = near + 0.5 * options_.agent_width_m * near.normalized();
+    const Eigen::Vector2d to_goal = goal - centre;
+    if (!(to_goal.norm() < goal_m)) {
+      continue;
+    }
+    const std::optional<Eigen::Vector2d> relative =
+        detail::relative_velocity(o, agent, DepthGuess{}, kStaticClosingRatio);
+    if (relative && (*relative + Eigen::Vector2d(0.0, agent.speed_mps)).dot(to_goal.normalized()) >
+                        options_.wait_speed_mps) {
       return true;
     }
   }

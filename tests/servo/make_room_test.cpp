@@ -172,6 +172,42 @@ TEST(MakeRoom, OnItsWayItWaitsItsTurnAtATakenGoal) {
             0.0);
 }
 
+// Someone walking at ground_mps (x right, z ahead), its near side 1 m ahead at image column 0.9.
+ObjectFeatures walker(const Eigen::Vector2d& ground_mps, double agent_speed_mps) {
+  ObjectFeatures o = body(7, 0.9, 1.0, INFINITY);
+  const Eigen::Vector2d relative = ground_mps - Eigen::Vector2d(0.0, agent_speed_mps);
+  o.status = relative.y() < 0.0 ? MotionStatus::approaching : MotionStatus::receding;
+  o.ttc_s = -*o.depth_m / relative.y();
+  o.foe = {relative.x() / relative.y(), 0.0};
+  return o;
+}
+
+// Six walking to one point closed into a ring round it, each held by the two beside it, and none
+// arrived (converge_six at 120² and 160²). One nearer the goal and walking to it gets there first:
+// the agent waits its turn as at a taken goal.
+TEST(MakeRoom, OnItsWayItLetsOneNearerItsGoalWalkingThereGoFirst) {
+  const MakeRoom room;
+  const base::Command law{0.8, -1.5};
+  constexpr double kSpeed = 0.5;
+  const double goal_bearing = 0.3;  // 1.8 m away: 0.8 m from the walker's centre, left of it
+  const std::vector<ObjectFeatures> to_goal = {walker({-0.7, 0.7}, kSpeed)};
+  const base::Command waiting =
+      room.approach(percept_of(to_goal, goal_bearing, 1.8), {kSpeed, kStep}, law, kGoalRadius);
+  EXPECT_LT(waiting.accel_mps2, 0.0);  // down to wait_speed_mps
+  EXPECT_GT(waiting.turn_rate, 0.0);   // to the goal, on the right
+  // Walking away from the goal, standing beside it, walking to it from further than the agent, or
+  // the goal further than wait_range_m: the law's.
+  const std::vector<ObjectFeatures> away = {walker({0.7, -0.7}, kSpeed)};
+  const std::vector<ObjectFeatures> standing = {walker({0.0, 0.0}, kSpeed)};
+  for (const auto& [objects, distance_m] :
+       {std::pair{away, 1.8}, {standing, 1.8}, {to_goal, 0.6}, {to_goal, 2.5}}) {
+    const base::Command command = room.approach(percept_of(objects, goal_bearing, distance_m),
+                                                {kSpeed, kStep}, law, kGoalRadius);
+    EXPECT_EQ(command.accel_mps2, law.accel_mps2) << distance_m;
+    EXPECT_EQ(command.turn_rate, law.turn_rate) << distance_m;
+  }
+}
+
 TEST(MakeRoom, OptionsOutOfRangeAreRefused) {
   EXPECT_THROW(MakeRoom({.warn_s = 0.0}), std::invalid_argument);
   EXPECT_THROW(MakeRoom({.step_aside_m = 0.2}), std::invalid_argument);

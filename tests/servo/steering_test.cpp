@@ -333,30 +333,33 @@ struct Arrival {
   double clearance_m = std::numeric_limits<double>::infinity();      // from any wall, body to wall
 };
 
-// An agent of 0.6 m walking at kSpeed with walls (static, seen by a 150° camera) towards a goal,
-// for `steps` steps of 0.05 s.
+// An agent of 0.6 m setting off at kSpeed from `start` with walls (static, seen by a 150° camera)
+// towards a goal, for `steps` steps of 0.05 s, its speed following the command.
 Arrival walk_to(const ControllerConfig& config, const std::vector<StaticSegment>& walls,
-                const Eigen::Vector2d& goal, int steps, const StaticPercept& statics = {}) {
+                const Eigen::Vector2d& goal, int steps, const StaticPercept& statics = {},
+                const Pose& start = {}) {
   constexpr double kSpeed = 1.2;
   constexpr double kPeriod = 0.05;
   Controller controller = make_controller(config, 0.6, kSpeed, statics);
-  Pose pose;
+  Pose pose = start;
+  double speed_mps = kSpeed;
   Arrival arrival;
   std::vector<ObjectFeatures> objects;
   ControlOutput out;
   for (int step = 0; step < steps && arrival.goal_distance_m > 0.3; ++step) {
     objects.clear();
     for (const StaticSegment& wall : walls) {
-      if (const std::optional<ObjectFeatures> o = seen(wall, pose, kSpeed)) {
+      if (const std::optional<ObjectFeatures> o = seen(wall, pose, speed_mps)) {
         objects.push_back(*o);
       }
     }
     const Eigen::Vector2d to_goal = pose.to_agent(goal);
     controller.step({objects, std::atan2(to_goal.x(), to_goal.y()), to_goal.norm(), {}},
-                    {kSpeed, kPeriod}, out);
+                    {speed_mps, kPeriod}, out);
+    speed_mps = std::max(0.0, speed_mps + out.command.accel_mps2 * kPeriod);
     pose.heading_rad += out.command.turn_rate * kPeriod;
-    pose.position +=
-        kSpeed * kPeriod * Eigen::Vector2d{std::sin(pose.heading_rad), std::cos(pose.heading_rad)};
+    pose.position += speed_mps * kPeriod *
+                     Eigen::Vector2d{std::sin(pose.heading_rad), std::cos(pose.heading_rad)};
     arrival.goal_distance_m = std::min(arrival.goal_distance_m, (goal - pose.position).norm());
     for (const StaticSegment& wall : walls) {
       const Eigen::Vector2d along = wall.b - wall.a;
@@ -408,6 +411,29 @@ TEST(TurnCheck, KeepsOffAWallWithTheGoalBehindIt) {
   config.max_turn_rate = 1.5;
   const Arrival arrival = walk_to(config, {{1, {0.9, -2.0}, {0.9, 14.0}}}, {3.0, 5.0}, 100);
   EXPECT_GT(arrival.clearance_m, 0.0);
+}
+
+// The goal 4 m behind the agent in a corridor of plain walls 2.4 or 2 m wide: every turn onto it
+// at walking pace crosses a wall, the check weighed each against that wall's cost and kept an
+// eighth of it, and the agent walked away from its goal. It slows until the way round is clear
+// and turns round within the corridor; the way onto the goal is judged only where the percept
+// holds the walls beside the agent.
+TEST(TurnCheck, TurnsRoundInACorridorForAGoalBehind) {
+  ControllerConfig config;
+  for (const double width_m : {2.4, 2.0}) {
+    const std::vector<StaticSegment> corridor = {
+        {1, {0.5 * width_m, -20.0}, {0.5 * width_m, 20.0}},
+        {2, {-0.5 * width_m, -20.0}, {-0.5 * width_m, 20.0}}};
+    const Eigen::Vector2d goal{0.0, -4.0};
+    const Pose start{{0.1, 0.0}, 0.0};
+    const Arrival arrival = walk_to(config, corridor, goal, 400, {}, start);
+    EXPECT_LE(arrival.goal_distance_m, 0.3) << width_m << " m";
+    EXPECT_GT(arrival.clearance_m, 0.0) << width_m << " m";
+    EXPECT_GT(walk_to(config, corridor, goal, 400, {0.5 * std::numbers::pi, false}, start)
+                  .goal_distance_m,
+              1.0)
+        << width_m << " m";
+  }
 }
 
 }  // namespace

@@ -365,6 +365,15 @@ enum class GradientStep {
 // view clear, the objects that stand still are left out of the check (the way passes them clear,
 // though the course now crosses them), and turns towards the goal, at the limit or its half,
 // quarter or eighth, compete with the checked one.
+// A goal behind the agent (beyond a quarter turn) only falls further behind as the agent walks on,
+// and in a corridor every turn onto it at walking pace crosses a wall: the check weighed each turn
+// against that wall's cost, kept an eighth of it, and the agent walked away from its goal for good.
+// So where the way onto a goal behind keeps half the kept width from every object (contact, not
+// the clearance cost's reach: the terms do not steer this turn), the agent turns onto it at the
+// limit; where it does not, but would at the present speed's half, quarter, eighth or at rest, the
+// agent slows to the fastest such speed and turns round within the corridor. Where no speed makes
+// the way clear (a wall between the agent and its goal) the terms steer, as before, until the goal
+// is no longer behind.
 struct TurnCheck {
   bool enabled = false;
   // What the terms take objects' depths and motion from (ThreatOptions), for the prediction.
@@ -418,6 +427,15 @@ class Controller {
   // Whether the goal lies beyond one period's turn and the way onto it (TurnCheck) is clear of
   // every object in view, and some of them stand still; fills open_objects_ with the others.
   bool leaves_static_objects_out(const Percept& percept, const AgentState& agent);
+  // Whether the way onto the goal is judged and the goal lies beyond a quarter turn.
+  bool goal_is_behind(const Percept& percept) const;
+  // Whether the way onto a goal behind, at speed_mps, keeps half the kept width from every object.
+  bool way_onto_goal_behind_is_clear(const Percept& percept, const AgentState& agent,
+                                     double speed_mps) const;
+  // The fastest speed at which the way onto a goal behind is clear, where the present speed and
+  // one period's acceleration past it are not; infinity where no speed is limited so. Where no
+  // speed makes it clear, sets way_round_blocked_; clears it once the goal is not behind.
+  double speed_to_turn_round_mps(const Percept& percept, const AgentState& agent);
 
   NavigationFunction navigation_;
   double lambda_;
@@ -427,6 +445,10 @@ class Controller {
   StopCheck stop_check_;
   std::vector<ObjectFeatures> turned_objects_;  // reused by each check
   std::vector<ObjectFeatures> open_objects_;    // the objects that do not stand still
+  // The way onto the goal behind was seen blocked at every speed: the terms steer until the goal
+  // is no longer behind. Turning onto it had brought the wall between into view, turning away took
+  // it out again, and the agent turned to and fro at rest in a dead end (u_dead_end_inside).
+  bool way_round_blocked_ = false;
 };
 
 }  // namespace flowsteer::servo

@@ -35,9 +35,10 @@ struct MakeRoomOptions {
   double face_turn_rate = 0.6;   // rad/s, at most, while it waits aside facing its goal
   double agent_width_m = 0.5;    // its own width
   double stop_decel_mps2 = 1.0;  // how it stops
-  // On its way: within this of its goal and with the goal taken, it waits its turn, facing the
-  // goal and edging in no faster than wait_speed_mps while nothing in view is nearer than
-  // wait_gap_m, instead of going round and round it.
+  // On its way: within this of its goal and with the goal taken, or someone nearer it walking
+  // there faster than wait_speed_mps, it waits its turn, facing the goal and edging in no faster
+  // than wait_speed_mps while nothing in view is nearer than wait_gap_m, instead of going round
+  // and round it, or closing with the others into a ring round it that none can leave.
   double wait_range_m = 2.0;
   double wait_speed_mps = 0.2;
   double wait_gap_m = 0.25;  // it edges in only while everything in view is further than this
@@ -82,6 +83,9 @@ class MakeRoom {
   const ObjectFeatures* coming_at(const Percept& percept);
   // Whether something stands on the goal's circle, on the near side of its centre, in view.
   bool goal_taken(const Percept& percept, double goal_radius_m) const;
+  // Whether someone in view, nearer the goal than the agent, walks towards it faster than
+  // wait_speed_mps: it gets there first.
+  bool goal_contested(const Percept& percept, const AgentState& agent) const;
   void start_giving_way(const ObjectFeatures& comer);
   // Notes that `id` comes at it now; `known`: its entry, or end() for a new one.
   void remember(std::int32_t id, std::vector<Comer>::iterator known);
