@@ -439,16 +439,19 @@ void Controller::step(const Percept& percept, const AgentState& agent, ControlOu
     throw std::domain_error("controller: the command is not finite");
   }
   double accel_mps2 = out.unclamped.accel_mps2;
+  TurnRound round;
   if (agent.period_s > 0.0) {
-    const double max_speed_mps =
-        std::min(limits_.max_speed_mps, speed_to_turn_round_mps(percept, agent));
+    round = turn_round(percept, agent);
+    const double max_speed_mps = std::min(limits_.max_speed_mps, round.max_speed_mps);
     accel_mps2 = std::min(accel_mps2, (max_speed_mps - agent.speed_mps) / agent.period_s);
   }
   out.command = {
       std::clamp(accel_mps2, -limits_.max_accel_mps2, limits_.max_accel_mps2),
       std::clamp(out.unclamped.turn_rate, -limits_.max_turn_rate, limits_.max_turn_rate)};
   if (turn_check_.enabled && agent.period_s > 0.0 && out.command.turn_rate != 0.0) {
-    out.command.turn_rate = checked_turn_rate(percept, agent, out.command.turn_rate);
+    out.command.turn_rate =
+        round.at_limit ? (*percept.goal_bearing_rad > 0.0 ? 1.0 : -1.0) * limits_.max_turn_rate
+                       : checked_turn_rate(percept, agent, out.command.turn_rate);
   }
   if (stop_check_.enabled && agent.period_s > 0.0) {
     check_stop(percept, agent, out.command);
@@ -461,18 +464,13 @@ namespace {
 // on towards `s`: the outline and the object's velocity over the ground turn the other way in the
 // agent's frame.
 double contact_after_turn_s(const detail::StraightOn& s, double speed_mps, double angle_rad) {
-  const double cos_a = std::cos(angle_rad);
-  const double sin_a = std::sin(angle_rad);
-  const auto turned = [&](const Eigen::Vector2d& p) {
-    return Eigen::Vector2d{p.x() * cos_a - p.y() * sin_a, p.x() * sin_a + p.y() * cos_a};
-  };
   detail::Outline outline = s.outline;
   for (int i = 0; i < outline.count; ++i) {
-    outline.points[i] = turned(s.outline.points[i]);
+    outline.points[i] = detail::seen_after_turn(s.outline.points[i], angle_rad);
   }
-  const Eigen::Vector2d over_ground = s.velocity + Eigen::Vector2d{0.0, speed_mps};
+  const Eigen::Vector2d own{0.0, speed_mps};
   detail::Contact contact;
-  detail::outline_contact(outline, turned(over_ground) - Eigen::Vector2d{0.0, speed_mps},
+  detail::outline_contact(outline, detail::seen_after_turn(s.velocity + own, angle_rad) - own,
                           s.radius_m, contact);
   return contact.time_s;
 }
@@ -526,10 +524,6 @@ void Controller::check_stop(const Percept& percept, const AgentState& agent,
 
 double Controller::checked_turn_rate(const Percept& percept, const AgentState& agent,
                                      double turn_rate) {
-  if (goal_is_behind(percept) && !way_round_blocked_ &&
-      way_onto_goal_behind_is_clear(percept, agent, agent.speed_mps)) {
-    return (*percept.goal_bearing_rad > 0.0 ? 1.0 : -1.0) * limits_.max_turn_rate;
-  }
   constexpr std::array kFractions{1.0, 0.5, 0.25, 0.125};
   double best_rate = turn_rate;
   double best_cost = std::numeric_limits<double>::infinity();
@@ -580,25 +574,30 @@ bool Controller::way_onto_goal_behind_is_clear(const Percept& percept, const Age
                                         0.5 * detail::kept_width(agent, turn_check_.kept_width));
 }
 
-double Controller::speed_to_turn_round_mps(const Percept& percept, const AgentState& agent) {
-  constexpr double kAny = std::numeric_limits<double>::infinity();
+Controller::TurnRound Controller::turn_round(const Percept& percept, const AgentState& agent) {
   if (!goal_is_behind(percept)) {
     way_round_blocked_ = false;
-    return kAny;
+    return {};
+  }
+  if (way_round_blocked_) {
+    return {};
   }
   const double speed_mps = std::max(0.0, agent.speed_mps);
-  if (way_round_blocked_ ||
-      way_onto_goal_behind_is_clear(percept, agent,
+  const bool clear_now = way_onto_goal_behind_is_clear(percept, agent, speed_mps);
+  if (way_onto_goal_behind_is_clear(percept, agent,
                                     speed_mps + limits_.max_accel_mps2 * agent.period_s)) {
-    return kAny;
+    return {.at_limit = clear_now};
   }
-  for (const double fraction : {1.0, 0.5, 0.25, 0.125, 0.0}) {
+  if (clear_now) {
+    return {.max_speed_mps = speed_mps, .at_limit = true};
+  }
+  for (const double fraction : {0.5, 0.25, 0.125, 0.0}) {
     if (way_onto_goal_behind_is_clear(percept, agent, fraction * speed_mps)) {
-      return fraction * speed_mps;
+      return {.max_speed_mps = fraction * speed_mps};
     }
   }
   way_round_blocked_ = true;
-  return kAny;
+  return {};
 }
 
 bool Controller::leaves_static_objects_out(const Percept& percept, const AgentState& agent) {

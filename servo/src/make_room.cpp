@@ -21,8 +21,6 @@ constexpr double kAsideReachedM = 0.3;
 constexpr double kGoalInViewRad = 1.4;
 // How many comers it remembers; the oldest is forgotten first.
 constexpr std::size_t kComers = 16;
-// As ThreatOptions::static_closing_ratio: what the law takes for standing still.
-constexpr double kStaticClosingRatio = 1.5;
 
 // Bearing (positive right) and distance of `point` from a pose (x forward, y left, yaw
 // counter-clockwise).
@@ -237,7 +235,7 @@ bool MakeRoom::goal_contested(const Percept& percept, const AgentState& agent) c
       continue;
     }
     const std::optional<Eigen::Vector2d> relative =
-        detail::relative_velocity(o, agent, DepthGuess{}, kStaticClosingRatio);
+        detail::relative_velocity(o, agent, DepthGuess{}, ThreatOptions{}.static_closing_ratio);
     if (relative && (*relative + Eigen::Vector2d(0.0, agent.speed_mps)).dot(to_goal.normalized()) >
                         options_.wait_speed_mps) {
       return true;

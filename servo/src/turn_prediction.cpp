@@ -20,14 +20,6 @@ constexpr double kPathStepRad = 0.05;
 // Beyond this bearing a column has no image coordinate worth keeping (tan grows without bound).
 constexpr double kMaxBearingRad = 0.49 * std::numbers::pi;
 
-// A direction at bearing β (x = sin β right, z = cos β forward) seen from a frame turned right
-// by turn_rad: bearing β − turn_rad.
-Eigen::Vector2d turned(const Eigen::Vector2d& v, double turn_rad) {
-  const double c = std::cos(turn_rad);
-  const double s = std::sin(turn_rad);
-  return {v.x() * c - v.y() * s, v.y() * c + v.x() * s};
-}
-
 // Image column x after the turn, and the factor by which the depth along the optical axis of a
 // point on that column changes (Z = r cos β).
 struct Column {
@@ -61,7 +53,7 @@ void turn_motion(ObjectFeatures& object, const ObjectFeatures& before, const Age
     return;
   }
   const Eigen::Vector2d own{0.0, agent.speed_mps};
-  const Eigen::Vector2d after = turned(*relative + own, turn_rad) - own;
+  const Eigen::Vector2d after = seen_after_turn(*relative + own, turn_rad) - own;
   if (!(after.y() < 0.0)) {
     object.status = MotionStatus::receding;
     object.ttc_s = std::numeric_limits<double>::infinity();
@@ -72,6 +64,12 @@ void turn_motion(ObjectFeatures& object, const ObjectFeatures& before, const Age
 }
 
 }  // namespace
+
+Eigen::Vector2d seen_after_turn(const Eigen::Vector2d& v, double turn_rad) {
+  const double c = std::cos(turn_rad);
+  const double s = std::sin(turn_rad);
+  return {v.x() * c - v.y() * s, v.y() * c + v.x() * s};
+}
 
 void percept_after_turn(const Percept& now, const AgentState& agent, double turn_rad,
                         const DepthGuess& depth, double static_closing_ratio,

@@ -5,9 +5,15 @@
 
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "flowsteer/servo/control.hpp"
 
 namespace flowsteer::servo::detail {
+
+// A point or direction in the agent's frame (x right, z forward) seen from the frame turned right
+// by turn_rad: at bearing β − turn_rad.
+Eigen::Vector2d seen_after_turn(const Eigen::Vector2d& v, double turn_rad);
 
 // `now` as seen after the camera turns by turn_rad (positive right) about its y axis: every
 // object's image columns and depths rotated with it, its FOE and τ from its relative velocity

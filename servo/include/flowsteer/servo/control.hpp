@@ -432,10 +432,16 @@ class Controller {
   // Whether the way onto a goal behind, at speed_mps, keeps half the kept width from every object.
   bool way_onto_goal_behind_is_clear(const Percept& percept, const AgentState& agent,
                                      double speed_mps) const;
-  // The fastest speed at which the way onto a goal behind is clear, where the present speed and
-  // one period's acceleration past it are not; infinity where no speed is limited so. Where no
-  // speed makes it clear, sets way_round_blocked_; clears it once the goal is not behind.
-  double speed_to_turn_round_mps(const Percept& percept, const AgentState& agent);
+  // What turning round for a goal behind asks of this step (TurnCheck).
+  struct TurnRound {
+    // The fastest speed at which the way onto the goal is clear, where the present speed and one
+    // period's acceleration past it are not; infinity where no speed is limited so.
+    double max_speed_mps = std::numeric_limits<double>::infinity();
+    bool at_limit = false;  // the way is clear at the present speed: turn onto it at the limit
+  };
+  // Where no speed makes the way clear, sets way_round_blocked_; clears it once the goal is not
+  // behind.
+  TurnRound turn_round(const Percept& percept, const AgentState& agent);
 
   NavigationFunction navigation_;
   double lambda_;
