@@ -376,8 +376,13 @@ ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
                                std::to_string(buffer.index) + " of " +
                                std::to_string(buffers_.size()));
     }
-    dropped_frames_ += skipped_frames(last_driver_sequence_, buffer.sequence);
     const bool corrupt = (buffer.flags & V4L2_BUF_FLAG_ERROR) != 0;
+    // A corrupt buffer counts as dropped by the gap it leaves before the next frame, not by
+    // itself: after a stall a driver may fill two buffers within one frame period under one
+    // sequence number (vivid does), and the frame after a corrupt one was then counted twice.
+    if (!corrupt) {
+      dropped_frames_ += skipped_frames(last_driver_sequence_, buffer.sequence);
+    }
     // Read before VIDIOC_QBUF, which writes the buffer's new state into the same struct.
     const bool monotonic =
         (buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
@@ -394,7 +399,6 @@ ReadStatus V4l2Camera::read(Frame& frame, double timeout_s) {
     // The frame is converted into the camera's own image, so the buffer goes back at once.
     checked_ioctl(fd_.get(), VIDIOC_QBUF, &buffer, "VIDIOC_QBUF", device_);
     if (corrupt) {
-      ++dropped_frames_;
       continue;
     }
     frame.timestamp_s = frame_time_s(monotonic, stamped_s, dequeued_s);

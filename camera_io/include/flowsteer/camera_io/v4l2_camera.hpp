@@ -74,8 +74,8 @@ class V4l2Camera final : public FrameSource {
   // release fails (the device is closed either way).
   void stop();
 
-  // Frames the driver skipped, from gaps in its buffer sequence numbers, plus buffers it
-  // returned flagged as corrupt.
+  // Frames the driver skipped or returned flagged as corrupt, from the gaps in the sequence
+  // numbers of the frames read (a corrupt buffer at the end of the stream is not counted).
   std::uint64_t dropped_frames() const { return dropped_frames_; }
   // The driver's sequence number of the last frame read (gaps are dropped frames).
   std::uint32_t driver_sequence() const { return last_driver_sequence_.value_or(0); }
