@@ -150,9 +150,10 @@ NavigationWeights navigation_weights(const ControllerConfig& config);
 // suite at three sizes; with the obstacle memory, which keeps only what stands still, people
 // converging on one goal touched 15 times against 6). Its stop check (StopCheck) predicts
 // contacts from each object's ends, τ and FOE, which numerical flow gives with errors of tens of
-// percent: it runs only where depths are exact (a variant of it run with dis_medium and flow
-// segmentation over the suite at three sizes gave 157 contacts, 38 with obstacles, against 137 and
-// 32 without it; docs/NAVIGATION.md, "Control update").
+// percent: it runs only where depths are exact (run with every percept, dis_medium and flow
+// segmentation gave 55/84 clean over the suite at three sizes against 52/84, but lost a robot
+// scene and an arrival case: no better than a resolution's chance; docs/NAVIGATION.md, "Control
+// update").
 struct StaticPercept {
   double view_half_angle_rad = 0.5 * std::numbers::pi;
   bool exact_depth = true;
