@@ -38,6 +38,8 @@ ObstacleMemory::ObstacleMemory(const base::CameraMount& mount, const ObstacleMem
           "confirm_span_s out of range");
   require(options.ttc_tolerance >= 0.0, "ttc_tolerance must not be negative");
   require(options.evidence_height_m > 0.0, "evidence_height_m must be positive");
+  require(options.column_height_m > 0.0, "column_height_m must be positive");
+  require(options.column_flow_error_px >= 0.0, "column_flow_error_px must not be negative");
   require(options.min_forward_m > 0.0, "min_forward_m must be positive");
   require(options.capacity > 0, "capacity must be positive");
   const auto capacity = static_cast<std::size_t>(options.capacity);
@@ -79,6 +81,9 @@ bool ObstacleMemory::stands_still(const View& view, const GroundContact& contact
     return false;
   }
   const ObjectFeatures& o = view.objects[static_cast<std::size_t>(contact.label)];
+  if (o.kind == RegionKind::visible && column_stands_upright(view, contact, speed_mps)) {
+    return true;
+  }
   // Ends with depths: the features found it rising above the horizon, standing on the ground
   // at both ends, which a patch of ground the ground test missed does not.
   if (o.kind != RegionKind::visible || o.status != MotionStatus::approaching || !o.fit.static_foe ||
@@ -90,6 +95,53 @@ bool ObstacleMemory::stands_still(const View& view, const GroundContact& contact
   // the segmentation joined to something further, or the feet of someone walking.
   const double static_depth_m = o.ttc_s * speed_mps * cos_pitch_;
   return std::abs(contact.depth_m - static_depth_m) <= options_.ttc_tolerance * static_depth_m;
+}
+
+bool ObstacleMemory::column_stands_upright(const View& view, const GroundContact& contact,
+                                           double speed_mps) const {
+  const FlowField& field = view.field;
+  const base::CameraIntrinsics& k = field.intrinsics();
+  const auto foot = ground_.point_at(contact.x, contact.ground_y);
+  const auto top = foot ? ground_.image_of(*foot, options_.column_height_m) : std::nullopt;
+  const auto col = static_cast<int>(std::lround(k.fx_px * contact.x + k.cx_px));
+  const auto foot_row = static_cast<int>(std::lround(k.fy_px * contact.y + k.cy_px));
+  if (!top || col < 0 || col >= field.width() || foot_row < 0 || foot_row >= field.height()) {
+    return false;
+  }
+  const int first =
+      std::clamp(static_cast<int>(std::lround(k.fy_px * top->y() + k.cy_px)), 0, foot_row);
+  const double to_px = k.fx_px * field.interval_s();
+  const double x = field.x(col);
+  int in_region = 0;
+  int telling = 0;  // rows where an upright surface and the floor move apart
+  int upright = 0;  // of those, rows that move as the upright surface
+  for (int row = first; row <= foot_row; ++row) {
+    const Eigen::Vector2f& flow = field.at(col, row);
+    if (view.segmentation.labels[field.index(col, row)] != contact.label || !flow.allFinite()) {
+      continue;
+    }
+    ++in_region;
+    const double y = field.y(row);
+    const auto depth_m = ground_.depth_at_distance_ahead(y, foot->x());
+    const auto floor_depth_m = ground_.depth_at(x, y);
+    if (!depth_m || !floor_depth_m) {
+      continue;
+    }
+    const Eigen::Vector2d standing =
+        ground_.static_flow_at(x, y, *depth_m, speed_mps, field.interval_s());
+    const Eigen::Vector2d floor =
+        ground_.static_flow_at(x, y, *floor_depth_m, speed_mps, field.interval_s());
+    // The flow's error, and the fraction of the flow by which a static point's τ may be off.
+    const double error_px =
+        options_.column_flow_error_px + options_.ttc_tolerance * standing.norm() * to_px;
+    if ((standing - floor).norm() * to_px <= error_px || standing.norm() * to_px <= error_px) {
+      continue;
+    }
+    ++telling;
+    const double off = (flow.cast<double>() - standing).norm();
+    upright += off * to_px <= error_px && off < (flow.cast<double>() - floor).norm();
+  }
+  return telling >= 3 && 2 * upright > telling && 2 * in_region > foot_row - first;
 }
 
 void ObstacleMemory::remember(const Eigen::Vector2d& position_m) {

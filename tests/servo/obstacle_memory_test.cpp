@@ -19,6 +19,7 @@ using Sight = ObstacleMemory::Point::Sight;
 constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kSpeed_mps = 1.0;
 constexpr double kFrame_s = 0.1;
+constexpr double kBaseline_s = 0.2;  // the measured flow's interval
 
 // A 320×240 camera of 90° a metre above the floor, pitched down 0.1 rad, whose frames show what
 // each test says: one visible region (label 0) standing on the ground at the points given.
@@ -80,6 +81,42 @@ class ObstacleMemoryTest : public ::testing::Test {
   void observe_nothing() {
     contacts_.clear();
     memory_.observe({field_, segmentation_, floor_, {}, contacts_}, kSpeed_mps, kFrame_s);
+  }
+
+  enum class ColumnMotion { upright, floor };
+  // One frame in which region 0, fitted as nothing static (no ends with depths, no FOE), covers
+  // the column of the ground point `foot_m` from its foot up to column_height_m, its flow over
+  // kBaseline_s that of an upright surface standing there or that of the floor seen there.
+  void observe_column(const Eigen::Vector2d& foot_m, ColumnMotion motion,
+                      double speed_mps = kSpeed_mps) {
+    field_.set_interval_s(kBaseline_s);
+    const auto foot = ground_.image_of(foot_m);
+    const auto top = ground_.image_of(foot_m, ObstacleMemoryOptions{}.column_height_m);
+    ASSERT_TRUE(foot && top);
+    const base::CameraIntrinsics& k = field_.intrinsics();
+    const auto col = static_cast<int>(std::lround(k.fx_px * foot->x() + k.cx_px));
+    const auto foot_row = static_cast<int>(std::lround(k.fy_px * foot->y() + k.cy_px));
+    const auto top_row = static_cast<int>(std::lround(k.fy_px * top->y() + k.cy_px));
+    const double x = field_.x(col);
+    for (int row = std::max(top_row, 0); row <= foot_row; ++row) {
+      const double y = field_.y(row);
+      const auto depth_m = motion == ColumnMotion::upright
+                               ? ground_.depth_at_distance_ahead(y, foot_m.x())
+                               : ground_.depth_at(x, y);
+      const Eigen::Vector2d flow =
+          depth_m ? ground_.static_flow_at(x, y, *depth_m, speed_mps, kBaseline_s)
+                  : Eigen::Vector2d::Zero();  // above the horizon the floor is not seen
+      field_.at(col, row) = flow.cast<float>();
+      segmentation_.labels[field_.index(col, row)] = 0;
+      floor_[field_.index(col, row)] = 0;
+    }
+    const double pixel = 1.0 / k.fy_px;
+    contacts_ = {{0, foot->x(), foot->y() - pixel, foot->y(), foot->z(), false}};
+    ObjectFeatures region;
+    region.label = 0;
+    region.status = MotionStatus::lateral;
+    objects_ = {region};
+    memory_.observe({field_, segmentation_, floor_, objects_, contacts_}, speed_mps, kFrame_s);
   }
 
   base::CameraMount mount_;
@@ -210,6 +247,29 @@ TEST_F(ObstacleMemoryTest, RemembersOnlyContactsWhoseRowPlacesThemWithinItsSpaci
   use_camera(320, 240);
   observe({{2.0, 0.0}});
   EXPECT_EQ(memory_.points().size(), 2u);
+}
+
+TEST_F(ObstacleMemoryTest, RemembersAContactWhoseColumnMovesAsAnUprightSurfaceStandingThere) {
+  // A wall along the course: its region's one τ and its ends say nothing of this contact, 1.5 m
+  // ahead and 0.8 m to the left, but its column moves as a surface standing there.
+  observe_column({1.5, 0.8}, ColumnMotion::upright);
+  ASSERT_EQ(memory_.points().size(), 1u);
+  EXPECT_NEAR((memory_.points()[0].position_m - Eigen::Vector2d(1.5, 0.8)).norm(), 0.0, 0.05);
+}
+
+TEST_F(ObstacleMemoryTest, DoesNotRememberAContactWhoseColumnMovesAsTheFloor) {
+  observe_column({1.5, 0.8}, ColumnMotion::floor);
+  EXPECT_TRUE(memory_.points().empty());
+}
+
+TEST_F(ObstacleMemoryTest, JudgesNoColumnWhereUprightAndFloorMoveAlikeWithinTheFlowsError) {
+  // At 0.5 m/s a surface standing 3 m straight ahead and the floor seen above its foot move apart
+  // by less than half a pixel and a quarter of the flow in every row: the column cannot tell them
+  // apart. At 1.5 m it can.
+  observe_column({3.0, 0.0}, ColumnMotion::upright, 0.5);
+  EXPECT_TRUE(memory_.points().empty());
+  observe_column({1.5, 0.0}, ColumnMotion::upright, 0.5);
+  EXPECT_EQ(memory_.points().size(), 1u);
 }
 
 TEST_F(ObstacleMemoryTest, DropsARemovedObstacleWithinItsFadeTime) {

@@ -41,6 +41,14 @@ struct ObstacleMemoryOptions {
   // agent has the static FOE too, and a τ a fraction of that; and a region that took in floor
   // below what stands there has contacts nearer than its τ says.
   double ttc_tolerance = 0.25;
+  // A contact is also taken where its region's pixels in its column, over this height above
+  // the foot, move as an upright surface standing there would and not as the floor: a wall
+  // along the course, whose one τ spans the depths of all its contacts. Only rows where the two
+  // differ by more than the flow's error count: near the foot, or far ahead, they do not.
+  double column_height_m = 1.0;
+  // The measured flow's error in the column's test, in pixels over the flow's interval, beside
+  // ttc_tolerance of the flow.
+  double column_flow_error_px = 0.5;
   // Below this speed nothing expands, and no region can be told to stand still.
   double min_speed_mps = 0.1;
   // The floor must show over this height above a point's foot to count against the point; an
@@ -116,6 +124,9 @@ class ObstacleMemory {
  private:
   // Whether the contact is where a region that stands still stands.
   bool stands_still(const View& view, const GroundContact& contact, double speed_mps) const;
+  // Whether the contact's column moves as an upright surface standing at its foot.
+  bool column_stands_upright(const View& view, const GroundContact& contact,
+                             double speed_mps) const;
   void remember(const Eigen::Vector2d& position_m);
   Point::Sight sight_of(const View& view, const Point& point) const;
   std::size_t find(std::size_t i);  // the root of i's object in parent_
