@@ -16,6 +16,14 @@ double sinc(double phi) {
   return std::abs(phi) < 1e-4 ? 1.0 - phi * phi / 6.0 : std::sin(phi) / phi;
 }
 
+// The pixel column and row nearest the normalised point (x, y).
+int column_of(const base::CameraIntrinsics& k, double x) {
+  return static_cast<int>(std::lround(k.fx_px * x + k.cx_px));
+}
+int row_of(const base::CameraIntrinsics& k, double y) {
+  return static_cast<int>(std::lround(k.fy_px * y + k.cy_px));
+}
+
 void require(bool ok, const std::string& what) {
   if (!ok) {
     throw std::invalid_argument("ObstacleMemoryOptions: " + what);
@@ -103,13 +111,12 @@ bool ObstacleMemory::column_stands_upright(const View& view, const GroundContact
   const base::CameraIntrinsics& k = field.intrinsics();
   const auto foot = ground_.point_at(contact.x, contact.ground_y);
   const auto top = foot ? ground_.image_of(*foot, options_.column_height_m) : std::nullopt;
-  const auto col = static_cast<int>(std::lround(k.fx_px * contact.x + k.cx_px));
-  const auto foot_row = static_cast<int>(std::lround(k.fy_px * contact.y + k.cy_px));
+  const int col = column_of(k, contact.x);
+  const int foot_row = row_of(k, contact.y);
   if (!top || col < 0 || col >= field.width() || foot_row < 0 || foot_row >= field.height()) {
     return false;
   }
-  const int first =
-      std::clamp(static_cast<int>(std::lround(k.fy_px * top->y() + k.cy_px)), 0, foot_row);
+  const int first = std::clamp(row_of(k, top->y()), 0, foot_row);
   const double to_px = k.fx_px * field.interval_s();
   const double x = field.x(col);
   int in_region = 0;
@@ -189,15 +196,14 @@ ObstacleMemory::Point::Sight ObstacleMemory::sight_of(const View& view, const Po
   }
   const FlowField& field = view.field;
   const base::CameraIntrinsics& k = field.intrinsics();
-  const auto col = static_cast<int>(std::lround(k.fx_px * foot->x() + k.cx_px));
-  const auto foot_row = static_cast<int>(std::lround(k.fy_px * foot->y() + k.cy_px));
+  const int col = column_of(k, foot->x());
+  const int foot_row = row_of(k, foot->y());
   if (col < 0 || col >= field.width() || foot_row < 1 || foot_row >= field.height()) {
     return Point::Sight::out_of_view;
   }
   // The obstacle would stand in the rows above its foot, up to evidence_height_m.
   const int last = foot_row - 1;
-  const int first =
-      std::clamp(static_cast<int>(std::lround(k.fy_px * top->y() + k.cy_px)), 0, last);
+  const int first = std::clamp(row_of(k, top->y()), 0, last);
   int floor_rows = 0;
   for (int row = first; row <= last; ++row) {
     const std::size_t i = field.index(col, row);
