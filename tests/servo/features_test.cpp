@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "flowsteer/servo/analytic_scene.hpp"
+#include "flowsteer/servo/ground.hpp"
 #include "flowsteer/servo/segmentation.hpp"
 #include "radial_fit.hpp"
 
@@ -588,6 +589,45 @@ TEST(FeatureExtractor, ACameraThatKnowsItsSpeedGetsTheDepthOfALowStaticObjectFro
     EXPECT_TRUE(object_with_id(objects, kFloorPatch).fit.static_foe) << pitch_rad;
     EXPECT_FALSE(object_with_id(seen_by_a_camera(scene, render), 2).min_x_depth_m.has_value())
         << pitch_rad;
+  }
+}
+
+// The flow test that takes the ground out (mark_ground) runs below the horizon only. Far enough
+// away, an upright's flow below the horizon is within the test's floor of the floor's, and all of
+// it goes with the ground: its region ends at the horizon, and the floor seen just below, hundreds
+// of metres away here, is not where it stands. It gets no depth from the ground. A near one, whose
+// region ends below the horizon where its flow leaves the test's tolerance, keeps its contact at
+// the floor's depth there, beyond its foot (the test took its lowest rows) but within a metre.
+TEST(FeatureExtractor, AnUprightWhoseRowsBelowTheHorizonAllPassedAsGroundGetsNoContact) {
+  for (const double pitch_rad : {0.0, 8.0 * kDeg}) {
+    AnalyticScene scene = base_scene(pitch_rad);
+    scene.agent_turn_rate = 0.0;
+    scene.objects = {panel(1, 12.0, 0.0, 2.0, {0.0, 0.0}), panel(2, 2.0, -0.6, 0.4, {0.0, 0.0})};
+    const SceneRender render = render_scene(scene);
+    FlowField field(scene.intrinsics);
+    std::copy(render.flow.flow().begin(), render.flow.flow().end(), field.flow().begin());
+    GroundRemovalOptions test;
+    test.flow_floor = 0.05;
+    std::vector<std::uint8_t> ground_mask(field.size(), 0);
+    mark_ground(field, scene.mount, scene.agent_speed_mps, test, ground_mask);
+    Segmentation segmentation;
+    segment_by_ids(render.ids, field.width(), field.height(), ground_mask, segmentation);
+    FeatureOptions options;
+    options.use_depth = false;
+    options.ground_mount = scene.mount;
+    options.static_foe = scene.mount.forward_foe();
+    FeatureExtractor extractor(options);
+    const auto objects =
+        extractor.extract(field, segmentation, scene.agent_speed_mps * std::cos(pitch_rad));
+    const ObjectFeatures& far = object_with_id(objects, 1);
+    ASSERT_GT(far.pixel_count, 0);
+    EXPECT_FALSE(far.min_x_depth_m.has_value()) << pitch_rad;
+    EXPECT_FALSE(far.nearest_depth_m.has_value()) << pitch_rad;
+    const ObjectFeatures& near = object_with_id(objects, 2);
+    ASSERT_TRUE(near.nearest_depth_m.has_value()) << pitch_rad;
+    const double foot_m = 2.0 * std::cos(pitch_rad) + scene.mount.height_m * std::sin(pitch_rad);
+    EXPECT_GE(*near.nearest_depth_m, foot_m) << pitch_rad;
+    EXPECT_LT(*near.nearest_depth_m, foot_m + 1.0) << pitch_rad;
   }
 }
 
