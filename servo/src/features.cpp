@@ -758,9 +758,9 @@ bool stands_on_ground(const FlowField& field, const Segmentation& segmentation,
 // there. That pixel's flow passed the ground's flow test (mark_ground) or lies in a ground region,
 // and the test, which runs below the horizon only, takes an upright's rows with the ground up to
 // where its flow leaves the test's floor: near the horizon a static point's flow is A/Z, and an
-// upright further than |A| / floor passes all the way up (about 6 m at x = 0.5 for the suite's
-// camera at 128² and 1 m/s, 37 m for the robot's at 320×240). Its foot is anywhere from there
-// on; the floor just below the horizon, tens of metres away, is not where it stands.
+// upright further than |A| / floor passes all the way up (about 5.5 m at x = 0.5 for the
+// suite's camera at 128² and 1 m/s, 37 m for the robot's at 320×240). Its foot is anywhere from
+// there on; the floor just below the horizon, tens of metres away, is not where it stands.
 void find_ground_contacts(const FlowField& field, const Segmentation& segmentation,
                           const base::CameraMount& mount, std::vector<GroundContact>& contacts) {
   contacts.clear();
