@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "flat_ground_flow.hpp"
+
 namespace flowsteer::servo {
 
 FlatGround::FlatGround(const base::CameraMount& mount)
@@ -26,11 +28,7 @@ std::optional<double> FlatGround::depth_at([[maybe_unused]] double x, double y) 
 }
 
 std::optional<Eigen::Vector2d> FlatGround::flow_at(double x, double y, double speed_mps) const {
-  const auto depth = depth_at(x, y);
-  if (!depth) {
-    return std::nullopt;
-  }
-  return static_flow_at(x, y, *depth, speed_mps, 0.0);
+  return detail::floor_flow_at(*this, x, y, speed_mps, 0.0);
 }
 
 Eigen::Vector2d FlatGround::static_flow_at(double x, double y, double depth_m, double speed_mps,
@@ -95,19 +93,9 @@ std::optional<Eigen::Vector3d> FlatGround::image_of(const Eigen::Vector2d& point
 
 namespace {
 
-// The ground's flow at (x, y) as the field holds it: instantaneous, or the displacement over the
-// field's interval, which on near ground is far below the instantaneous flow.
-std::optional<Eigen::Vector2d> expected_ground_flow(const FlatGround& ground, double x, double y,
-                                                    double speed_mps, double interval_s) {
-  const auto depth_m = ground.depth_at(x, y);
-  if (!depth_m) {
-    return std::nullopt;
-  }
-  return ground.static_flow_at(x, y, *depth_m, speed_mps, interval_s);
-}
-
-// expected_ground_flow along one image row, at_zero + x per_x: the ground's depth, and with it
-// the flow's scale, depend on the row alone, so the pixel loops need no division.
+// The ground's flow (detail::floor_flow_at) along one image row, at_zero + x per_x: the ground's
+// depth, and with it the flow's scale, depend on the row alone, so the pixel loops need no
+// division.
 struct GroundRowFlow {
   Eigen::Vector2d at_zero;
   Eigen::Vector2d per_x;
@@ -115,11 +103,11 @@ struct GroundRowFlow {
 
 std::optional<GroundRowFlow> ground_row_flow(const FlatGround& ground, double y, double speed_mps,
                                              double interval_s) {
-  const auto at_zero = expected_ground_flow(ground, 0.0, y, speed_mps, interval_s);
+  const auto at_zero = detail::floor_flow_at(ground, 0.0, y, speed_mps, interval_s);
   if (!at_zero) {
     return std::nullopt;
   }
-  const auto at_one = expected_ground_flow(ground, 1.0, y, speed_mps, interval_s);
+  const auto at_one = detail::floor_flow_at(ground, 1.0, y, speed_mps, interval_s);
   return GroundRowFlow{*at_zero, *at_one - *at_zero};
 }
 

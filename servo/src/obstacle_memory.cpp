@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "flat_ground_flow.hpp"
+
 namespace flowsteer::servo {
 
 namespace {
@@ -129,15 +131,14 @@ bool ObstacleMemory::column_stands_upright(const View& view, const GroundContact
     }
     ++in_region;
     const double y = field.y(row);
-    const auto depth_m = ground_.depth_at_distance_ahead(y, foot->x());
-    const auto floor_depth_m = ground_.depth_at(x, y);
-    if (!depth_m || !floor_depth_m) {
+    const auto standing_flow =
+        detail::upright_flow_at(ground_, x, y, foot->x(), speed_mps, field.interval_s());
+    const auto floor_flow = detail::floor_flow_at(ground_, x, y, speed_mps, field.interval_s());
+    if (!standing_flow || !floor_flow) {
       continue;
     }
-    const Eigen::Vector2d standing =
-        ground_.static_flow_at(x, y, *depth_m, speed_mps, field.interval_s());
-    const Eigen::Vector2d floor =
-        ground_.static_flow_at(x, y, *floor_depth_m, speed_mps, field.interval_s());
+    const Eigen::Vector2d& standing = *standing_flow;
+    const Eigen::Vector2d& floor = *floor_flow;
     // The flow's error, and the fraction of the flow by which a static point's τ may be off.
     const double error_px =
         options_.column_flow_error_px + options_.ttc_tolerance * standing.norm() * to_px;

@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "flat_ground_flow.hpp"
 #include "flowsteer/servo/ground.hpp"
 
 namespace flowsteer::servo {
@@ -288,14 +289,14 @@ void UntexturedFill::vote(const FlowField& field, const FlatGround& ground, int 
   const std::size_t i = field.index(col, row);
   const double x = field.x(col);
   const double y = field.y(row);
-  const auto depth_m = ground.depth_at_distance_ahead(y, ahead_m);
-  const auto floor_depth_m = ground.depth_at(x, y);
-  if (!depth_m || !floor_depth_m) {
+  const auto near_flow =
+      detail::upright_flow_at(ground, x, y, ahead_m, speed_mps, field.interval_s());
+  const auto floor_flow = detail::floor_flow_at(ground, x, y, speed_mps, field.interval_s());
+  if (!near_flow || !floor_flow) {
     return;
   }
-  Eigen::Vector2d as_near = ground.static_flow_at(x, y, *depth_m, speed_mps, field.interval_s());
-  Eigen::Vector2d as_floor =
-      ground.static_flow_at(x, y, *floor_depth_m, speed_mps, field.interval_s());
+  Eigen::Vector2d as_near = *near_flow;
+  Eigen::Vector2d as_floor = *floor_flow;
   const auto seen = seen_flow(field, i);
   if (!seen) {
     return;
@@ -461,20 +462,17 @@ bool UntexturedFill::stands_at(const FlowField& field, const FlatGround& ground,
       continue;
     }
     const double y = field.y(row);
-    const auto depth_m = ground.depth_at_distance_ahead(y, ahead_m);
-    if (!(ahead_m > 0.0) || !depth_m) {
+    const auto expected_flow =
+        detail::upright_flow_at(ground, x, y, ahead_m, speed_mps, field.interval_s());
+    if (!(ahead_m > 0.0) || !expected_flow) {
       continue;
     }
     const Eigen::Vector2d flow = field.at(col, row).cast<double>();
-    const Eigen::Vector2d expected =
-        ground.static_flow_at(x, y, *depth_m, speed_mps, field.interval_s());
+    const Eigen::Vector2d& expected = *expected_flow;
     const double error = (flow - expected).norm();
     // Below the horizon, flow nearer the floor's own there is the floor's.
-    const auto floor_depth_m = ground.depth_at(x, y);
-    const bool floor_like =
-        floor_depth_m &&
-        (flow - ground.static_flow_at(x, y, *floor_depth_m, speed_mps, field.interval_s()))
-                .norm() <= error;
+    const auto floor_flow = detail::floor_flow_at(ground, x, y, speed_mps, field.interval_s());
+    const bool floor_like = floor_flow && (flow - *floor_flow).norm() <= error;
     alike += !floor_like && error * to_px(field) <=
                                 options_.agreement_px +
                                     options_.agreement_share * expected.norm() * to_px(field)
