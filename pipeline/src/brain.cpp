@@ -131,7 +131,7 @@ const servo::ControlOutput& Brain::step(const BrainInput& input) {
       previous_frame_s_ ? std::max(0.0, input.frame.timestamp_s - *previous_frame_s_) : 0.0};
   const bool to_last_goal = input.last_goal_radius_m && makes_room();
   if (to_last_goal && !make_room_) {
-    make_room_.emplace(servo::MakeRoomOptions{.agent_width_m = config_.agent_width_m});
+    make_room_.emplace(servo::make_room_options(config_.controller, config_.agent_width_m));
   }
   std::optional<base::Command> standing;
   if (to_last_goal && input.arrived) {

@@ -235,7 +235,7 @@ bool MakeRoom::goal_contested(const Percept& percept, const AgentState& agent) c
       continue;
     }
     const std::optional<Eigen::Vector2d> relative =
-        detail::relative_velocity(o, agent, DepthGuess{}, ThreatOptions{}.static_closing_ratio);
+        detail::relative_velocity(o, agent, options_.depth, options_.static_closing_ratio);
     if (relative && (*relative + Eigen::Vector2d(0.0, agent.speed_mps)).dot(to_goal.normalized()) >
                         options_.wait_speed_mps) {
       return true;

@@ -227,6 +227,18 @@ NavigationWeights navigation_weights(const ControllerConfig& c) {
   return w;
 }
 
+MakeRoomOptions make_room_options(const ControllerConfig& c, double agent_width_m) {
+  // The terms' depth guess and still-standing test do not depend on the speed their margin
+  // grows to.
+  const ThreatOptions threats =
+      flowsteer_terms(c, agent_width_m, DepthGuess{}.min_speed_mps).clearance.threats;
+  MakeRoomOptions options;
+  options.agent_width_m = agent_width_m;
+  options.depth = threats.depth;
+  options.static_closing_ratio = threats.static_closing_ratio;
+  return options;
+}
+
 Controller make_controller(const ControllerConfig& c, double agent_width_m,
                            double preferred_speed_mps, const StaticPercept& statics) {
   ControlLimits limits{c.max_accel_mps2, c.max_turn_rate};

@@ -117,6 +117,19 @@ TEST(LawMechanism, WithoutTheClosingCheckAnObjectWalkingStraightAtTheAgentIsTake
   EXPECT_NE(step({}, {person}).turn_rate, step({}, {}).turn_rate);
 }
 
+// Making room at the goal judges who walks there as the law's terms judge motion.
+TEST(LawMechanism, MakingRoomTellsWhatStandsStillAsTheLawDoes) {
+  const MakeRoomOptions as_is = make_room_options({}, 0.6);
+  EXPECT_EQ(as_is.agent_width_m, 0.6);
+  EXPECT_EQ(as_is.static_closing_ratio, ThreatOptions{}.static_closing_ratio);
+  EXPECT_TRUE(as_is.depth.use_depth);
+  EXPECT_TRUE(std::isinf(make_room_options(flowsteer_without(LawMechanism::static_closing), 0.6)
+                             .static_closing_ratio));
+  ControllerConfig depth_free;
+  depth_free.use_depth = false;
+  EXPECT_FALSE(make_room_options(depth_free, 0.6).depth.use_depth);
+}
+
 // A person 0.4 m wide, its middle `x_m` right of the course and `z_m` ahead, facing the agent,
 // walking over the ground at `ground_velocity` (x right, z forward, m/s), seen by an agent walking
 // at `speed_mps`: the features exact flow and depths give it (CGF Eq. 2–3).

@@ -42,6 +42,10 @@ struct MakeRoomOptions {
   double wait_range_m = 2.0;
   double wait_speed_mps = 0.2;
   double wait_gap_m = 0.25;  // it edges in only while everything in view is further than this
+  // Whether someone walks to its goal is judged as the law's terms judge motion: depths guessed
+  // and what stands still told apart as their ThreatOptions say (make_room_options).
+  DepthGuess depth = {};
+  double static_closing_ratio = ThreatOptions{}.static_closing_ratio;
 };
 
 class MakeRoom {

@@ -7,6 +7,7 @@
 
 #include "flowsteer/servo/control.hpp"
 #include "flowsteer/servo/flow_segmentation.hpp"
+#include "flowsteer/servo/make_room.hpp"
 #include "flowsteer/servo/motion_energy.hpp"
 #include "flowsteer/servo/optical_flow.hpp"
 
@@ -158,6 +159,10 @@ struct StaticPercept {
   double view_half_angle_rad = 0.5 * std::numbers::pi;
   bool exact_depth = true;
 };
+
+// What the flowsteer law's agent that makes room at its last goal (MakeRoom) needs of a config:
+// its width, and the depth guess and still-standing test of the law's terms.
+MakeRoomOptions make_room_options(const ControllerConfig& config, double agent_width_m);
 
 // The navigation-function controller a config asks for, for an agent agent_width_m wide that
 // prefers preferred_speed_mps (goal reaching's v*), perceiving static objects as `statics` says.
