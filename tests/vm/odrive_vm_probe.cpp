@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "flowsteer/base/clock.hpp"
 #include "flowsteer/drivers/mobile_base.hpp"
@@ -28,10 +29,11 @@ constexpr std::uint8_t kRightNode = 5;
 
 // Calls update() every loop period for duration_s; `command` says whether to send a fresh
 // command first. Returns the realtime of the last command sent; `commanded` gets the state
-// the last update after a command returned.
+// the last update after a command returned; `update_starts` gets the realtime at which each
+// update() began.
 template <typename Command>
 double run_loop(MobileBase& base, double duration_s, Command command,
-                BaseState* commanded = nullptr) {
+                BaseState* commanded = nullptr, std::vector<double>* update_starts = nullptr) {
   double last_command_realtime_s = 0.0;
   const double start_s = monotonic_now_s();
   for (double next_s = start_s; monotonic_now_s() - start_s < duration_s; next_s += kLoopPeriodS) {
@@ -41,6 +43,9 @@ double run_loop(MobileBase& base, double duration_s, Command command,
       base.command({5.0, 0.6}, monotonic_now_s());
       last_command_realtime_s = realtime_s();
     }
+    if (update_starts != nullptr) {
+      update_starts->push_back(realtime_s());
+    }
     const BaseState state = base.update(monotonic_now_s());
     if (fresh && commanded != nullptr) {
       *commanded = state;
@@ -49,20 +54,36 @@ double run_loop(MobileBase& base, double duration_s, Command command,
   return last_command_realtime_s;
 }
 
-// Drives for 2 s, calling inject() from 0.3 s on, and prints how the base failed under `key`.
+// Prints when each update() of a loop began, under `key`-updates.
+void print_update_starts(const char* key, const std::vector<double>& update_starts) {
+  std::printf("PROBE %s-updates", key);
+  for (const double start_s : update_starts) {
+    std::printf(" %.6f", start_s);
+  }
+  std::printf("\n");
+}
+
+// Drives for 2 s, calling inject() from 0.3 s on, and prints how the base failed under `key`
+// and when each update() began under `key`-updates (the last is the one that failed).
 template <typename Inject>
 void drive_into_fault(MobileBase& base, const char* key, Inject inject) {
+  std::vector<double> update_starts;
+  update_starts.reserve(static_cast<std::size_t>(2.0 / kLoopPeriodS) + 2);
   try {
-    run_loop(base, 2.0, [&](double t_s) {
-      if (t_s > 0.3) {
-        inject();
-      }
-      return true;
-    });
+    run_loop(
+        base, 2.0,
+        [&](double t_s) {
+          if (t_s > 0.3) {
+            inject();
+          }
+          return true;
+        },
+        nullptr, &update_starts);
     std::printf("PROBE %s no error\n", key);
   } catch (const DriveError& e) {
     std::printf("PROBE %s %.6f %s\n", key, realtime_s(), e.what());
   }
+  print_update_starts(key, update_starts);
 }
 
 int run() {
@@ -100,9 +121,12 @@ int run() {
   std::printf("PROBE stream %.6f\n", realtime_s());
   // Commands for 1 s, then none for 0.6 s while the loop goes on.
   BaseState commanded;
+  std::vector<double> update_starts;
+  update_starts.reserve(static_cast<std::size_t>(1.6 / kLoopPeriodS) + 2);
   const double last_command_s = run_loop(
-      base, 1.6, [](double t_s) { return t_s < 1.0; }, &commanded);
+      base, 1.6, [](double t_s) { return t_s < 1.0; }, &commanded, &update_starts);
   std::printf("PROBE last-command %.6f\n", last_command_s);
+  print_update_starts("stream", update_starts);
   // What the drive measured from the simulated axes' encoder estimates while commanded.
   std::printf("PROBE measured %.6f %.6f %.6f %.6f %zu\n", commanded.measured.speed_mps,
               commanded.measured.turn_rate, commanded.drive.odometry.left_rad,
