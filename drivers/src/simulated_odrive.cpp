@@ -108,6 +108,7 @@ void SimulatedOdrive::obey(AxisModel& model, const ReceivedCanFrame& received) {
       axis.setpoint_changed_s = received.received_s;
     }
     model.setpoint_turns_per_s = setpoint;
+    axis.moving_setpoints += setpoint != 0.0f ? 1 : 0;
   } else if (cmd == odrive::kGetEncoderEstimates && (frame.can_id & CAN_RTR_FLAG) != 0) {
     socket_.send(
         odrive::encoder_estimates_frame(axis.node, {static_cast<float>(axis.pos_turns),

@@ -14,9 +14,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -75,18 +77,41 @@ goal:
   distance_m: 50.0
 )";
 
-// Waits for the run to have started its loop with the drive (its first line names the drive),
-// then lets it drive for `drive_s`; false when it did not start within the time.
-bool wait_until_driving(const std::string& log_path, double drive_s) {
-  const double start_s = monotonic_now_s();
-  while (!flowsteer::vm_test::log_has(log_path, "drive odrive")) {
-    if (monotonic_now_s() - start_s > 20.0) {
-      return false;
+// The fault comes once the run has driven: each axis has taken kMovingSetpoints non-zero
+// velocities and at least `drive_s` has passed since the loop started (its first line names the
+// drive). Updates, not time alone: on a loaded host the emulated CPU can spend seconds on the
+// first pictures' perception, and a recorded run must hold commands that moved the base. False
+// when it did not start, or not drive, within the limits.
+constexpr std::uint64_t kMovingSetpoints = 5;
+constexpr double kStartLimitS = 20.0;
+constexpr double kDriveLimitS = 30.0;
+
+bool wait_until_driving(const std::string& log_path,
+                        const flowsteer::drivers::SimulatedOdrive& axes, double drive_s) {
+  const auto before = axes.axes();  // the axes serve every case of the probe
+  const auto waited_until = [](double limit_s, const auto& done) {
+    const double start_s = monotonic_now_s();
+    while (!done()) {
+      if (monotonic_now_s() - start_s > limit_s) {
+        return false;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return true;
+  };
+  if (!waited_until(kStartLimitS,
+                    [&] { return flowsteer::vm_test::log_has(log_path, "drive odrive"); })) {
+    return false;
   }
-  std::this_thread::sleep_for(std::chrono::duration<double>(drive_s));
-  return true;
+  const double driving_s = monotonic_now_s();
+  return waited_until(kDriveLimitS, [&] {
+    const auto now = axes.axes();
+    return monotonic_now_s() - driving_s >= drive_s &&
+           std::equal(now.begin(), now.end(), before.begin(),
+                      [](const auto& axis, const auto& was) {
+                        return axis.moving_setpoints - was.moving_setpoints >= kMovingSetpoints;
+                      });
+  });
 }
 
 // Takes the interface down with one ioctl, as a cable pulled out or a bus-off would, at the
@@ -173,8 +198,8 @@ void print_recording(const std::string& name, const std::string& path) {
 // One run ended by `fault`, called with flowsteer's pid and log: prints "PROBE <name>-start T",
 // "PROBE <name>-fault T", "PROBE <name>-exit STATUS T" and each line flowsteer wrote as "PROBE
 // <name>-log-<k> LINE"; with `recorded`, the run records itself and print_recording follows.
-void run_case(const std::string& name, const std::function<void(pid_t, const std::string&)>& fault,
-              bool recorded = false) {
+void run_case(const std::string& name, const flowsteer::drivers::SimulatedOdrive& axes,
+              const std::function<void(pid_t, const std::string&)>& fault, bool recorded = false) {
   const std::string log_path = "/tmp/" + name + ".log";
   const std::string recording = "/tmp/" + name + ".mcap";
   std::printf("PROBE %s-start %.6f\n", name.c_str(), realtime_s());
@@ -183,7 +208,7 @@ void run_case(const std::string& name, const std::function<void(pid_t, const std
     argv.insert(argv.end(), {"--mcap", recording.c_str(), "--mcap-images", "0"});
   }
   const pid_t pid = flowsteer::vm_test::start_logged(log_path, argv);
-  if (!wait_until_driving(log_path, 2.0)) {
+  if (!wait_until_driving(log_path, axes, 2.0)) {
     std::printf("PROBE %s-fault never: flowsteer did not start driving\n", name.c_str());
   } else {
     std::printf("PROBE %s-fault %.6f\n", name.c_str(), realtime_s());
@@ -205,17 +230,17 @@ int run() {
   std::ofstream(kLaunchPath) << kLaunch;
   flowsteer::drivers::SimulatedOdrive axes(kCanInterface, 3, 5);
   run_case(
-      "sigint", [](pid_t pid, const std::string&) { ::kill(pid, SIGINT); }, true);
-  run_case("sigterm", [](pid_t pid, const std::string&) { ::kill(pid, SIGTERM); });
+      "sigint", axes, [](pid_t pid, const std::string&) { ::kill(pid, SIGINT); }, true);
+  run_case("sigterm", axes, [](pid_t pid, const std::string&) { ::kill(pid, SIGTERM); });
   // A button: any value presses it. vivid answers every call on the node with ENODEV until
   // its last file handle is closed, as a USB camera pulled out does.
   run_case(
-      "camera-gone",
+      "camera-gone", axes,
       [](pid_t, const std::string&) {
         flowsteer::vm_test::set_vivid_control(kCamera, "Disconnect", 1);
       },
       true);
-  run_case("can-down", [](pid_t, const std::string& log_path) {
+  run_case("can-down", axes, [](pid_t, const std::string& log_path) {
     const std::string error = take_link_down(kCanInterface);
     if (!error.empty()) {
       std::printf("PROBE can-down-failed %s %s\n", kCanInterface, error.c_str());

@@ -36,6 +36,8 @@ class SimulatedOdrive {
     // When the last Set_Input_Vel that changed the setpoint arrived (the kernel's receive time
     // on base::monotonic_now_s()'s clock); none before the first.
     std::optional<double> setpoint_changed_s;
+    // Set_Input_Vel frames received with a non-zero velocity: how many updates drove the axis.
+    std::uint64_t moving_setpoints = 0;
   };
   // Left, then right, as they are now.
   std::array<Axis, 2> axes() const;
