@@ -176,7 +176,7 @@ void expect_recording_is_the_bus(const CanCaptureRun& run, const std::string& na
     recorded.push_back(axis_velocities(speed, yaw_rate));
     moving += speed != 0.0 ? 1 : 0;
   }
-  // The probe faults a run once each axis has taken 5 moving velocities, 2 s at the least.
+  // The probe faults a run once each axis has taken 8 moving velocities, 2 s at the least.
   ASSERT_GE(moving, 3) << "the recording holds too few commands that moved the base";
   EXPECT_EQ(recorded.back().left, 0.0f) << "the recording does not end with the stop";
   const std::vector<AxisVelocities> bus = bus_velocities(run, ended.start_s, ended.exited_s);
