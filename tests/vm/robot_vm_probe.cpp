@@ -77,44 +77,6 @@ goal:
   distance_m: 50.0
 )";
 
-// The fault comes once the run has driven: each axis has taken kMovingSetpoints non-zero
-// velocities and at least `drive_s` has passed since the loop started (its first line names the
-// drive). Updates, not time alone: on a loaded host the emulated CPU can spend seconds on the
-// first pictures' perception, and a recorded run must hold commands that moved the base (a
-// wheel's velocity is not zero on a turn in place either, hence eight for the test's three).
-// False when it did not start, or not drive, within the limits.
-constexpr std::uint64_t kMovingSetpoints = 8;
-constexpr double kStartLimitS = 20.0;
-constexpr double kDriveLimitS = 20.0;  // four cases at 20 + 20 + 10 s stay within the VM's 240 s
-
-bool wait_until_driving(const std::string& log_path,
-                        const flowsteer::drivers::SimulatedOdrive& axes, double drive_s) {
-  const auto before = axes.axes();  // the axes serve every case of the probe
-  const auto waited_until = [](double limit_s, const auto& done) {
-    const double start_s = monotonic_now_s();
-    while (!done()) {
-      if (monotonic_now_s() - start_s > limit_s) {
-        return false;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return true;
-  };
-  if (!waited_until(kStartLimitS,
-                    [&] { return flowsteer::vm_test::log_has(log_path, "drive odrive"); })) {
-    return false;
-  }
-  const double driving_s = monotonic_now_s();
-  return waited_until(kDriveLimitS, [&] {
-    const auto now = axes.axes();
-    return monotonic_now_s() - driving_s >= drive_s &&
-           std::equal(now.begin(), now.end(), before.begin(),
-                      [](const auto& axis, const auto& was) {
-                        return axis.moving_setpoints - was.moving_setpoints >= kMovingSetpoints;
-                      });
-  });
-}
-
 // Takes the interface down with one ioctl, as a cable pulled out or a bus-off would, at the
 // moment it is called: `ip link set ... down` would first fork and exec two programs, which on
 // the emulated CPU takes some 50 ms of the time measured. An empty string when done, else why not.
@@ -149,6 +111,39 @@ double when_logged(const std::string& log_path, const std::string& text, double 
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   return realtime_s();
+}
+
+// The fault comes once the run has driven: each axis has taken kMovingSetpoints non-zero
+// velocities and at least `drive_s` has passed since the loop started (its first line names the
+// drive). Updates, not time alone: on a loaded host the emulated CPU can spend seconds on the
+// first pictures' perception, and a recorded run must hold commands that moved the base (a
+// wheel's velocity is not zero on a turn in place either: eight leaves room for those beside the
+// test's three). False when it did not start, or not drive, within the limits.
+constexpr std::uint64_t kMovingSetpoints = 8;
+constexpr double kStartLimitS = 20.0;
+constexpr double kDriveLimitS = 20.0;  // four cases at 20 + 20 + 10 s stay within the VM's 240 s
+
+bool wait_until_driving(const std::string& log_path,
+                        const flowsteer::drivers::SimulatedOdrive& axes, double drive_s) {
+  const auto before = axes.axes();  // the axes serve every case of the probe
+  if (std::isnan(when_logged(log_path, "drive odrive", kStartLimitS))) {
+    return false;
+  }
+  const auto has_driven = [&] {
+    const auto now = axes.axes();
+    return std::equal(now.begin(), now.end(), before.begin(),
+                      [](const auto& axis, const auto& was) {
+                        return axis.moving_setpoints - was.moving_setpoints >= kMovingSetpoints;
+                      });
+  };
+  const double driving_s = monotonic_now_s();
+  while (monotonic_now_s() - driving_s < drive_s || !has_driven()) {
+    if (monotonic_now_s() - driving_s > kDriveLimitS) {
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
 }
 
 struct Exit {
