@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "../image_ink.hpp"
+#include "../param_names.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/eval/compare.hpp"
@@ -49,7 +50,8 @@ TEST_P(MotionEnergyCrosses, WithoutCollision) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Blumberg, MotionEnergyCrosses, ::testing::Values("room", "corridor"));
+INSTANTIATE_TEST_SUITE_P(Blumberg, MotionEnergyCrosses, ::testing::Values("room", "corridor"),
+                         test::scenario_param_name);
 
 // Straight at a long wall the halves' energies balance and the plain law would go straight on;
 // the head-on case turns at the full rate instead, and the agent walks on along the wall rather
@@ -130,7 +132,8 @@ TEST_P(VisionAgainstReference, BothAvoidAndVisionStaysNearTheReference) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Papers, VisionAgainstReference, ::testing::Values("room", "crossing"));
+INSTANTIATE_TEST_SUITE_P(Papers, VisionAgainstReference, ::testing::Values("room", "crossing"),
+                         test::scenario_param_name);
 
 TEST(Compare, WritesTopViewsTableAndHistogramsForEveryController) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() /

@@ -93,14 +93,15 @@ TEST(FlowEvaluation, StaticSurfacesWithoutDepthKeepTheHeadingAsFoe) {
 
 // The obstacle memory's recalled objects are placed in the world by the walker's pose and scored
 // by what stands there. Along the corridor's walls with exact flow every one is on a wall: the
-// scoring's frames and signs agree with the memory's.
+// scoring's frames and signs agree with the memory's. Over 60 frames the exact flow recalls about
+// a hundred objects, and DIS's recalls fall in more than one of the three counts.
 TEST(FlowEvaluation, RecalledObjectsAreScoredByWhatStandsWhereTheyAre) {
   FlowEvalOptions options;
   options.resolutions = {128};
   options.methods = {servo::FlowMethod::dis_ultrafast};
   options.segmentation = servo::SegmentationMethod::flow_graph_fast;
   options.obstacle_memory = true;
-  options.frames = 100;
+  options.frames = 60;
   std::ostringstream log;
   const auto rows = evaluate_flow(builtin_scenario("corridor"), options, log);
   ASSERT_EQ(rows.size(), 2U);

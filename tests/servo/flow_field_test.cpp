@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <numbers>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -116,7 +117,10 @@ TEST_P(GroundRemoval, DepthAndFlowTestsFindTheGround) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Pitch, GroundRemoval, ::testing::Values(0.0, 8.0 * kDeg));
+INSTANTIATE_TEST_SUITE_P(Pitch, GroundRemoval, ::testing::Values(0.0, 8.0 * kDeg),
+                         [](const ::testing::TestParamInfo<double>& info) {
+                           return info.param == 0.0 ? std::string("level") : "pitched_8deg";
+                         });
 
 // The region-level test on exact flow without depth: the ground as one region is ground, the
 // moving box and the static post standing on it are not, whatever was marked before. The same

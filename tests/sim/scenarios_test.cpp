@@ -16,6 +16,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "../image_ink.hpp"
+#include "../param_names.hpp"
 #include "flowsteer/base/config_error.hpp"
 #include "flowsteer/config/scenario_file.hpp"
 #include "flowsteer/pipeline/overlay.hpp"
@@ -58,7 +59,8 @@ TEST_P(GoalScenario, EveryAgentReachesItsGoalWithoutCollision) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Papers, GoalScenario,
-                         ::testing::Values("room", "circle6", "crossing", "street"));
+                         ::testing::Values("room", "circle6", "crossing", "street"),
+                         test::scenario_param_name);
 
 // The street is a real test of avoidance: agents that ignore what they see are hit by cars.
 // What a real camera has: flow computed from the images (DIS) and objects found in that flow
@@ -145,7 +147,8 @@ TEST_P(FollowScenario, FollowersKeepUpWithTheLeader) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Papers, FollowScenario, ::testing::Values("follow", "follow_obstacles"));
+INSTANTIATE_TEST_SUITE_P(Papers, FollowScenario, ::testing::Values("follow", "follow_obstacles"),
+                         test::scenario_param_name);
 
 TEST(Scenarios, EveryBuiltinOneLoadsAndRuns) {
   const auto all = builtin_scenarios();
