@@ -1,6 +1,7 @@
 #include "flowsteer/servo/flow_field.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numbers>
 #include <string>
 
@@ -119,7 +120,8 @@ TEST_P(GroundRemoval, DepthAndFlowTestsFindTheGround) {
 
 INSTANTIATE_TEST_SUITE_P(Pitch, GroundRemoval, ::testing::Values(0.0, 8.0 * kDeg),
                          [](const ::testing::TestParamInfo<double>& info) {
-                           return info.param == 0.0 ? std::string("level") : "pitched_8deg";
+                           return "pitched_" + std::to_string(std::lround(info.param / kDeg)) +
+                                  "deg";
                          });
 
 // The region-level test on exact flow without depth: the ground as one region is ground, the
